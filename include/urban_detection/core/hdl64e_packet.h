@@ -1,0 +1,140 @@
+/// \file hdl64e_packet.h
+/// HDL-64E data packet layout, decoding (packets -> calibrated points) and encoding
+/// (returns -> packets), ROS-free.
+///
+/// Packet: 12 blocks of 100 bytes (block id 0xEEFF = upper lasers 0-31, 0xDDFF = lower lasers
+/// 32-63; azimuth in 1/100 degree; 32 returns of distance in distance_resolution units and an
+/// intensity byte), then a 4-byte timestamp [us past the hour] and 2 status bytes: 1206 bytes.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "urban_detection/core/calibration.h"
+#include "urban_detection/core/point_types.h"
+
+namespace urban_detection {
+namespace core {
+
+constexpr std::size_t kPacketSize = 1206;
+constexpr int kBlocksPerPacket = 12;
+constexpr int kLasersPerBlock = 32;
+constexpr std::uint16_t kUpperBlockId = 0xEEFF;
+constexpr std::uint16_t kLowerBlockId = 0xDDFF;
+
+using RawPacket = std::array<std::uint8_t, kPacketSize>;
+
+/// Why a packet was rejected (nothing of a rejected packet is emitted).
+enum class PacketStatus {
+  kOk,
+  kWrongSize,       // not 1206 bytes
+  kUnknownBlockId,  // a block id other than 0xEEFF / 0xDDFF
+  kBadAzimuth,      // azimuth >= 36000
+  kDualReturn,      // S3 dual-return packet: rejected with a clear status, never misread
+};
+const char* toString(PacketStatus status);
+
+/// Parameters of the decoder.
+struct DecoderParams {
+  double min_range_m = 0.9;    // [m] returns closer than this are dropped
+  double max_range_m = 130.0;  // [m] returns farther than this are dropped
+};
+
+/// Counters of one decode call (accumulate them across calls for diagnostics).
+struct DecodeStats {
+  std::size_t packets = 0;         // packets seen
+  std::size_t bad_packets = 0;     // packets rejected (any non-kOk status)
+  std::size_t points = 0;          // points emitted
+  std::size_t no_return = 0;       // raw distance 0 (no echo)
+  std::size_t out_of_range = 0;    // dropped by min/max range
+};
+
+/// Decodes packets with the full per-laser correction model (rotational and vertical
+/// correction, distance correction with the two-point near-range correction, vertical and
+/// horizontal offsets, intensity focal correction) using tables precomputed at construction.
+class PacketDecoder {
+ public:
+  PacketDecoder(const Calibration& calibration, const DecoderParams& params);
+
+  /// Decodes one packet and appends its points to `cloud`. `packet_time_s` is the time of the
+  /// packet's first firing relative to the revolution start [s]; each point's `time` adds the
+  /// firing offset within the packet. On a non-kOk status nothing is appended.
+  PacketStatus decode(const std::uint8_t* data, std::size_t size, double packet_time_s,
+                      CloudXYZIRT* cloud, DecodeStats* stats) const;
+
+  /// Same, but also records the laser id and raw azimuth [1/100 deg] of each emitted point
+  /// (used by tests and the simulator's ground-truth bookkeeping). Either vector may be null.
+  PacketStatus decode(const std::uint8_t* data, std::size_t size, double packet_time_s,
+                      CloudXYZIRT* cloud, DecodeStats* stats, std::vector<std::uint8_t>* laser,
+                      std::vector<std::uint16_t>* raw_azimuth) const;
+
+  const Calibration& calibration() const { return calibration_; }
+  const DecoderParams& params() const { return params_; }
+
+ private:
+  Calibration calibration_;
+  DecoderParams params_;
+  // Precomputed tables (implementation detail, free to change).
+  std::vector<float> cos_azimuth_, sin_azimuth_;  // [36000] cos/sin of raw azimuth
+};
+
+/// Time offset of firing `firing` (0..5) within a packet [s]; each firing fires an upper and a
+/// lower block together.
+double firingTimeOffset(int firing);
+
+/// Reads the azimuth [1/100 deg] of block `block` of a packet (no validation).
+std::uint16_t blockAzimuth(const std::uint8_t* data, int block);
+
+/// One firing of all 64 lasers at one azimuth, in raw units.
+struct Firing {
+  std::uint16_t azimuth = 0;                   // [1/100 deg] 0..35999
+  std::array<std::uint16_t, kNumLasers> distance{};  // [distance_resolution] 0 = no return
+  std::array<std::uint8_t, kNumLasers> intensity{};  // raw intensity
+};
+
+/// Builds packets from firings: every 6 firings make one packet (upper + lower block each),
+/// with the given timestamp [us past the hour] and status bytes. Inverse of PacketDecoder.
+class PacketEncoder {
+ public:
+  explicit PacketEncoder(const Calibration& calibration);
+
+  /// Packs 6 firings into one packet.
+  RawPacket encode(const Firing* firings6, std::uint32_t timestamp_us) const;
+
+  /// Inverse correction model: the raw distance [units] and raw azimuth [1/100 deg] of laser
+  /// `laser` for which the decoder reproduces the point (x, y, z) [m] to within one raw unit.
+  /// Returns false if the point is not reachable by that laser (beyond the raw range).
+  bool invert(int laser, double x, double y, double z, std::uint16_t* raw_azimuth,
+              std::uint16_t* raw_distance) const;
+
+  /// Ray of laser `laser` at raw azimuth `raw_azimuth` in the sensor frame: origin [m] and unit
+  /// direction, such that a surface hit at distance d along the ray is decoded at
+  /// origin + d * direction (far-field model, used by the simulator's ray caster).
+  void ray(int laser, std::uint16_t raw_azimuth, float origin[3], float direction[3]) const;
+
+  const Calibration& calibration() const { return calibration_; }
+
+ private:
+  Calibration calibration_;
+};
+
+/// Cuts a stream of packets into whole revolutions at a configurable azimuth, so 300-1200 rpm
+/// all give whole revolutions (no fixed packet count).
+class RevolutionCutter {
+ public:
+  explicit RevolutionCutter(double cut_angle_deg = 0.0);
+
+  /// Feeds the first block azimuth of the next packet; returns true if this packet starts a new
+  /// revolution (the azimuth crossed the cut angle since the previous packet).
+  bool startsNewRevolution(std::uint16_t first_block_azimuth);
+  void reset();
+
+ private:
+  int cut_;   // [1/100 deg]
+  int last_;  // previous azimuth or -1
+};
+
+}  // namespace core
+}  // namespace urban_detection

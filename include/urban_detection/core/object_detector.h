@@ -1,0 +1,42 @@
+/// \file object_detector.h
+/// The one interface shared by the interchangeable object detectors (hierarchical grid,
+/// kd-tree baseline), so nodelets, the benchmark and the evaluator take either. ROS-free.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "urban_detection/core/point_types.h"
+
+namespace urban_detection {
+namespace core {
+
+/// One detected urban object: a distinct group of foreground points.
+struct DetectedObject {
+  std::uint32_t id = 0;                // 1.. within one frame
+  std::vector<std::uint32_t> indices;  // indices of its points in the segmented input cloud
+                                       // (the `index` field of the foreground points)
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  // [m]
+  Eigen::Vector3f min_pt = Eigen::Vector3f::Zero();    // [m] axis-aligned box corner
+  Eigen::Vector3f max_pt = Eigen::Vector3f::Zero();    // [m] axis-aligned box corner
+  Eigen::Vector3f obb_center = Eigen::Vector3f::Zero();  // [m] yaw-oriented box centre
+  Eigen::Vector3f obb_size = Eigen::Vector3f::Zero();    // [m] length (along yaw), width, height
+  float obb_yaw_rad = 0.0f;                              // [rad] about z
+};
+
+/// Finds objects in a foreground cloud (short street object points of the segmentation).
+class ObjectDetector {
+ public:
+  virtual ~ObjectDetector() = default;
+  /// Short stable name ("hierarchical_grid", "kdtree").
+  virtual std::string name() const = 0;
+  /// `foreground` points carry `index` = index in the segmented input cloud; non-finite points
+  /// are ignored. `objects` is cleared and filled; ids are 1..N in output order.
+  virtual void detect(const LabeledCloud& foreground, std::vector<DetectedObject>* objects) = 0;
+};
+
+}  // namespace core
+}  // namespace urban_detection

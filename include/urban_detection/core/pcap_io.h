@@ -1,0 +1,55 @@
+/// \file pcap_io.h
+/// Reading and writing HDL-64E packets in pcap files (libpcap), ROS-free.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "urban_detection/core/hdl64e_packet.h"
+
+namespace urban_detection {
+namespace core {
+
+/// One Velodyne data packet read from a capture.
+struct PcapPacket {
+  double stamp_s = 0.0;  // [s] capture time (epoch)
+  RawPacket data{};
+};
+
+/// Reads UDP payloads of 1206 bytes to a given port from a pcap file (Ethernet/IPv4/UDP or
+/// Linux cooked captures). Other packets are skipped and counted.
+class PcapReader {
+ public:
+  /// Throws std::runtime_error naming the file if it cannot be opened or is not a capture.
+  explicit PcapReader(const std::string& path, int udp_port = 2368);
+  ~PcapReader();
+
+  enum class Result { kPacket, kEnd, kTruncated };
+  /// Reads the next Velodyne data packet. kTruncated: the file ends inside a record.
+  Result next(PcapPacket* packet);
+  void rewind();
+  std::size_t skipped() const { return skipped_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::size_t skipped_ = 0;
+};
+
+/// Writes packets as Ethernet/IPv4/UDP frames from 192.168.3.43:2368 (sensor default) to
+/// port 2368.
+class PcapWriter {
+ public:
+  explicit PcapWriter(const std::string& path);
+  ~PcapWriter();
+  void write(const RawPacket& packet, double stamp_s);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,48 @@
+/// \file point_types.h
+/// Point types shared by every stage of the pipeline (ROS-free).
+#pragma once
+
+#include <cstdint>
+
+#define PCL_NO_PRECOMPILE
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+namespace urban_detection {
+
+/// A decoded Velodyne return. Field names (x y z intensity ring time) match
+/// velodyne_pointcloud's XYZIRT so existing tools and rviz configs work unchanged.
+struct EIGEN_ALIGN16 PointXYZIRT {
+  PCL_ADD_POINT4D;      // [m] x, y, z in the sensor (or target) frame
+  float intensity;      // [0..255] calibrated intensity
+  std::uint16_t ring;   // laser index ordered by vertical angle, 0 = lowest beam
+  float time;           // [s] time of the firing relative to the revolution start
+  PCL_MAKE_ALIGNED_OPERATOR_NEW
+};
+
+/// A point carrying a label and the index of the point in the cloud it came from.
+/// `label` is a SegmentClass value on segmentation outputs and an object id on detector
+/// outputs; `index` is the position of the point in the input cloud of the segmentation,
+/// so detections can be matched to per-point ground truth.
+struct EIGEN_ALIGN16 LabeledPoint {
+  PCL_ADD_POINT4D;       // [m]
+  float intensity;       // [0..255]
+  std::uint32_t label;   // class or object id, see above
+  std::uint32_t index;   // index into the input cloud
+  PCL_MAKE_ALIGNED_OPERATOR_NEW
+};
+
+using CloudXYZIRT = pcl::PointCloud<PointXYZIRT>;
+using LabeledCloud = pcl::PointCloud<LabeledPoint>;
+
+}  // namespace urban_detection
+
+POINT_CLOUD_REGISTER_POINT_STRUCT(urban_detection::PointXYZIRT,
+                                  (float, x, x)(float, y, y)(float, z, z)(float, intensity,
+                                                                          intensity)(
+                                      std::uint16_t, ring, ring)(float, time, time))
+
+POINT_CLOUD_REGISTER_POINT_STRUCT(urban_detection::LabeledPoint,
+                                  (float, x, x)(float, y, y)(float, z, z)(float, intensity,
+                                                                          intensity)(
+                                      std::uint32_t, label, label)(std::uint32_t, index, index))
