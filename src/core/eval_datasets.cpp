@@ -10,14 +10,11 @@
 #include <sstream>
 
 #include <Eigen/Geometry>
-#include <pcl/io/pcd_io.h>
 
 namespace urban_detection {
 namespace core {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 void setError(std::string* error, const std::string& what) {
   if (error) *error = what;
@@ -27,114 +24,6 @@ void setError(std::string* error, const std::string& what) {
 
 // ------------------------------------------------------------------------------------------
 // Point cloud files
-
-void recoverRingsFromScanOrder(CloudXYZIRT* cloud, int num_rings, float period_s) {
-  // KITTI stores each laser's full turn in sequence, starting near azimuth 0 and turning
-  // counter-clockwise: within one laser the azimuth rises to +pi, wraps to -pi and rises
-  // back towards 0. A new laser therefore starts where the azimuth crosses from negative to
-  // non-negative after a wrap was seen; requiring the wrap makes the rule immune to jitter
-  // around azimuth 0 inside one laser.
-  const std::size_t n = cloud->size();
-  std::vector<int> laser(n, 0);
-  int current = 0;
-  bool wrapped = false;
-  double prev_az = 0.0;
-  bool have_prev = false;
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& p = (*cloud)[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      laser[i] = -1;
-      continue;
-    }
-    const double az = std::atan2(static_cast<double>(p.y), static_cast<double>(p.x));
-    if (have_prev) {
-      if (az - prev_az < -kPi) wrapped = true;
-      if (wrapped && prev_az < 0.0 && az >= 0.0) {
-        ++current;
-        wrapped = false;
-      }
-    }
-    prev_az = az;
-    have_prev = true;
-    laser[i] = current;
-  }
-  const int found = current + 1;
-  for (std::size_t i = 0; i < n; ++i) {
-    auto& p = (*cloud)[i];
-    if (laser[i] < 0) {
-      p.ring = 0;
-      p.time = 0.0f;
-      continue;
-    }
-    // The first laser stored is the top one.
-    const int ring = std::clamp(found - 1 - laser[i], 0, num_rings - 1);
-    p.ring = static_cast<std::uint16_t>(ring);
-    double az = std::atan2(static_cast<double>(p.y), static_cast<double>(p.x));
-    if (az < 0.0) az += 2.0 * kPi;
-    p.time = static_cast<float>(az / (2.0 * kPi)) * period_s;
-  }
-}
-
-bool readKittiVelodyneBin(const std::string& path, CloudXYZIRT* cloud, std::string* error) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) {
-    setError(error, "cannot open " + path);
-    return false;
-  }
-  const std::streamsize bytes = in.tellg();
-  if (bytes < 0 || bytes % 16 != 0) {
-    setError(error, path + ": size is not a multiple of 16 bytes (4 float32 per point)");
-    return false;
-  }
-  const std::size_t n = static_cast<std::size_t>(bytes / 16);
-  std::vector<float> raw(n * 4);
-  in.seekg(0);
-  if (!in.read(reinterpret_cast<char*>(raw.data()), bytes)) {
-    setError(error, "cannot read " + path);
-    return false;
-  }
-  cloud->clear();
-  cloud->resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    auto& p = (*cloud)[i];
-    p.x = raw[4 * i];
-    p.y = raw[4 * i + 1];
-    p.z = raw[4 * i + 2];
-    p.intensity = std::clamp(raw[4 * i + 3], 0.0f, 1.0f) * 255.0f;
-  }
-  cloud->width = static_cast<std::uint32_t>(n);
-  cloud->height = 1;
-  cloud->is_dense = false;
-  recoverRingsFromScanOrder(cloud);
-  return true;
-}
-
-bool readXyziPcd(const std::string& path, CloudXYZIRT* cloud, std::string* error) {
-  pcl::PointCloud<pcl::PointXYZI> in;
-  pcl::PCDReader reader;
-  if (reader.read(path, in) < 0) {
-    setError(error, "cannot read PCD " + path);
-    return false;
-  }
-  cloud->clear();
-  cloud->resize(in.size());
-  // kitti_raw stores reflectance in [0..1] like the .bin files.
-  float max_i = 0.0f;
-  for (const auto& q : in) max_i = std::max(max_i, std::isfinite(q.intensity) ? q.intensity : 0.f);
-  const float scale = max_i <= 1.0f ? 255.0f : 1.0f;
-  for (std::size_t i = 0; i < in.size(); ++i) {
-    auto& p = (*cloud)[i];
-    p.x = in[i].x;
-    p.y = in[i].y;
-    p.z = in[i].z;
-    p.intensity = in[i].intensity * scale;
-  }
-  cloud->width = static_cast<std::uint32_t>(in.size());
-  cloud->height = 1;
-  cloud->is_dense = false;
-  recoverRingsFromScanOrder(cloud);
-  return true;
-}
 
 std::vector<std::string> listFiles(const std::string& dir, const std::string& suffix) {
   std::vector<std::string> files;
@@ -423,27 +312,6 @@ std::string semanticKittiClassName(std::uint16_t c) {
     case 259: return "moving-other-vehicle";
     default: return "class_" + std::to_string(c);
   }
-}
-
-bool readSemanticKittiLabels(const std::string& path, std::vector<std::uint32_t>* labels,
-                             std::string* error) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) {
-    setError(error, "cannot open " + path);
-    return false;
-  }
-  const std::streamsize bytes = in.tellg();
-  if (bytes < 0 || bytes % 4 != 0) {
-    setError(error, path + ": size is not a multiple of 4 bytes (uint32 per point)");
-    return false;
-  }
-  labels->resize(static_cast<std::size_t>(bytes / 4));
-  in.seekg(0);
-  if (!in.read(reinterpret_cast<char*>(labels->data()), bytes)) {
-    setError(error, "cannot read " + path);
-    return false;
-  }
-  return true;
 }
 
 void buildSemanticKittiGroundTruth(const std::vector<std::uint32_t>& labels,

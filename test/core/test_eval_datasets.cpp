@@ -7,9 +7,9 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <set>
 
 #include "urban_detection/core/eval_datasets.h"
+#include "urban_detection/core/kitti_io.h"
 
 namespace urban_detection {
 namespace core {
@@ -176,52 +176,32 @@ TEST(KittiObject, CalibrationFileErrors) {
   fs::remove_all(dir);
 }
 
-TEST(FileReaders, VelodyneBinAndPngHeader) {
-  const fs::path dir = fs::temp_directory_path() / "ud_eval_bin_test";
+TEST(FileReaders, PngHeaderAndListing) {
+  const fs::path dir = fs::temp_directory_path() / "ud_eval_png_test";
   fs::create_directories(dir);
-  // Two lasers, each a full counter-clockwise turn starting at azimuth 0; the top one is
-  // stored first, as KITTI does.
-  std::vector<float> raw;
-  for (int laser = 0; laser < 2; ++laser) {
-    for (int k = 0; k < 36; ++k) {
-      const double az = (k * 10.0 + 0.5) * kPi / 180.0;
-      raw.insert(raw.end(), {static_cast<float>(10 * std::cos(az)),
-                             static_cast<float>(10 * std::sin(az)), laser == 0 ? 0.5f : -1.0f,
-                             0.5f});
-    }
-  }
-  const std::string bin = (dir / "a.bin").string();
-  {
-    std::ofstream f(bin, std::ios::binary);
-    f.write(reinterpret_cast<const char*>(raw.data()), raw.size() * sizeof(float));
-    std::ofstream t((dir / "t.bin").string(), std::ios::binary);
-    t.write(reinterpret_cast<const char*>(raw.data()), 10);  // truncated
-  }
-  CloudXYZIRT cloud;
-  std::string err;
-  ASSERT_TRUE(readKittiVelodyneBin(bin, &cloud, &err)) << err;
-  ASSERT_EQ(cloud.size(), 72u);
-  EXPECT_FLOAT_EQ(cloud[0].intensity, 127.5f);
-  // Two lasers found: the first stored (top) one is ring 1, the second ring 0.
-  EXPECT_EQ(cloud[0].ring, 1);
-  EXPECT_EQ(cloud[35].ring, 1);
-  EXPECT_EQ(cloud[36].ring, 0);
-  EXPECT_EQ(cloud[71].ring, 0);
-  EXPECT_NEAR(cloud[18].time, 0.1f * 180.5f / 360.0f, 1e-6f);
-  EXPECT_FALSE(readKittiVelodyneBin((dir / "t.bin").string(), &cloud, &err));
-  EXPECT_FALSE(readKittiVelodyneBin((dir / "none.bin").string(), &cloud, &err));
-
+  // Signature, IHDR chunk length 13, "IHDR", width 0x04DA = 1242, height 0x0177 = 375.
   const unsigned char png[24] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13,
                                  'I', 'H', 'D', 'R', 0, 0, 0x04, 0xDA, 0, 0, 0x01, 0x77};
   {
-    std::ofstream f((dir / "a.png").string(), std::ios::binary);
+    std::ofstream f((dir / "b.png").string(), std::ios::binary);
     f.write(reinterpret_cast<const char*>(png), sizeof(png));
+    std::ofstream g((dir / "a.png").string(), std::ios::binary);
+    g.write(reinterpret_cast<const char*>(png), 20);  // truncated header
+    std::ofstream h((dir / "c.txt").string());
+    h << "not a png, long enough to fill a header......";
   }
   int w = 0, h = 0;
-  ASSERT_TRUE(readPngSize((dir / "a.png").string(), &w, &h));
+  ASSERT_TRUE(readPngSize((dir / "b.png").string(), &w, &h));
   EXPECT_EQ(w, 1242);
   EXPECT_EQ(h, 375);
-  EXPECT_FALSE(readPngSize(bin, &w, &h));
+  EXPECT_FALSE(readPngSize((dir / "a.png").string(), &w, &h));
+  EXPECT_FALSE(readPngSize((dir / "c.txt").string(), &w, &h));
+  EXPECT_FALSE(readPngSize((dir / "missing.png").string(), &w, &h));
+  const auto files = listFiles(dir.string(), ".png");
+  ASSERT_EQ(files.size(), 2u);
+  EXPECT_EQ(fs::path(files[0]).filename(), "a.png");
+  EXPECT_EQ(fs::path(files[1]).filename(), "b.png");
+  EXPECT_TRUE(listFiles((dir / "nope").string(), ".png").empty());
   fs::remove_all(dir);
 }
 
@@ -279,12 +259,8 @@ TEST(SharedData, KittiAndSemanticKittiFrames) {
   }
   CloudXYZIRT cloud;
   std::string err;
-  ASSERT_TRUE(readKittiVelodyneBin((ko / "velodyne/000000.bin").string(), &cloud, &err)) << err;
+  ASSERT_TRUE(readKittiBin((ko / "velodyne/000000.bin").string(), &cloud, &err)) << err;
   EXPECT_EQ(cloud.size(), 115384u);
-  std::set<int> rings;
-  for (const auto& p : cloud) rings.insert(p.ring);
-  EXPECT_EQ(rings.size(), 64u);
-  EXPECT_EQ(cloud[0].ring, 63);  // the first stored laser is the top one (+2.6 deg)
   KittiCalibration calib;
   ASSERT_TRUE(readKittiCalibration((ko / "calib/000000.txt").string(), &calib, &err)) << err;
   std::vector<KittiLabel> labels;

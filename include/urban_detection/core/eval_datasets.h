@@ -30,26 +30,8 @@
 namespace urban_detection {
 namespace core {
 
-// ------------------------------------------------------------------------------------------
-// Point cloud files
-
-/// Reads a KITTI velodyne .bin file (float32 x, y, z, reflectance per point) into `cloud`.
-/// Reflectance [0..1] is scaled to intensity [0..255]. The ring is recovered from the scan
-/// order (KITTI stores the HDL-64E returns laser by laser, top laser first, each laser one
-/// full turn; a new laser starts where the azimuth wraps), ring 0 = lowest beam, and `time`
-/// is the azimuth fraction of a 0.1 s revolution. Returns false with `error` set on failure
-/// (missing file, size not a multiple of 16 bytes).
-bool readKittiVelodyneBin(const std::string& path, CloudXYZIRT* cloud, std::string* error);
-
-/// Reads a PCD file with fields x y z intensity (the kitti_raw sweeps) into `cloud`, with the
-/// same ring/time recovery as readKittiVelodyneBin.
-bool readXyziPcd(const std::string& path, CloudXYZIRT* cloud, std::string* error);
-
-/// Recovers ring (0 = lowest of `num_rings`) and time (azimuth fraction of `period_s`) of a
-/// cloud stored laser by laser, as KITTI does. Non-finite points keep ring 0.
-void recoverRingsFromScanOrder(CloudXYZIRT* cloud, int num_rings = 64, float period_s = 0.1f);
-
-/// Files of `dir` whose name ends with `suffix`, sorted by name.
+/// Files of `dir` whose name ends with `suffix`, sorted by name (empty if `dir` is missing).
+/// Point clouds and SemanticKITTI labels are read with kitti_io.h.
 std::vector<std::string> listFiles(const std::string& dir, const std::string& suffix);
 
 // ------------------------------------------------------------------------------------------
@@ -145,10 +127,6 @@ enum class SemanticKittiCategory : std::uint8_t {
 SemanticKittiCategory semanticKittiCategory(std::uint16_t semantic_class);
 /// Name of a class ("car", "person", ...; "class_<n>" when unknown).
 std::string semanticKittiClassName(std::uint16_t semantic_class);
-
-/// Reads labels/*.label (one uint32 per point). Returns false with `error` set.
-bool readSemanticKittiLabels(const std::string& path, std::vector<std::uint32_t>* labels,
-                             std::string* error);
 
 /// Ground-truth construction parameters for SemanticKITTI.
 struct SemanticKittiGroundTruthParams {
