@@ -186,7 +186,7 @@ bool inKittiCameraFrustum(const KittiCalibration& calib, const Eigen::Vector3d& 
 
 void buildKittiGroundTruth(const CloudXYZIRT& cloud, const std::vector<KittiLabel>& labels,
                            const KittiCalibration& calib, const KittiGroundTruthParams& params,
-                           int width_px, int height_px, GroundTruthFrame* gt) {
+                           int width_px, int height_px, EvalFrame* gt) {
   gt->reset(cloud.size());
   std::vector<const KittiLabel*> boxes, dont_care;
   for (std::size_t i = 0; i < labels.size(); ++i) {
@@ -195,7 +195,7 @@ void buildKittiGroundTruth(const CloudXYZIRT& cloud, const std::vector<KittiLabe
       continue;
     }
     boxes.push_back(&labels[i]);
-    GroundTruthObject o;
+    EvalObject o;
     o.label = labels[i].type;
     o.id = static_cast<std::uint32_t>(i + 1);  // line number in label_2
     gt->objects.push_back(o);
@@ -316,7 +316,7 @@ std::string semanticKittiClassName(std::uint16_t c) {
 
 void buildSemanticKittiGroundTruth(const std::vector<std::uint32_t>& labels,
                                    const SemanticKittiGroundTruthParams& params,
-                                   GroundTruthFrame* gt) {
+                                   EvalFrame* gt) {
   gt->reset(labels.size());
   std::map<std::uint32_t, std::int32_t> object_of_label;  // full label (class|instance) -> GT
   for (std::size_t i = 0; i < labels.size(); ++i) {
@@ -330,7 +330,7 @@ void buildSemanticKittiGroundTruth(const std::vector<std::uint32_t>& labels,
         }
         auto it = object_of_label.find(labels[i]);
         if (it == object_of_label.end()) {
-          GroundTruthObject o;
+          EvalObject o;
           o.label = semanticKittiClassName(c);
           o.id = inst;
           it = object_of_label.emplace(labels[i], static_cast<std::int32_t>(gt->objects.size()))

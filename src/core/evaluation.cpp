@@ -8,13 +8,13 @@
 namespace urban_detection {
 namespace core {
 
-void GroundTruthFrame::reset(std::size_t num_points) {
+void EvalFrame::reset(std::size_t num_points) {
   objects.clear();
   object_of_point.assign(num_points, -1);
   role.assign(num_points, PointRole::kScored);
 }
 
-void GroundTruthFrame::finalize(std::size_t min_points) {
+void EvalFrame::finalize(std::size_t min_points) {
   for (auto& o : objects) o.num_points = 0;
   const bool has_roles = role.size() == object_of_point.size();
   for (std::size_t i = 0; i < object_of_point.size(); ++i) {
@@ -92,7 +92,7 @@ std::vector<std::int32_t> assignMaxIou(const std::vector<std::vector<double>>& i
 
 DetectionEvaluator::DetectionEvaluator(const EvaluationParams& params) : params_(params) {}
 
-void DetectionEvaluator::evaluate(const GroundTruthFrame& gt,
+void DetectionEvaluator::evaluate(const EvalFrame& gt,
                                   const std::vector<DetectedObject>& detections,
                                   FrameMatch* match) {
   FrameMatch local;

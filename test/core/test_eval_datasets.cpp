@@ -137,7 +137,7 @@ TEST(KittiObject, GroundTruthRoles) {
   cloud.push_back(pt(8.27f, 1.0f, -1.08f));    // 10 pedestrian: camera (-1.0, 1.0, 8.0)
   KittiGroundTruthParams params;
   params.min_points = 1;
-  GroundTruthFrame gt;
+  EvalFrame gt;
   buildKittiGroundTruth(cloud, {carLabel(), dont_care, ped}, handCalibration(), params, 1242,
                         375, &gt);
   ASSERT_EQ(gt.objects.size(), 2u);
@@ -233,7 +233,7 @@ TEST(SemanticKitti, GroundTruthFromLabels) {
   for (int i = 0; i < 10; ++i) labels.push_back(lab(252, 5));  // moving car, same instance id
   SemanticKittiGroundTruthParams params;
   params.min_points = 10;
-  GroundTruthFrame gt;
+  EvalFrame gt;
   buildSemanticKittiGroundTruth(labels, params, &gt);
   ASSERT_EQ(gt.objects.size(), 3u);
   EXPECT_EQ(gt.objects[0].label, "car");
@@ -265,7 +265,7 @@ TEST(SharedData, KittiAndSemanticKittiFrames) {
   ASSERT_TRUE(readKittiCalibration((ko / "calib/000000.txt").string(), &calib, &err)) << err;
   std::vector<KittiLabel> labels;
   ASSERT_TRUE(readKittiLabels((ko / "label_2/000000.txt").string(), &labels, &err)) << err;
-  GroundTruthFrame gt;
+  EvalFrame gt;
   buildKittiGroundTruth(cloud, labels, calib, KittiGroundTruthParams(), 1242, 375, &gt);
   ASSERT_EQ(gt.objects.size(), 1u);
   EXPECT_EQ(gt.objects[0].label, "Pedestrian");

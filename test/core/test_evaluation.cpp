@@ -20,13 +20,13 @@ DetectedObject det(std::uint32_t first, std::uint32_t last_inclusive) {
 }
 
 // A frame of `n` points, GT objects given as inclusive index ranges.
-GroundTruthFrame frame(std::size_t n,
+EvalFrame frame(std::size_t n,
                        const std::vector<std::pair<std::uint32_t, std::uint32_t>>& objects,
                        std::size_t min_points = 1) {
-  GroundTruthFrame gt;
+  EvalFrame gt;
   gt.reset(n);
   for (std::size_t k = 0; k < objects.size(); ++k) {
-    GroundTruthObject o;
+    EvalObject o;
     o.label = "obj";
     o.id = static_cast<std::uint32_t>(k + 1);
     gt.objects.push_back(o);
@@ -177,7 +177,7 @@ TEST(DetectionEvaluator, OutOfRangeIndicesAndEmptyInputs) {
   EXPECT_EQ(m.verdict[0], DetectionVerdict::kTrue);
   EXPECT_EQ(m.verdict[1], DetectionVerdict::kIgnored);  // no points at all
 
-  GroundTruthFrame empty;
+  EvalFrame empty;
   ev.evaluate(empty, {}, &m);
   EXPECT_EQ(m.score.no, 0u);
   EXPECT_DOUBLE_EQ(m.score.precision(), 1.0);

@@ -101,7 +101,7 @@ bool inKittiCameraFrustum(const KittiCalibration& calib, const Eigen::Vector3d& 
 /// Builds the ground truth of one KITTI object frame (rules in the file comment).
 void buildKittiGroundTruth(const CloudXYZIRT& cloud, const std::vector<KittiLabel>& labels,
                            const KittiCalibration& calib, const KittiGroundTruthParams& params,
-                           int width_px, int height_px, GroundTruthFrame* gt);
+                           int width_px, int height_px, EvalFrame* gt);
 
 /// Width and height of a PNG file from its header; false if it is not a readable PNG.
 bool readPngSize(const std::string& path, int* width_px, int* height_px);
@@ -136,7 +136,7 @@ struct SemanticKittiGroundTruthParams {
 /// Builds the ground truth of one SemanticKITTI scan from its per-point labels.
 void buildSemanticKittiGroundTruth(const std::vector<std::uint32_t>& labels,
                                    const SemanticKittiGroundTruthParams& params,
-                                   GroundTruthFrame* gt);
+                                   EvalFrame* gt);
 
 }  // namespace core
 }  // namespace urban_detection

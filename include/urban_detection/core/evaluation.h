@@ -8,7 +8,7 @@
 /// points, a GT object the set of indices of the points that belong to it, and their overlap
 /// is the point-set intersection over union (IoU). The dataset-specific rules (what is a GT
 /// object, which points are "don't care") are encoded by the dataset readers into a
-/// GroundTruthFrame; the scoring itself is dataset independent.
+/// EvalFrame; the scoring itself is dataset independent.
 #pragma once
 
 #include <cstddef>
@@ -31,7 +31,7 @@ enum class PointRole : std::uint8_t {
 };
 
 /// One ground-truth object of a frame.
-struct GroundTruthObject {
+struct EvalObject {
   std::string label;             ///< class name ("Car", "person", ...)
   std::uint32_t id = 0;          ///< dataset id (instance id, label line number, track id)
   bool ignored = false;          ///< not counted in NO (e.g. too few points); a detection
@@ -40,8 +40,8 @@ struct GroundTruthObject {
 };
 
 /// Ground truth of one frame, per point of the evaluated cloud.
-struct GroundTruthFrame {
-  std::vector<GroundTruthObject> objects;
+struct EvalFrame {
+  std::vector<EvalObject> objects;
   /// Per input point: index into `objects`, or -1 for none. Size = number of input points.
   std::vector<std::int32_t> object_of_point;
   /// Per input point role; empty means every point is kScored.
@@ -49,7 +49,7 @@ struct GroundTruthFrame {
 
   /// Resizes both per-point arrays to `num_points` (no object, kScored).
   void reset(std::size_t num_points);
-  /// Recomputes GroundTruthObject::num_points and marks objects with fewer than
+  /// Recomputes EvalObject::num_points and marks objects with fewer than
   /// `min_points` scored points as ignored. Call after filling the arrays.
   void finalize(std::size_t min_points);
 };
@@ -117,7 +117,7 @@ class DetectionEvaluator {
   explicit DetectionEvaluator(const EvaluationParams& params = EvaluationParams());
 
   /// Scores one frame and adds its score to the running total.
-  void evaluate(const GroundTruthFrame& gt, const std::vector<DetectedObject>& detections,
+  void evaluate(const EvalFrame& gt, const std::vector<DetectedObject>& detections,
                 FrameMatch* match);
   const DetectionScore& total() const { return total_; }
   void resetTotal() { total_ = DetectionScore(); }
