@@ -1,0 +1,60 @@
+/// \file simulation_conversions.h
+/// ROS messages of the simulated HDL-64E drive: VelodyneScan, GroundTruth and tf transforms
+/// built from core::SimRevolution, and a rosbag writer used by urban_detection_simulate.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <geometry_msgs/TransformStamped.h>
+#include <urban_detection/GroundTruth.h>
+#include <urban_detection/VelodyneScan.h>
+
+#include "urban_detection/core/lidar_simulator.h"
+
+namespace rosbag {
+class Bag;
+}
+
+namespace urban_detection {
+namespace ros_conv {
+
+/// Frame names of the simulated platform.
+struct SimulationFrames {
+  std::string odom = "odom";            // world frame of the scene
+  std::string base_link = "base_link";  // platform, on the ground under the sensor
+  std::string sensor = "velodyne";      // sensor frame (frame_id of scans and ground truth)
+};
+
+/// Scan of one revolution: header stamp = first packet stamp, one packet per RawPacket.
+void toScanMsg(const core::SimRevolution& rev, const std::string& frame_id,
+               urban_detection::VelodyneScan* msg);
+/// Ground truth of one revolution (same header stamp as toScanMsg).
+void toGroundTruthMsg(const core::SimRevolution& rev, const std::string& frame_id,
+                      urban_detection::GroundTruth* msg);
+/// odom -> base_link at drive time `t_s` (stamped `stamp_s`), and base_link -> sensor.
+void toTransforms(const core::LidarSimulator& sim, double t_s, double stamp_s,
+                  const SimulationFrames& frames, geometry_msgs::TransformStamped* odom_base,
+                  geometry_msgs::TransformStamped* base_sensor);
+
+/// Writes a simulated drive into a bag: `/velodyne_packets` (VelodyneScan),
+/// `/ground_truth` (GroundTruth), `/tf` (odom -> base_link at every revolution start and at
+/// the end of the last one; tf interpolates in between) and `/tf_static` (base_link -> velodyne).
+class SimulationBagWriter {
+ public:
+  /// Throws rosbag::BagException if the file cannot be created.
+  SimulationBagWriter(const std::string& path, const SimulationFrames& frames = {});
+  ~SimulationBagWriter();
+  void write(const core::LidarSimulator& sim, const core::SimRevolution& rev);
+  void close();
+
+ private:
+  std::unique_ptr<rosbag::Bag> bag_;
+  SimulationFrames frames_;
+  bool static_written_ = false;
+  bool have_end_pose_ = false;
+  geometry_msgs::TransformStamped end_pose_;  // odom -> base_link at the last revolution's end
+};
+
+}  // namespace ros_conv
+}  // namespace urban_detection

@@ -1,0 +1,134 @@
+// urban_detection/SimulatedSensor: a virtual HDL-64E driving through the procedural street of
+// a YAML drive description. Publishes velodyne_packets (one VelodyneScan per revolution),
+// ground_truth (per-point labels in decoder order) and tf odom -> base_link -> velodyne.
+#include <atomic>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include <boost/make_shared.hpp>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/ros/simulation_conversions.h"
+
+namespace urban_detection {
+
+class SimulatedSensor : public nodelet::Nodelet {
+ public:
+  ~SimulatedSensor() override {
+    running_ = false;
+    if (worker_.joinable()) worker_.join();
+  }
+
+ private:
+  void onInit() override {
+    if (!loadParams()) return;
+    ros::NodeHandle& nh = getNodeHandle();
+    scan_pub_ = nh.advertise<VelodyneScan>("velodyne_packets", 4);
+    gt_pub_ = nh.advertise<GroundTruth>("ground_truth", 4);
+    tf_.reset(new tf2_ros::TransformBroadcaster());
+    static_tf_.reset(new tf2_ros::StaticTransformBroadcaster());
+    running_ = true;
+    worker_ = std::thread(&SimulatedSensor::run, this);
+  }
+
+  bool loadParams() {
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    std::string config_path;
+    if (!pnh.getParam("config", config_path) || config_path.empty()) {
+      NODELET_FATAL("SimulatedSensor: parameter ~config (path of a drive YAML such as "
+                    "config/demo_drive.yaml) is required; the nodelet stays idle");
+      return false;
+    }
+    pnh.param("realtime", realtime_, true);
+    pnh.param("rate_factor", rate_factor_, 1.0);
+    pnh.param("loop", loop_, true);
+    pnh.param("publish_tf", publish_tf_, true);
+    pnh.param("frame_id", frames_.sensor, frames_.sensor);
+    pnh.param("odom_frame", frames_.odom, frames_.odom);
+    pnh.param("base_frame", frames_.base_link, frames_.base_link);
+    if (!(rate_factor_ > 0.0 && rate_factor_ <= 100.0)) {
+      NODELET_FATAL("SimulatedSensor: ~rate_factor must be in (0, 100], got %f", rate_factor_);
+      return false;
+    }
+    try {
+      config_ = core::loadSimulationConfig(config_path);
+      calibration_ = core::loadCalibration(config_.calibration_file);
+    } catch (const std::exception& e) {
+      NODELET_FATAL("SimulatedSensor: %s; the nodelet stays idle", e.what());
+      return false;
+    }
+    return true;
+  }
+
+  void run() {
+    core::SimRevolution rev;
+    while (running_ && ros::ok()) {
+      // Stamps follow the ROS clock: the drive starts "now" and restarts "now" when looping.
+      core::SimulationConfig c = config_;
+      c.sensor.start_stamp_s = ros::Time::now().toSec();
+      core::LidarSimulator sim(core::generateScene(c.scene, c.drive), c.scene, c.drive,
+                               calibration_, c.sensor);
+      NODELET_INFO("SimulatedSensor: driving %.0f m at %.1f m/s, %zu objects, %.0f rpm",
+                   c.drive.length(), c.drive.speed_mps, sim.scene().objects.size(), c.sensor.rpm);
+      const ros::WallTime wall0 = ros::WallTime::now();
+      bool first = true;
+      while (running_ && ros::ok() && !sim.driveFinished()) {
+        sim.simulateNext(&rev);
+        const double rev_s = 60.0 / c.sensor.rpm;
+        if (realtime_) {  // publish when the revolution's last packet would have arrived
+          (wall0 + ros::WallDuration((rev.start_time_s + rev_s) / rate_factor_)).sleep();
+        }
+        if (publish_tf_) publishTf(sim, rev, rev_s, first);
+        first = false;
+        auto scan = boost::make_shared<VelodyneScan>();
+        ros_conv::toScanMsg(rev, frames_.sensor, scan.get());
+        scan_pub_.publish(boost::shared_ptr<const VelodyneScan>(scan));
+        if (gt_pub_.getNumSubscribers() > 0) {
+          auto gt = boost::make_shared<GroundTruth>();
+          ros_conv::toGroundTruthMsg(rev, frames_.sensor, gt.get());
+          gt_pub_.publish(boost::shared_ptr<const GroundTruth>(gt));
+        }
+        if (!realtime_ && rev.stats.returns == 0) {
+          NODELET_WARN_THROTTLE(5.0, "SimulatedSensor: a revolution without any return");
+        }
+      }
+      if (!loop_) break;
+    }
+  }
+
+  void publishTf(const core::LidarSimulator& sim, const core::SimRevolution& rev, double rev_s,
+                 bool first) {
+    geometry_msgs::TransformStamped odom_base, base_sensor;
+    if (first) {
+      ros_conv::toTransforms(sim, rev.start_time_s, rev.stamp_s, frames_, &odom_base,
+                             &base_sensor);
+      static_tf_->sendTransform(base_sensor);
+      tf_->sendTransform(odom_base);
+    }
+    // The pose at the revolution's end: every packet stamp is bracketed by two samples.
+    ros_conv::toTransforms(sim, rev.start_time_s + rev_s, rev.stamp_s + rev_s, frames_,
+                           &odom_base, &base_sensor);
+    tf_->sendTransform(odom_base);
+  }
+
+  core::SimulationConfig config_;
+  core::Calibration calibration_;
+  ros_conv::SimulationFrames frames_;
+  bool realtime_ = true, loop_ = true, publish_tf_ = true;
+  double rate_factor_ = 1.0;
+  ros::Publisher scan_pub_, gt_pub_;
+  std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
+  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;
+  std::atomic<bool> running_{false};
+  std::thread worker_;
+};
+
+}  // namespace urban_detection
+
+PLUGINLIB_EXPORT_CLASS(urban_detection::SimulatedSensor, nodelet::Nodelet)
