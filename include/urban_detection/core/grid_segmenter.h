@@ -18,7 +18,9 @@
 ///     of g; short otherwise.
 ///  5. HoughWallRefiner turns short cells on long straight walls into tall.
 ///  6. Per point: in ground-bearing cells a point within ground_tolerance_m of g is ground, the
-///     others take the cell class (mixed cells are split per point).
+///     others take the cell class (mixed cells are split per point). Sparse (clutter) cells of
+///     far road get the same per-point test against the filled terrain when
+///     ground_in_sparse_cells is set.
 #pragma once
 
 #include <cstdint>
@@ -39,9 +41,13 @@ struct GridSegmenterParams {
   double max_range_m = 80.0;          // [m] half side of the grid; farther points: kUnknown
   double max_abs_height_m = 50.0;     // [m] points farther than this from the ground plane
                                       //     (|z + sensor_height_m|) are kUnknown
-  int min_points_per_cell = 4;        // [points] fewer -> clutter (paper: 4-8)
+  int min_points_per_cell = 3;        // [points] fewer -> clutter (paper: 4-8; 3 keeps far
+                                      //     cyclists on SemanticKITTI)
+  bool ground_in_sparse_cells = true; // points of a clutter cell lying within
+                                      //     ground_tolerance_m of the terrain filled in from
+                                      //     neighbouring ground cells are ground (far road)
   double ground_max_range_m = 0.25;   // [m] z_max - z_min below this: ground candidate (paper)
-  double ground_tolerance_m = 0.20;   // [m] a point this close above the local ground is ground
+  double ground_tolerance_m = 0.10;   // [m] a point this close above the local ground is ground
   double ground_max_step_m = 0.20;    // [m] elevation step allowed between neighbouring ground
                                       //     cells (curbs, slopes)
   double seed_radius_m = 12.0;        // [m] ground growing starts from candidates this close
@@ -50,8 +56,14 @@ struct GridSegmenterParams {
                                       //     growing did not reach
   double terrain_max_offset_m = 0.35; // [m] a flat cell the growing did not reach is ground when
                                       //     its mean is this close to the filled terrain
-  double tall_min_height_m = 1.40;    // [m] z_max above local ground beyond this: tall (paper)
+  double tall_min_height_m = 2.00;    // [m] z_max above local ground beyond this: tall (paper:
+                                      //     1.40, which makes standing people (1.7-1.9 m) tall
+                                      //     when heights are taken above the local ground)
   double tall_min_range_m = 3.10;     // [m] z_max - z_min beyond this: tall (paper)
+  double fov_top_elevation_deg = 1.0; // [deg] a cell whose highest point is seen at this
+                                      //     elevation or more may extend above the vertical
+                                      //     field of view (HDL-64E: +2 deg); it supports Hough
+                                      //     wall lines like a tall cell
   HoughWallRefinerParams hough;       // Hough wall refinement (paper Fig. 3)
 };
 
@@ -97,6 +109,7 @@ class GridSegmenter {
   SegmentationStats stats_;
   // Scratch, sized to the grid, reset only on the cells touched by the previous frame.
   std::vector<SegmentClass> cell_class_;
+  std::vector<std::uint8_t> wall_support_;  // cell top at the upper edge of the field of view
   std::vector<float> ground_z_;          // [m] local ground elevation per cell
   std::vector<std::uint8_t> ground_state_;
   std::vector<std::int32_t> queue_;
