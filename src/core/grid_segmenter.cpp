@@ -33,6 +33,7 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
   ground_state_.assign(n, kNoGround);
   fill_sum_.assign(n, 0.0f);
   fill_cnt_.assign(n, 0);
+  hops_.assign(n, 0);
 }
 
 void GridSegmenter::setParams(const GridSegmenterParams& params) {
@@ -121,27 +122,42 @@ void GridSegmenter::growGround() {
     touched_.push_back(c);
     queue_.push_back(c);
   }
+  std::uint32_t reached = static_cast<std::uint32_t>(queue_.size());
+  const int max_hops =
+      std::min(250, static_cast<int>(params_.ground_max_gap_m / grid_.params().cell_size_m));
   for (std::size_t head = 0; head < queue_.size(); ++head) {
     const std::int32_t c = queue_[head];
     const int r = grid_.rowOf(c), k = grid_.colOf(c);
     const float g = ground_z_[c];
+    const int hop = ground_state_[c] == kBridged ? hops_[c] : 0;
     for (int d = 0; d < 8; ++d) {
       const int nr = r + kDr[d], nk = k + kDc[d];
       if (nr < 0 || nr >= rows || nk < 0 || nk >= cols) continue;
       const std::int32_t nc = nr * cols + nk;
       if (ground_state_[nc] != kNoGround) continue;
       const GridCell& cell = grid_.cell(nc);
-      if (cell.count == 0 || cell_class_[nc] == SegmentClass::kClutter) continue;
+      if (cell.count == 0 || cell_class_[nc] == SegmentClass::kClutter) {
+        // Empty and sparse cells carry the terrain across the gaps between far rings and
+        // through shadows, for a limited distance; sparse cells keep it for their points.
+        if (hop >= max_hops) continue;
+        ground_state_[nc] = kBridged;
+        ground_z_[nc] = g;
+        hops_[nc] = static_cast<std::uint8_t>(hop + 1);
+        touched_.push_back(nc);
+        queue_.push_back(nc);
+        continue;
+      }
       const bool is_flat = cell.zRange() < flat;
       const float e = is_flat ? cell.zMean() : cell.z_min;
       if (std::fabs(e - g) >= step) continue;
       ground_state_[nc] = kReached;
       ground_z_[nc] = e;
       touched_.push_back(nc);
+      ++reached;
       if (is_flat) queue_.push_back(nc);
     }
   }
-  stats_.cells_ground_reached = static_cast<std::uint32_t>(touched_.size());
+  stats_.cells_ground_reached = reached;
 }
 
 // Cells the growing did not reach (under a car roof, behind an occluder) take the mean ground

@@ -39,6 +39,7 @@ bool validateGridSegmenterParams(const core::GridSegmenterParams& p, std::string
   c.check("ground_max_range_m", p.ground_max_range_m, 0.01, 2.0);
   c.check("ground_tolerance_m", p.ground_tolerance_m, 0.0, 2.0);
   c.check("ground_max_step_m", p.ground_max_step_m, 0.0, 2.0);
+  c.check("ground_max_gap_m", p.ground_max_gap_m, 0.0, 20.0);
   c.check("seed_radius_m", p.seed_radius_m, 0.0, 250.0);
   c.check("seed_max_abs_height_m", p.seed_max_abs_height_m, 0.0, 5.0);
   c.check("terrain_fill_iterations", p.terrain_fill_iterations, 0, 100);
@@ -67,6 +68,7 @@ bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParam
   nh.param("ground_max_range_m", p->ground_max_range_m, p->ground_max_range_m);
   nh.param("ground_tolerance_m", p->ground_tolerance_m, p->ground_tolerance_m);
   nh.param("ground_max_step_m", p->ground_max_step_m, p->ground_max_step_m);
+  nh.param("ground_max_gap_m", p->ground_max_gap_m, p->ground_max_gap_m);
   nh.param("seed_radius_m", p->seed_radius_m, p->seed_radius_m);
   nh.param("seed_max_abs_height_m", p->seed_max_abs_height_m, p->seed_max_abs_height_m);
   nh.param("terrain_fill_iterations", p->terrain_fill_iterations, p->terrain_fill_iterations);

@@ -11,7 +11,9 @@
 ///     region growing over neighbouring candidates whose elevation differs by less than
 ///     ground_max_step_m per cell, so slopes, camber and curbs stay connected to the road while
 ///     car roofs and walls do not. Cells with both ground and object returns (a car over road)
-///     join via their lowest point. Cells the growing did not reach get the mean ground
+///     join via their lowest point; the growing crosses empty and sparse cells for up to
+///     ground_max_gap_m (the rings of a Velodyne are metres apart at range). Cells the growing
+///     did not reach get the mean ground
 ///     elevation of reached cells nearby (terrain_fill_iterations dilation steps).
 ///  4. Cell classes against the local ground g: tall when z_max - g > tall_min_height_m or
 ///     z_max - z_min > tall_min_range_m; ground when all points lie within ground_tolerance_m
@@ -50,6 +52,8 @@ struct GridSegmenterParams {
   double ground_tolerance_m = 0.10;   // [m] a point this close above the local ground is ground
   double ground_max_step_m = 0.20;    // [m] elevation step allowed between neighbouring ground
                                       //     cells (curbs, slopes)
+  double ground_max_gap_m = 2.0;      // [m] the terrain growing crosses empty or sparse cells
+                                      //     over at most this distance (gaps between far rings)
   double seed_radius_m = 12.0;        // [m] ground growing starts from candidates this close
   double seed_max_abs_height_m = 0.4; // [m] ... whose elevation is within this of z = 0
   int terrain_fill_iterations = 6;    // [cells] dilation steps filling the terrain of cells the
@@ -98,7 +102,7 @@ class GridSegmenter {
   const HoughWallRefiner& houghRefiner() const { return hough_; }
 
  private:
-  enum GroundState : std::uint8_t { kNoGround = 0, kReached = 1, kFilled = 2 };
+  enum GroundState : std::uint8_t { kNoGround = 0, kReached = 1, kFilled = 2, kBridged = 3 };
   void growGround();
   void fillTerrain();
   void classifyCells();
@@ -112,6 +116,7 @@ class GridSegmenter {
   std::vector<std::uint8_t> wall_support_;  // cell top at the upper edge of the field of view
   std::vector<float> ground_z_;          // [m] local ground elevation per cell
   std::vector<std::uint8_t> ground_state_;
+  std::vector<std::uint8_t> hops_;       // empty cells crossed to reach a bridged cell
   std::vector<std::int32_t> queue_;
   std::vector<std::int32_t> touched_;    // cells whose ground state was set this frame
   std::vector<std::int32_t> frontier_, next_frontier_;

@@ -25,7 +25,7 @@ struct HoughWallRefinerParams {
   double min_line_length_m = 6.0;      // [m] shortest accepted line
   double max_line_gap_m = 1.0;         // [m] largest gap bridged within one line
   double theta_resolution_deg = 1.0;   // [deg] angular resolution of the accumulator
-  double min_tall_fraction = 0.8;      // [0..1] a run of occupied cells along a line must lie
+  double min_tall_fraction = 0.9;      // [0..1] a run of occupied cells along a line must lie
                                        //     on at least this fraction of wall-supporting cells
                                        //     (tall, or reaching the top of the field of view):
                                        //     rows of parked cars are not walls
