@@ -14,3 +14,10 @@ pin() { if command -v taskset >/dev/null; then taskset -c 0 "$@"; else "$@"; fi;
 pin "$BIN/urban_detection_bench_decode" --benchmark_repetitions=5 \
     --benchmark_out="$OUT/bench_decode.json" --benchmark_out_format=json "$@" \
   | tee "$OUT/bench_decode.txt"
+
+# Simulation of one revolution of the default drive (config/demo_drive.yaml, nominal S2) at 600,
+# 300 and 1200 rpm: ray casting, noise, packet encoding, ground truth. Aggregates per revolution:
+# median, p95 (one revolution per repetition).
+pin "$BIN/urban_detection_bench_simulation" \
+    --benchmark_out="$OUT/bench_simulation.json" --benchmark_out_format=json \
+  | tee "$OUT/bench_simulation.txt"

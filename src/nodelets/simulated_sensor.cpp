@@ -82,7 +82,9 @@ class SimulatedSensor : public nodelet::Nodelet {
         sim.simulateNext(&rev);
         const double rev_s = 60.0 / c.sensor.rpm;
         if (realtime_) {  // publish when the revolution's last packet would have arrived
-          (wall0 + ros::WallDuration((rev.start_time_s + rev_s) / rate_factor_)).sleep();
+          const ros::WallTime due = wall0 + ros::WallDuration((rev.start_time_s + rev_s) / rate_factor_);
+          const ros::WallDuration wait = due - ros::WallTime::now();
+          if (wait > ros::WallDuration(0.0)) wait.sleep();
         }
         if (publish_tf_) publishTf(sim, rev, rev_s, first);
         first = false;
