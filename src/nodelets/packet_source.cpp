@@ -1,5 +1,6 @@
 // urban_detection/PacketSource: HDL-64E packets from a live UDP socket or a pcap replay,
-// published as one urban_detection/VelodyneScan per revolution on `velodyne_packets`.
+// published as one urban_detection/VelodyneScan per whole revolution on `velodyne_packets`
+// (the partial revolutions at the start and the end of a stream are dropped).
 //
 // Laziness: the live socket is read all the time, subscribers or not. A sensor does not stop
 // sending; an unread socket fills its buffer with stale packets that a late subscriber would
@@ -69,8 +70,7 @@ class PacketSource : public nodelet::Nodelet {
     while (running_ && ros::ok()) {
       switch (receiver_->receive(&raw, 100, &size)) {
         case core::UdpReceiver::Result::kPacket:
-          ++packets_;
-          publish(assembler_->add(raw, ros::Time::now()));
+          addPacket(raw, ros::Time::now());
           break;
         case core::UdpReceiver::Result::kWrongSize:
           ++bad_size_;
@@ -151,10 +151,10 @@ class PacketSource : public nodelet::Nodelet {
                                                                 std::chrono::milliseconds(50)));
         }
       }
-      ++packets_;
-      publish(assembler_->add(packet.data, ros::Time(std::max(0.0, replay_s + stamp_offset_s))));
+      addPacket(packet.data, ros::Time(std::max(0.0, replay_s + stamp_offset_s)));
     }
-    publish(assembler_->flush());
+    assembler_->reset();  // the revolution open at the end of the file is partial
+    partial_dropped_ = assembler_->partialDropped();
     if (pcap_->skipped() > 0) {
       NODELET_WARN("pcap '%s': skipped %lu records that are not HDL-64E data packets",
                    params_.pcap.c_str(), static_cast<unsigned long>(pcap_->skipped()));
@@ -164,7 +164,16 @@ class PacketSource : public nodelet::Nodelet {
     running_ = false;
   }
 
-  void publish(const VelodyneScan::Ptr& scan) {
+  void addPacket(const core::RawPacket& packet, const ros::Time& stamp) {
+    ++packets_;
+    VelodyneScan::Ptr scan = assembler_->add(packet, stamp);
+    partial_dropped_ = assembler_->partialDropped();
+    if (assembler_->forcedCuts() != forced_cuts_) {
+      forced_cuts_ = assembler_->forcedCuts();
+      NODELET_WARN_THROTTLE(5, "no revolution boundary at cut_angle %.2f deg within %zu packets: "
+                               "dropped them (is the sensor spinning?)",
+                            params_.cut_angle_deg, ScanAssembler::kMaxPacketsPerScan);
+    }
     if (!scan) return;
     ++scans_;
     pub_.publish(scan);  // a fresh message, never touched again: zero copy inside a manager
@@ -185,6 +194,8 @@ class PacketSource : public nodelet::Nodelet {
     stat.add("revolutions", scans_.load());
     stat.add("bad_size_packets", bad_size_.load());
     stat.add("other_sender_packets", other_sender_.load());
+    stat.add("partial_revolutions_dropped", partial_dropped_.load());
+    stat.add("forced_cuts", forced_cuts_.load());
   }
 
   PacketSourceParams params_;
@@ -197,6 +208,7 @@ class PacketSource : public nodelet::Nodelet {
   std::thread thread_;
   std::atomic<bool> running_{false};
   std::atomic<std::uint64_t> packets_{0}, scans_{0}, bad_size_{0}, other_sender_{0};
+  std::atomic<std::uint64_t> partial_dropped_{0}, forced_cuts_{0};
   std::uint64_t reported_bad_ = 0, reported_packets_ = 0;  // diagnostics thread only
 };
 

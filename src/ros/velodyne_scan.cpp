@@ -18,14 +18,19 @@ ScanAssembler::ScanAssembler(double cut_angle_deg, const std::string& frame_id)
 
 VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::Time& stamp) {
   VelodyneScan::Ptr finished;
-  const bool new_revolution = cutter_.startsNewRevolution(core::blockAzimuth(packet.data(), 0));
-  if (current_ && !current_->packets.empty()) {
-    if (new_revolution) {
-      finished = flush();
-    } else if (current_->packets.size() >= kMaxPacketsPerScan) {
-      ++forced_cuts_;
-      finished = flush();
+  if (cutter_.startsNewRevolution(core::blockAzimuth(packet.data(), 0))) {
+    if (current_ && current_is_whole_) {
+      expected_packets_ = current_->packets.size();
+      finished.swap(current_);
+    } else if (current_) {
+      ++partial_dropped_;
     }
+    current_.reset();
+    current_is_whole_ = true;
+  } else if (current_ && current_->packets.size() >= kMaxPacketsPerScan) {
+    ++forced_cuts_;
+    current_.reset();
+    current_is_whole_ = false;
   }
   if (!current_) {
     current_ = boost::make_shared<VelodyneScan>();
@@ -38,14 +43,11 @@ VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::T
   return finished;
 }
 
-VelodyneScan::Ptr ScanAssembler::flush() {
-  VelodyneScan::Ptr finished;
-  if (current_ && !current_->packets.empty()) {
-    expected_packets_ = std::min(current_->packets.size(), kMaxPacketsPerScan);
-    finished.swap(current_);
-  }
+void ScanAssembler::reset() {
+  if (current_) ++partial_dropped_;
   current_.reset();
-  return finished;
+  current_is_whole_ = false;
+  cutter_.reset();
 }
 
 namespace {

@@ -22,12 +22,15 @@ namespace urban_detection {
 /// Copies one raw packet and its stamp into a message packet.
 void toMessage(const core::RawPacket& packet, const ros::Time& stamp, VelodynePacket* msg);
 
-/// Groups a stream of packets into revolutions cut at a fixed azimuth (core::RevolutionCutter).
-/// Each finished revolution is a fresh message, so it can be published without copy.
+/// Groups a stream of packets into whole revolutions cut at a fixed azimuth
+/// (core::RevolutionCutter). Only revolutions bounded by two observed cuts are returned: the
+/// partial one at the start of a stream (and whatever is open when the stream ends) is dropped
+/// and counted. Each returned revolution is a fresh message, so it can be published without copy.
 class ScanAssembler {
  public:
-  /// Safety cut when the azimuth never crosses the cut angle (stuck or garbage azimuths):
-  /// three revolutions at 300 rpm, the slowest HDL-64E setting.
+  /// Safety limit when the azimuth never crosses the cut angle (sensor not spinning, garbage
+  /// azimuths): three revolutions at 300 rpm, the slowest HDL-64E setting. The packets
+  /// gathered so far are dropped and counted in forcedCuts().
   static constexpr std::size_t kMaxPacketsPerScan = 3 * 695;
 
   /// `cut_angle_deg` [deg, 0..360]; `frame_id` goes into every scan's header.
@@ -38,20 +41,21 @@ class ScanAssembler {
   /// header.stamp is the stamp of its first packet.
   VelodyneScan::Ptr add(const core::RawPacket& packet, const ros::Time& stamp);
 
-  /// Returns the revolution in progress (null if it has no packet) and starts afresh.
-  VelodyneScan::Ptr flush();
+  /// Drops the revolution in progress and restarts cut detection (a gap in the stream).
+  void reset();
 
-  /// Restarts the cut detection (after a jump in the stream, e.g. a pcap rewind).
-  void resetCutter() { cutter_.reset(); }
-
-  /// Number of scans cut at kMaxPacketsPerScan instead of at the cut angle.
+  /// Partial revolutions dropped (stream start, reset()).
+  std::size_t partialDropped() const { return partial_dropped_; }
+  /// Packet runs dropped at kMaxPacketsPerScan without any cut.
   std::size_t forcedCuts() const { return forced_cuts_; }
 
  private:
   core::RevolutionCutter cutter_;
   std::string frame_id_;
   VelodyneScan::Ptr current_;
+  bool current_is_whole_ = false;       // current_ was opened by an observed cut
   std::size_t expected_packets_ = 700;  // capacity hint: size of the previous revolution
+  std::size_t partial_dropped_ = 0;
   std::size_t forced_cuts_ = 0;
 };
 
