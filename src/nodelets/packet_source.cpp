@@ -127,6 +127,7 @@ class PacketSource : public nodelet::Nodelet {
         const double span_s = last_s - first_s;
         loop_shift_s += span_s + (in_pass > 1 ? span_s / static_cast<double>(in_pass - 1) : 0.1);
         pcap_->rewind();
+        assembler_->reset();  // never splice the end of the file to its start in one scan
         in_pass = 0;
         continue;
       }

@@ -477,6 +477,43 @@ TEST(PacketSource, PcapReplayThroughPacketToCloud) {
   EXPECT_GT((arrivals[2] - arrivals[0]).toSec(), 0.3);
 }
 
+// Loop replay: every pass yields the file's whole revolution; stamps keep increasing across
+// passes (shifted by the file's span plus one packet period).
+TEST(PacketSource, PcapLoopKeepsStampsIncreasing) {
+  const std::string pcap = "/tmp/urban_detection_test_loop_" + std::to_string(getpid()) + ".pcap";
+  const double packet_period_s = 0.1 / kPacketsPerRevolution;
+  std::size_t count = 0;
+  {
+    core::PcapWriter writer(pcap);
+    auto packets = makePackets(10, 300.5);
+    const auto whole = makePackets(kPacketsPerRevolution + 1, 0.5);
+    packets.insert(packets.end(), whole.begin(), whole.end());
+    for (const auto& packet : packets) {
+      writer.write(packet, 1700000000.0 + static_cast<double>(count++) * packet_period_s);
+    }
+  }
+  ros::NodeHandle nh("/loop");
+  ros::param::set("/loop/packet_source/pcap", pcap);
+  ros::param::set("/loop/packet_source/rate", 5.0);
+  ros::param::set("/loop/packet_source/loop", true);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/loop/packet_source", "urban_detection/PacketSource", {}, {}));
+  Collector<VelodyneScan> scans;
+  ros::Subscriber sub =
+      nh.subscribe("velodyne_packets", 100, &Collector<VelodyneScan>::callback, &scans);
+  ASSERT_TRUE(waitFor([&] { return scans.size() >= 5; }, 20.0));
+  sub.shutdown();
+  manager.clear();
+  std::remove(pcap.c_str());
+  for (std::size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(scans.at(i)->packets.size(), static_cast<std::size_t>(kPacketsPerRevolution));
+    if (i > 0) {
+      EXPECT_NEAR((scans.at(i)->header.stamp - scans.at(i - 1)->header.stamp).toSec(),
+                  static_cast<double>(count) * packet_period_s, 1e-5);
+    }
+  }
+}
+
 TEST(PacketSource, BadParametersFailInitClearly) {
   RosoutWatcher rosout;
   nodelet::Loader manager(false);
