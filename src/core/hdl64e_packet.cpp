@@ -96,32 +96,31 @@ PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderParams
     cos_azimuth_[a] = static_cast<float>(std::cos(a * kRawAzimuthToRad));
     sin_azimuth_[a] = static_cast<float>(std::sin(a * kRawAzimuthToRad));
   }
-  table_.resize(kNumLasers);
+  LaserTables& t = table_;
   for (int l = 0; l < kNumLasers; ++l) {
     const LaserCorrection& c = calibration_.lasers[l];
-    LaserTable& t = table_[l];
-    t.cos_rot = static_cast<float>(std::cos(c.rot_correction_rad));
-    t.sin_rot = static_cast<float>(std::sin(c.rot_correction_rad));
-    t.cos_vert = static_cast<float>(std::cos(c.vert_correction_rad));
-    t.sin_vert = static_cast<float>(std::sin(c.vert_correction_rad));
-    t.dist_corr = static_cast<float>(c.dist_correction_m);
-    t.vert_off_sin =
+    t.cos_rot[l] = static_cast<float>(std::cos(c.rot_correction_rad));
+    t.sin_rot[l] = static_cast<float>(std::sin(c.rot_correction_rad));
+    t.cos_vert[l] = static_cast<float>(std::cos(c.vert_correction_rad));
+    t.sin_vert[l] = static_cast<float>(std::sin(c.vert_correction_rad));
+    t.dist_corr[l] = static_cast<float>(c.dist_correction_m);
+    t.vert_off_sin[l] =
         static_cast<float>(c.vert_offset_correction_m * std::sin(c.vert_correction_rad));
-    t.vert_off_cos =
+    t.vert_off_cos[l] =
         static_cast<float>(c.vert_offset_correction_m * std::cos(c.vert_correction_rad));
-    t.horiz_off = static_cast<float>(c.horiz_offset_correction_m);
+    t.horiz_off[l] = static_cast<float>(c.horiz_offset_correction_m);
     double ax, bx, ay, by;
     twoPointCoefficients(c, &ax, &bx, &ay, &by);
-    t.two_pt_ax = static_cast<float>(ax);
-    t.two_pt_bx = static_cast<float>(bx);
-    t.two_pt_ay = static_cast<float>(ay);
-    t.two_pt_by = static_cast<float>(by);
+    t.two_pt_ax[l] = static_cast<float>(ax);
+    t.two_pt_bx[l] = static_cast<float>(bx);
+    t.two_pt_ay[l] = static_cast<float>(ay);
+    t.two_pt_by[l] = static_cast<float>(by);
     const double f = 1.0 - c.focal_distance / kFullScaleM;
-    t.focal_offset = static_cast<float>(256.0 * f * f);
-    t.focal_slope = static_cast<float>(c.focal_slope);
-    t.min_intensity = static_cast<float>(c.min_intensity);
-    t.max_intensity = static_cast<float>(c.max_intensity);
-    t.ring = static_cast<std::uint16_t>(calibration_.ring_of_laser[l]);
+    t.focal_offset[l] = static_cast<float>(256.0 * f * f);
+    t.focal_slope[l] = static_cast<float>(c.focal_slope);
+    t.min_intensity[l] = static_cast<float>(c.min_intensity);
+    t.max_intensity[l] = static_cast<float>(c.max_intensity);
+    t.ring[l] = static_cast<std::uint16_t>(calibration_.ring_of_laser[l]);
   }
 }
 
@@ -170,11 +169,11 @@ PacketStatus PacketDecoder::decodeImpl(const std::uint8_t* data, std::size_t siz
   if (status != PacketStatus::kOk || cloud == nullptr) return status;
 
   auto& points = cloud->points;
-  const std::size_t base = points.size();
   constexpr std::size_t kMaxPoints = kBlocksPerPacket * kLasersPerBlock;
-  if (points.capacity() < base + kMaxPoints) {
-    points.reserve(std::max(base + kMaxPoints, 2 * points.capacity()));
+  if (points.capacity() < points.size() + kMaxPoints) {
+    points.reserve(std::max(points.size() + kMaxPoints, 2 * points.capacity()));
   }
+  const std::size_t base = points.size();
   points.resize(base + kMaxPoints);
   PointXYZIRT* out = points.data() + base;
   std::size_t n = 0, no_return = 0, out_of_range = 0;
@@ -183,7 +182,14 @@ PacketStatus PacketDecoder::decodeImpl(const std::uint8_t* data, std::size_t siz
   const float min_range = static_cast<float>(params_.min_range_m);
   const float max_range = static_cast<float>(params_.max_range_m);
   constexpr float kInvFullRaw = 1.0f / 65535.0f;
+  const LaserTables& t = table_;
 
+  // Per block: gather the 32 returns, run the correction model over all of them in a
+  // branch-free loop over per-laser arrays (vectorised by the compiler), then append the valid
+  // ones. Invalid returns are computed and discarded, which is cheaper than branching.
+  alignas(32) float raw_f[kLasersPerBlock], raw_i[kLasersPerBlock];
+  alignas(32) float px[kLasersPerBlock], py[kLasersPerBlock], pz[kLasersPerBlock];
+  alignas(32) float pi[kLasersPerBlock], dist[kLasersPerBlock];
   for (int b = 0; b < kBlocksPerPacket; ++b) {
     const std::uint8_t* block = data + b * kBlockSize;
     const int bank = readU16(block) == kLowerBlockId ? kLasersPerBlock : 0;
@@ -192,44 +198,64 @@ PacketStatus PacketDecoder::decodeImpl(const std::uint8_t* data, std::size_t siz
     const float sin_a = sin_azimuth_[azimuth];
     const float time = static_cast<float>(packet_time_s + (b / 2) * kFiringPeriodS);
     const std::uint8_t* ret = block + 4;
-    const LaserTable* tables = table_.data() + bank;
-
-    for (int j = 0; j < kLasersPerBlock; ++j, ret += kReturnSize) {
-      const std::uint16_t raw = readU16(ret);
-      if (raw == 0) {
+    for (int j = 0; j < kLasersPerBlock; ++j) {
+      raw_f[j] = static_cast<float>(readU16(ret + kReturnSize * j));
+      raw_i[j] = static_cast<float>(ret[kReturnSize * j + 2]);
+    }
+    const float* cos_rot = t.cos_rot.data() + bank;
+    const float* sin_rot = t.sin_rot.data() + bank;
+    const float* cos_vert = t.cos_vert.data() + bank;
+    const float* sin_vert = t.sin_vert.data() + bank;
+    const float* dist_corr = t.dist_corr.data() + bank;
+    const float* vo_sin = t.vert_off_sin.data() + bank;
+    const float* vo_cos = t.vert_off_cos.data() + bank;
+    const float* ho = t.horiz_off.data() + bank;
+    const float* ax = t.two_pt_ax.data() + bank;
+    const float* bx = t.two_pt_bx.data() + bank;
+    const float* ay = t.two_pt_ay.data() + bank;
+    const float* by = t.two_pt_by.data() + bank;
+    const float* f_off = t.focal_offset.data() + bank;
+    const float* f_slope = t.focal_slope.data() + bank;
+    const float* i_min = t.min_intensity.data() + bank;
+    const float* i_max = t.max_intensity.data() + bank;
+    for (int j = 0; j < kLasersPerBlock; ++j) {
+      const float d = raw_f[j] * resolution + dist_corr[j];
+      // theta = azimuth - rot_correction by the angle-difference identities.
+      const float cos_t = cos_a * cos_rot[j] + sin_a * sin_rot[j];
+      const float sin_t = sin_a * cos_rot[j] - cos_a * sin_rot[j];
+      const float xy0 = d * cos_vert[j] - vo_sin[j];
+      const float xx = std::fabs(xy0 * sin_t - ho[j] * cos_t);
+      const float yy = std::fabs(xy0 * cos_t + ho[j] * sin_t);
+      const float dx = d + ax[j] + bx[j] * xx;
+      const float dy = d + ay[j] + by[j] * yy;
+      const float vx = (dx * cos_vert[j] - vo_sin[j]) * sin_t - ho[j] * cos_t;
+      const float vy = (dy * cos_vert[j] - vo_sin[j]) * cos_t + ho[j] * sin_t;
+      px[j] = vy;  // ROS frame: x forward = Velodyne Y, y left = -Velodyne X
+      py[j] = -vx;
+      pz[j] = dy * sin_vert[j] + vo_cos[j];
+      const float near = 1.0f - raw_f[j] * kInvFullRaw;
+      const float in = raw_i[j] + f_slope[j] * std::fabs(f_off[j] - 256.0f * near * near);
+      pi[j] = std::min(std::max(in, i_min[j]), i_max[j]);
+      dist[j] = d;
+    }
+    for (int j = 0; j < kLasersPerBlock; ++j) {
+      if (raw_f[j] == 0.0f) {
         ++no_return;
         continue;
       }
-      const LaserTable& t = tables[j];
-      const float d = raw * resolution + t.dist_corr;
-      if (!(d >= min_range && d <= max_range)) {
+      if (!(dist[j] >= min_range && dist[j] <= max_range)) {
         ++out_of_range;
         continue;
       }
-      // theta = azimuth - rot_correction by the angle-difference identities.
-      const float cos_t = cos_a * t.cos_rot + sin_a * t.sin_rot;
-      const float sin_t = sin_a * t.cos_rot - cos_a * t.sin_rot;
-      const float xy0 = d * t.cos_vert - t.vert_off_sin;
-      const float xx = std::fabs(xy0 * sin_t - t.horiz_off * cos_t);
-      const float yy = std::fabs(xy0 * cos_t + t.horiz_off * sin_t);
-      const float dx = d + t.two_pt_ax + t.two_pt_bx * xx;
-      const float dy = d + t.two_pt_ay + t.two_pt_by * yy;
-      const float vx = (dx * t.cos_vert - t.vert_off_sin) * sin_t - t.horiz_off * cos_t;
-      const float vy = (dy * t.cos_vert - t.vert_off_sin) * cos_t + t.horiz_off * sin_t;
-      const float vz = dy * t.sin_vert + t.vert_off_cos;
-
-      const float near = 1.0f - raw * kInvFullRaw;
-      float intensity = ret[2] + t.focal_slope * std::fabs(t.focal_offset - 256.0f * near * near);
-      intensity = std::min(std::max(intensity, t.min_intensity), t.max_intensity);
-
-      PointXYZIRT& p = out[n++];
-      p.x = vy;  // ROS frame: x forward = Velodyne Y
-      p.y = -vx;
-      p.z = vz;
+      PointXYZIRT& p = out[n];
+      p.x = px[j];
+      p.y = py[j];
+      p.z = pz[j];
       p.data[3] = 1.0f;
-      p.intensity = intensity;
-      p.ring = t.ring;
+      p.intensity = pi[j];
+      p.ring = t.ring[bank + j];
       p.time = time;
+      ++n;
       if (kRecord) {
         if (laser != nullptr) laser->push_back(static_cast<std::uint8_t>(bank + j));
         if (raw_azimuth != nullptr) raw_azimuth->push_back(azimuth);

@@ -86,20 +86,22 @@ class PacketDecoder {
   const Calibration& calibration() const { return calibration_; }
   const DecoderParams& params() const { return params_; }
 
-  /// Per-laser constants of the correction model in float (implementation detail).
-  struct LaserTable {
-    float cos_rot, sin_rot;      // [-] of the rotational correction
-    float cos_vert, sin_vert;    // [-] of the vertical correction
-    float dist_corr;             // [m] far-field distance correction
-    float vert_off_sin;          // [m] vert_offset * sin_vert
-    float vert_off_cos;          // [m] vert_offset * cos_vert
-    float horiz_off;             // [m] horizontal offset
-    float two_pt_ax, two_pt_bx;  // [m], [-]: near-range correction along x = ax + bx * |x|
-    float two_pt_ay, two_pt_by;  // [m], [-]: same along y
-    float focal_offset;          // [-] 256 * (1 - focal_distance / 131.07 m)^2
-    float focal_slope;           // [-]
-    float min_intensity, max_intensity;
-    std::uint16_t ring;
+  /// Per-laser constants of the correction model in float, one array per term so the
+  /// per-block loop vectorises (implementation detail).
+  struct LaserTables {
+    using Row = std::array<float, kNumLasers>;
+    Row cos_rot, sin_rot;      // [-] of the rotational correction
+    Row cos_vert, sin_vert;    // [-] of the vertical correction
+    Row dist_corr;             // [m] far-field distance correction
+    Row vert_off_sin;          // [m] vert_offset * sin_vert
+    Row vert_off_cos;          // [m] vert_offset * cos_vert
+    Row horiz_off;             // [m] horizontal offset
+    Row two_pt_ax, two_pt_bx;  // [m], [-]: near-range correction along x = ax + bx * |x|
+    Row two_pt_ay, two_pt_by;  // [m], [-]: same along y
+    Row focal_offset;          // [-] 256 * (1 - focal_distance / 131.07 m)^2
+    Row focal_slope;           // [-]
+    Row min_intensity, max_intensity;
+    std::array<std::uint16_t, kNumLasers> ring;
   };
 
  private:
@@ -112,7 +114,7 @@ class PacketDecoder {
   DecoderParams params_;
   // Precomputed tables (implementation detail, free to change).
   std::vector<float> cos_azimuth_, sin_azimuth_;  // [36000] cos/sin of raw azimuth
-  std::vector<LaserTable> table_;                 // [kNumLasers]
+  LaserTables table_;
 };
 
 /// Time offset of firing `firing` (0..5) within a packet [s]; each firing fires an upper and a
