@@ -204,13 +204,15 @@ TEST(PacketToCloud, ZeroCopyInsideTheManagerAndPerPacketTransform) {
   nodelet::Loader manager(false);
   ASSERT_TRUE(manager.load("/zc/packet_to_cloud", "urban_detection/PacketToCloud", {}, {}));
 
+  // Advertise before subscribing downstream: roscpp can miss an in-process connection when a
+  // publisher is advertised while a subscription to its topic is being set up in another thread.
+  ros::Publisher pub = nh.advertise<VelodyneScan>("velodyne_packets", 5);
   Collector<CloudXYZIRT> same_type;
   Collector<sensor_msgs::PointCloud2> serialised;
   ros::Subscriber sub1 = nh.subscribe("velodyne_points", 5, &Collector<CloudXYZIRT>::callback,
                                       &same_type);
   ros::Subscriber sub2 = nh.subscribe(
       "velodyne_points", 5, &Collector<sensor_msgs::PointCloud2>::callback, &serialised);
-  ros::Publisher pub = nh.advertise<VelodyneScan>("velodyne_packets", 5);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
 
   const auto scan = makeScan(makePackets(kPacketsPerRevolution, 0.5), ros::Time(100.0), 0.0);
@@ -269,10 +271,10 @@ TEST(PacketToCloud, DropsBadPacketsWholeAndCountsThem) {
   DiagnosticsWatcher diagnostics;
   nodelet::Loader manager(false);
   ASSERT_TRUE(manager.load("/badscan/packet_to_cloud", "urban_detection/PacketToCloud", {}, {}));
+  ros::Publisher pub = nh.advertise<VelodyneScan>("velodyne_packets", 5);  // first (see above)
   Collector<CloudXYZIRT> clouds;
   ros::Subscriber sub =
       nh.subscribe("velodyne_points", 5, &Collector<CloudXYZIRT>::callback, &clouds);
-  ros::Publisher pub = nh.advertise<VelodyneScan>("velodyne_packets", 5);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
 
   auto packets = makePackets(10, 0.5);
