@@ -1,5 +1,7 @@
 #include "urban_detection/core/ground_truth.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -27,6 +29,15 @@ bool get(std::ifstream& i, T* v) {
 }
 
 }  // namespace
+
+std::ptrdiff_t findGroundTruthFrame(const std::vector<GroundTruthFrame>& frames, double stamp_s,
+                                    double tolerance_s) {
+  const auto it = std::lower_bound(
+      frames.begin(), frames.end(), stamp_s - tolerance_s,
+      [](const GroundTruthFrame& f, double s) { return f.stamp_s < s; });
+  if (it == frames.end() || std::abs(it->stamp_s - stamp_s) > tolerance_s) return -1;
+  return it - frames.begin();
+}
 
 void makeGroundTruthFrame(const LidarSimulator& sim, const SimRevolution& rev,
                           GroundTruthFrame* frame) {

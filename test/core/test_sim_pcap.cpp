@@ -4,6 +4,7 @@
 
 #include <cstdio>
 
+#include "urban_detection/core/ground_truth.h"
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/pcap_io.h"
 #include "urban_detection/core/simulation_config.h"
@@ -18,12 +19,15 @@ TEST(SimulationPcap, PcapReplaysThroughReaderCutterAndDecoder) {
   const std::string path = testing::TempDir() + "/ud_sim_test.pcap";
   std::vector<std::size_t> gt_sizes;
   std::vector<ud::RawPacket> written;
+  std::vector<ud::GroundTruthFrame> frames;
   {
     ud::PcapWriter w(path);
     ud::SimRevolution rev;
     for (int r = 0; r < 3; ++r) {
       sim.simulateNext(&rev);
       gt_sizes.push_back(rev.instance_ids.size());
+      frames.emplace_back();
+      ud::makeGroundTruthFrame(sim, rev, &frames.back());
       for (std::size_t i = 0; i < rev.packets.size(); ++i) {
         w.write(rev.packets[i], rev.packet_stamps_s[i]);
         written.push_back(rev.packets[i]);
@@ -35,6 +39,7 @@ TEST(SimulationPcap, PcapReplaysThroughReaderCutterAndDecoder) {
   ud::RevolutionCutter cutter(c.sensor.cut_angle_deg);
   ud::PacketDecoder decoder(sim.calibration(), ud::DecoderParams());
   std::vector<std::size_t> decoded;
+  std::vector<double> rev_stamps;
   urban_detection::CloudXYZIRT cloud;
   ud::PcapPacket p;
   std::size_t n = 0;
@@ -45,6 +50,7 @@ TEST(SimulationPcap, PcapReplaysThroughReaderCutterAndDecoder) {
     ++n;
     if (cutter.startsNewRevolution(ud::blockAzimuth(p.data.data(), 0)) && n > 1) {
       decoded.push_back(cloud.size());
+      rev_stamps.push_back(rev_stamp);
       cloud.clear();
       rev_stamp = p.stamp_s;
     }
@@ -53,7 +59,15 @@ TEST(SimulationPcap, PcapReplaysThroughReaderCutterAndDecoder) {
               ud::PacketStatus::kOk);
   }
   decoded.push_back(cloud.size());
+  rev_stamps.push_back(rev_stamp);
   EXPECT_EQ(n, written.size());
   EXPECT_EQ(decoded, gt_sizes);
+  // Stamps read back from the pcap (1 us resolution) find their ground-truth frame.
+  ASSERT_EQ(rev_stamps.size(), frames.size());
+  for (std::size_t r = 0; r < rev_stamps.size(); ++r) {
+    EXPECT_EQ(ud::findGroundTruthFrame(frames, rev_stamps[r]), static_cast<std::ptrdiff_t>(r));
+    EXPECT_EQ(frames[r].instance_ids.size(), decoded[r]);
+  }
+  EXPECT_EQ(ud::findGroundTruthFrame(frames, rev_stamps[1] + 0.01), -1);
   std::remove(path.c_str());
 }

@@ -55,6 +55,14 @@ struct GroundTruthFrame {
   std::vector<GroundTruthObject> objects;   // every scene object, with its point count
 };
 
+/// Index of the frame whose stamp is within `tolerance_s` of `stamp_s` (a VelodyneScan header
+/// stamp), or -1. Match frames by stamp, not by position: PacketSource/ScanAssembler drop the
+/// first revolution of a stream (no cut observed before it) and pcap stores stamps to 1 us, so
+/// the first scan replayed from a pcap is the simulator's revolution 1, stamped to +-0.5 us.
+/// `frames` must be sorted by stamp (as written).
+std::ptrdiff_t findGroundTruthFrame(const std::vector<GroundTruthFrame>& frames, double stamp_s,
+                                    double tolerance_s = 5e-5);
+
 /// Fills `frame` from a simulated revolution (objects of the simulator's scene).
 void makeGroundTruthFrame(const LidarSimulator& sim, const SimRevolution& rev,
                           GroundTruthFrame* frame);
