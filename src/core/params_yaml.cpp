@@ -81,21 +81,25 @@ bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& sec
   hough.bind("theta_resolution_deg", &h.theta_resolution_deg);
   hough.bind("min_tall_fraction", &h.min_tall_fraction);
   hough.bind("line_half_width_cells", &h.line_half_width_cells);
+  hough.bind("extend_lines", &h.extend_lines);
   FieldTable t;
   t.bind("sensor_height_m", &p->sensor_height_m);
   t.bind("cell_size_m", &p->cell_size_m);
   t.bind("max_range_m", &p->max_range_m);
   t.bind("max_abs_height_m", &p->max_abs_height_m);
   t.bind("min_points_per_cell", &p->min_points_per_cell);
+  t.bind("ground_in_sparse_cells", &p->ground_in_sparse_cells);
   t.bind("ground_max_range_m", &p->ground_max_range_m);
   t.bind("ground_tolerance_m", &p->ground_tolerance_m);
   t.bind("ground_max_step_m", &p->ground_max_step_m);
+  t.bind("ground_max_gap_m", &p->ground_max_gap_m);
   t.bind("seed_radius_m", &p->seed_radius_m);
   t.bind("seed_max_abs_height_m", &p->seed_max_abs_height_m);
   t.bind("terrain_fill_iterations", &p->terrain_fill_iterations);
   t.bind("terrain_max_offset_m", &p->terrain_max_offset_m);
   t.bind("tall_min_height_m", &p->tall_min_height_m);
   t.bind("tall_min_range_m", &p->tall_min_range_m);
+  t.bind("fov_top_elevation_deg", &p->fov_top_elevation_deg);
   const std::string where = path + ": ";
   t.bindMap("hough", [&hough, where](const YAML::Node& n, std::string* err) {
     return hough.apply(n, where + "hough/", err);
