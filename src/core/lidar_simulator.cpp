@@ -63,6 +63,30 @@ LidarSimulator::LidarSimulator(Scene scene, const SceneParams& scene_params,
   for (int l = 0; l < kNumLasers; ++l) {
     dist_correction_m_[l] = static_cast<float>(calibration.lasers.at(l).dist_correction_m);
   }
+  // The far-field rays of PacketEncoder::ray turn rigidly with the azimuth; if this holds for
+  // every laser at a spread of azimuths, rays are built from the azimuth-0 ones (saves a
+  // sin/cos per ray). Otherwise every ray is asked from the encoder.
+  base_origin_.resize(kNumLasers);
+  base_dir_.resize(kNumLasers);
+  for (int l = 0; l < kNumLasers; ++l) {
+    float o[3], d[3];
+    encoder_.ray(l, 0, o, d);
+    base_origin_[l] = Eigen::Vector3d(o[0], o[1], o[2]);
+    base_dir_[l] = Eigen::Vector3d(d[0], d[1], d[2]).normalized();
+  }
+  fast_rays_ = true;
+  for (std::uint16_t az : {1u, 4500u, 9001u, 17999u, 22222u, 35999u}) {
+    const Eigen::Matrix3d turn =
+        Eigen::AngleAxisd(-az * (3.14159265358979323846 / 18000.0), Eigen::Vector3d::UnitZ())
+            .toRotationMatrix();
+    for (int l = 0; l < kNumLasers; ++l) {
+      float o[3], d[3];
+      encoder_.ray(l, az, o, d);
+      const double e_o = (turn * base_origin_[l] - Eigen::Vector3d(o[0], o[1], o[2])).norm();
+      const double e_d = (turn * base_dir_[l] - Eigen::Vector3d(d[0], d[1], d[2]).normalized()).norm();
+      if (e_o > 1e-5 || e_d > 1e-6) fast_rays_ = false;
+    }
+  }
   reset();
 }
 
@@ -159,14 +183,24 @@ void LidarSimulator::simulatePacket(std::uint64_t packet, SimRevolution* out) {
     fi.azimuth = rawAzimuth(k);
     const Eigen::Isometry3d pose = sensorPose(t);
     const Eigen::Matrix3d rot = pose.linear();
+    // Fast path: the encoder's ray at azimuth a is its ray at azimuth 0 turned by -a about z.
+    const double a = fi.azimuth * (3.14159265358979323846 / 18000.0);
+    const Eigen::Matrix3d turn =
+        rot * Eigen::AngleAxisd(-a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     for (int l = 0; l < kNumLasers; ++l) {
       fi.distance[l] = 0;
       fi.intensity[l] = 0;
       ++out->stats.rays;
-      float o[3], d[3];
-      encoder_.ray(l, fi.azimuth, o, d);
-      const Eigen::Vector3d origin = pose * Eigen::Vector3d(o[0], o[1], o[2]);
-      const Eigen::Vector3d dir = (rot * Eigen::Vector3d(d[0], d[1], d[2])).normalized();
+      Eigen::Vector3d origin, dir;
+      if (fast_rays_) {
+        origin = pose.translation() + turn * base_origin_[l];
+        dir = turn * base_dir_[l];
+      } else {
+        float o[3], d[3];
+        encoder_.ray(l, fi.azimuth, o, d);
+        origin = pose * Eigen::Vector3d(o[0], o[1], o[2]);
+        dir = (rot * Eigen::Vector3d(d[0], d[1], d[2])).normalized();
+      }
       const RayHit hit = caster_->cast(origin, dir, sensor_.max_range_m + 1.0, t);
       if (hit.distance_m < 0.0) {
         ++out->stats.no_hit;

@@ -105,6 +105,9 @@ class LidarSimulator {
   const DriveParams& drive() const { return drive_; }
   const Calibration& calibration() const { return encoder_.calibration(); }
   double firingPeriod() const { return firing_period_s_; }
+  /// True if rays are turned from the encoder's azimuth-0 rays (checked against
+  /// PacketEncoder::ray at construction), false if every ray is asked from the encoder.
+  bool fastRays() const { return fast_rays_; }
 
  private:
   std::uint16_t rawAzimuth(std::uint64_t firing) const;
@@ -124,6 +127,8 @@ class LidarSimulator {
   std::uint64_t next_revolution_ = 0;
   bool pending_start_ = false;      // next_packet_ was already seen by the cutter as a start
   std::vector<float> dist_correction_m_;  // per laser
+  bool fast_rays_ = false;                // rays turned from the azimuth-0 ones (see ctor)
+  std::vector<Eigen::Vector3d> base_origin_, base_dir_;  // per laser, azimuth 0, sensor frame
 };
 
 }  // namespace core
