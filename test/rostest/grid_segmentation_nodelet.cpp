@@ -7,6 +7,7 @@
 #include <mutex>
 #include <vector>
 
+#include <boost/shared_ptr.hpp>
 #include <gtest/gtest.h>
 #include <pcl_conversions/pcl_conversions.h>
 #include <pcl_ros/point_cloud.h>
@@ -47,16 +48,16 @@ pcl::PointCloud<pcl::PointXYZI> scene() {
 
 class Listener {
  public:
-  void labeled(const LabeledCloud::ConstPtr& m) {
+  void labeled(const boost::shared_ptr<const LabeledCloud>& m) {
     std::lock_guard<std::mutex> l(mutex);
     last_labeled = m;
   }
-  void foreground(const LabeledCloud::ConstPtr& m) {
+  void foreground(const boost::shared_ptr<const LabeledCloud>& m) {
     std::lock_guard<std::mutex> l(mutex);
     last_foreground = m;
   }
   std::mutex mutex;
-  LabeledCloud::ConstPtr last_labeled, last_foreground;
+  boost::shared_ptr<const LabeledCloud> last_labeled, last_foreground;
 };
 
 TEST(GridSegmentationNodelet, SegmentsKittiStylePointCloud2) {
@@ -93,7 +94,7 @@ TEST(GridSegmentationNodelet, SegmentsKittiStylePointCloud2) {
   msg.header.stamp = ros::Time(100.0);
   for (const auto& f : msg.fields) ASSERT_TRUE(f.name != "ring" && f.name != "time");
 
-  LabeledCloud::ConstPtr labeled, foreground;
+  boost::shared_ptr<const LabeledCloud> labeled, foreground;
   const ros::WallTime deadline2 = ros::WallTime::now() + ros::WallDuration(20.0);
   while (ros::WallTime::now() < deadline2) {
     pub.publish(msg);
