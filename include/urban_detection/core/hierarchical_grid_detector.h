@@ -1,0 +1,149 @@
+/// \file hierarchical_grid_detector.h
+/// Object detection with the hierarchical grid model (paper Sec. 3 "Hierarchical Grid Model"
+/// and Sec. 3.2), ROS-free.
+///
+/// Data structure. A coarse 2-D grid of side W_S (`coarse_cell_m`, the paper's optimum 0.60 m)
+/// lies on the sensor's xy plane; each coarse cell ("super-cell") s is subdivided into xi x xi
+/// dense sub-cells of side W_S / xi (xi = 3: 0.20 m). Every valid point is stored at both
+/// levels: its sub-cell is computed once and its super-cell is the sub-cell index divided by xi,
+/// so the two levels always agree. The grid covers at least [-grid_half_extent_m,
+/// grid_half_extent_m)^2 around the sensor origin, with cell borders on multiples of W_S (the cloud must be in the sensor frame: the distance weight uses the
+/// distance to the origin). Cells are flat arrays; only the cells touched by a frame are visited
+/// and reset, so the cost is linear in the number of points and nothing is allocated per frame
+/// in steady state.
+///
+/// Exact rule (the paper describes it in words and with Fig. 4; this is how it is implemented):
+///
+///  1. Coarse level. Z_max(s) is the largest z of the points in super-cell s. Two 8-neighbouring
+///     non-empty super-cells s, r are *linked* when psi(s, r) = |Z_max(s) - Z_max(r)| <=
+///     `psi_max_m`. The connected components of this link graph (union-find) are the coarse
+///     blobs (reported in the stats; with `dense_refinement` = false they are the objects: the
+///     paper's "simple grid" comparison of Fig. 7).
+///  2. Dense level. The weighted density of sub-cell c with n points whose centre lies at
+///     horizontal distance d from the sensor is rho(c) = n * w(d), w the distance weight of
+///     distance_weight.h (far sub-cells are enriched, paper Sec. 4). c is *dense* when rho(c) >=
+///     `dense_min_weighted_points`, otherwise *near-empty* (the grey cells of Fig. 4).
+///  3. Objects are the connected components of the dense sub-cells, where two dense sub-cells
+///     are connected when they are 8-neighbours AND their super-cells are the same cell or a
+///     linked pair (step 1). Hence a coarse blob is divided exactly where a 4-connected line of
+///     near-empty sub-cells separates its dense sub-cells (a diagonal chain of near-empty
+///     sub-cells does not separate, so a slanted object outline is never cut). This covers the
+///     three cases of Fig. 4:
+///       a) two cars whose super-cells touch and pass psi: the sub-cells along the shared border
+///          of the two super-cells are near-empty, so no dense sub-cell of one touches a dense
+///          sub-cell of the other and the link is not used;
+///       b) a pedestrian beside a car: likewise, on the border of the pedestrian's super-cell;
+///       c) one super-cell straddling two objects: the separating near-empty line runs through
+///          the interior of that super-cell and splits its sub-cells between the two objects.
+///     A coarse link whose super-cells differ by more than psi is never crossed at the dense
+///     level either, so the dense level only ever divides coarse blobs, never joins them.
+///  4. The points of a near-empty sub-cell join the object of the densest dense 8-neighbour
+///     sub-cell that it may connect to (same or linked super-cell); near-empty sub-cells with no
+///     such neighbour are noise and their points are in no object.
+///  5. Objects with fewer than `min_points` points or whose axis-aligned xy box has a side
+///     longer than `max_extent_m` are dropped. Ids are 1..N in the order of the objects' first
+///     point in the input cloud.
+///
+/// Non-finite points and points outside the grid are ignored (counted in the stats).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "urban_detection/core/distance_weight.h"
+#include "urban_detection/core/object_detector.h"
+#include "urban_detection/core/object_geometry.h"
+#include "urban_detection/core/point_types.h"
+
+namespace urban_detection {
+namespace core {
+
+/// Parameters of HierarchicalGridDetector, mirrored in config/detection.yaml
+/// (`hierarchical_grid:`).
+struct HierarchicalGridDetectorParams {
+  double coarse_cell_m = 0.60;        // [m] W_S, side of a coarse super-cell (paper: 0.60)
+  int xi = 3;                         // [-] sub-cells per super-cell side (paper: 3)
+  double grid_half_extent_m = 80.0;   // [m] grid covers [-e, e)^2 around the sensor
+  double psi_max_m = 0.8;             // [m] link neighbours when |Zmax(s) - Zmax(r)| <= this
+  double dense_min_weighted_points = 6.0;  // [-] sub-cell dense when n * w(d) >= this
+  bool dense_refinement = true;       // [-] false: objects are the coarse blobs (simple grid)
+  int min_points = 5;                 // [-] objects with fewer points are dropped
+  double max_extent_m = 20.0;         // [m] objects with a longer xy box side are dropped
+  DistanceWeightParams weight;        // distance weight of sub-cell densities (paper Sec. 4)
+};
+
+/// Returns "" when `p` is usable, else a message naming the first bad field and its range.
+std::string validate(const HierarchicalGridDetectorParams& p);
+
+/// Counters of the last detect() call.
+struct HierarchicalGridStats {
+  std::size_t input_points = 0;
+  std::size_t invalid_points = 0;     // non-finite coordinates
+  std::size_t outside_points = 0;     // outside the grid extent
+  std::size_t coarse_cells = 0;       // non-empty super-cells
+  std::size_t coarse_blobs = 0;       // connected components at the coarse level
+  std::size_t dense_cells = 0;        // non-empty sub-cells
+  std::size_t dense_occupied = 0;     // sub-cells with weighted density >= threshold
+  std::size_t noise_points = 0;       // points of isolated near-empty sub-cells
+  std::size_t components = 0;         // objects before the size filters
+  std::size_t dropped_small = 0;      // components with < min_points points
+  std::size_t dropped_large = 0;      // components longer than max_extent_m
+  std::size_t objects = 0;
+};
+
+/// Hierarchical grid detector (paper Sec. 3.2); see the file comment for the exact rule.
+class HierarchicalGridDetector : public ObjectDetector {
+ public:
+  /// Throws std::invalid_argument when validate(params) is not empty.
+  explicit HierarchicalGridDetector(
+      const HierarchicalGridDetectorParams& params = HierarchicalGridDetectorParams());
+  std::string name() const override { return "hierarchical_grid"; }
+  void detect(const LabeledCloud& foreground, std::vector<DetectedObject>* objects) override;
+
+  const HierarchicalGridDetectorParams& params() const { return params_; }
+  const HierarchicalGridStats& stats() const { return stats_; }
+  /// Sub-cell side W_S / xi [m].
+  double denseCellSize() const { return dense_cell_m_; }
+
+ private:
+  int find(std::vector<std::int32_t>* parent, std::int32_t i) const;
+  bool linked(std::int32_t coarse_a, std::int32_t coarse_b) const;
+  void resetGrid();
+
+  HierarchicalGridDetectorParams params_;
+  DistanceWeight weight_;
+  ObjectGeometry geometry_;
+  HierarchicalGridStats stats_;
+  double dense_cell_m_;
+  int nd_;  // sub-cells per grid side
+  int nc_;  // super-cells per grid side
+  double origin_m_;  // [m] x and y of the grid's lower corner (a multiple of W_S)
+
+  // Grid -> slot maps (-1 = untouched), reset through the touched slot lists.
+  std::vector<std::int32_t> dense_slot_;   // nd_ * nd_
+  std::vector<std::int32_t> coarse_slot_;  // nc_ * nc_
+  // Per touched sub-cell (slot).
+  std::vector<std::int32_t> dense_cell_;    // flat grid index
+  std::vector<std::uint32_t> dense_count_;  // points
+  std::vector<std::int32_t> dense_coarse_;  // slot of its super-cell
+  std::vector<std::uint8_t> dense_occupied_;
+  std::vector<float> dense_rho_;            // weighted density
+  std::vector<std::int32_t> dense_parent_;  // union-find
+  std::vector<std::int32_t> dense_object_;  // object index or -1
+  // Per touched super-cell (slot).
+  std::vector<std::int32_t> coarse_cell_;
+  std::vector<float> coarse_zmax_;
+  std::vector<std::int32_t> coarse_parent_;
+  // Per input point: its sub-cell slot, or -1.
+  std::vector<std::int32_t> point_slot_;
+  // Per component.
+  std::vector<std::int32_t> root_object_;  // per dense slot root -> component index
+  std::vector<std::uint32_t> comp_count_;
+  std::vector<float> comp_box_;            // min x, min y, max x, max y per component
+  std::vector<std::int32_t> comp_final_;   // component -> output object index or -1
+  std::vector<std::vector<std::uint32_t>> positions_;  // per output object: cloud positions
+};
+
+}  // namespace core
+}  // namespace urban_detection
