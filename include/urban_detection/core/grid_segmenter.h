@@ -1,0 +1,121 @@
+/// \file grid_segmenter.h
+/// Point cloud segmentation with the simple grid model (paper Sec. 3.1): ground, tall
+/// structures, short street objects and clutter, with a locally adaptive terrain model and the
+/// Hough wall refinement. ROS-free.
+///
+/// Algorithm (one call, GridSegmenter::segment):
+///  1. Grid the points (SimpleGrid); heights are referenced to the ground below the sensor.
+///  2. Clutter: cells with fewer than min_points_per_cell points.
+///  3. Local terrain: a cell is a ground candidate when its height spread is below
+///     ground_max_range_m. Candidates near the sensor whose elevation is close to 0 seed a
+///     region growing over neighbouring candidates whose elevation differs by less than
+///     ground_max_step_m per cell, so slopes, camber and curbs stay connected to the road while
+///     car roofs and walls do not. Cells with both ground and object returns (a car over road)
+///     join via their lowest point. Cells the growing did not reach get the mean ground
+///     elevation of reached cells nearby (terrain_fill_iterations dilation steps).
+///  4. Cell classes against the local ground g: tall when z_max - g > tall_min_height_m or
+///     z_max - z_min > tall_min_range_m; ground when all points lie within ground_tolerance_m
+///     of g; short otherwise.
+///  5. HoughWallRefiner turns short cells on long straight walls into tall.
+///  6. Per point: in ground-bearing cells a point within ground_tolerance_m of g is ground, the
+///     others take the cell class (mixed cells are split per point).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "urban_detection/core/hough_wall_refiner.h"
+#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/segment_class.h"
+#include "urban_detection/core/simple_grid.h"
+
+namespace urban_detection {
+namespace core {
+
+/// Every threshold of the segmentation; config/segmentation.yaml mirrors it field by field.
+struct GridSegmenterParams {
+  double sensor_height_m = 1.73;      // [m] sensor height above the road (KITTI: 1.73)
+  double cell_size_m = 0.5;           // [m] W_S, side of a simple-grid cell
+  double max_range_m = 80.0;          // [m] half side of the grid; farther points: kUnknown
+  double max_abs_height_m = 50.0;     // [m] points farther than this from the ground plane
+                                      //     (|z + sensor_height_m|) are kUnknown
+  int min_points_per_cell = 4;        // [points] fewer -> clutter (paper: 4-8)
+  double ground_max_range_m = 0.25;   // [m] z_max - z_min below this: ground candidate (paper)
+  double ground_tolerance_m = 0.20;   // [m] a point this close above the local ground is ground
+  double ground_max_step_m = 0.20;    // [m] elevation step allowed between neighbouring ground
+                                      //     cells (curbs, slopes)
+  double seed_radius_m = 12.0;        // [m] ground growing starts from candidates this close
+  double seed_max_abs_height_m = 0.4; // [m] ... whose elevation is within this of z = 0
+  int terrain_fill_iterations = 6;    // [cells] dilation steps filling the terrain of cells the
+                                      //     growing did not reach
+  double terrain_max_offset_m = 0.35; // [m] a flat cell the growing did not reach is ground when
+                                      //     its mean is this close to the filled terrain
+  double tall_min_height_m = 1.40;    // [m] z_max above local ground beyond this: tall (paper)
+  double tall_min_range_m = 3.10;     // [m] z_max - z_min beyond this: tall (paper)
+  HoughWallRefinerParams hough;       // Hough wall refinement (paper Fig. 3)
+};
+
+/// Statistics of the last segment() call (points and cells per class).
+struct SegmentationStats {
+  std::uint32_t points_unknown = 0, points_clutter = 0, points_ground = 0, points_tall = 0,
+                points_short = 0;
+  std::uint32_t cells_occupied = 0, cells_ground_reached = 0;
+  HoughWallStats hough;
+};
+
+/// The simple-grid segmenter. Holds its grid and scratch buffers between frames.
+class GridSegmenter {
+ public:
+  explicit GridSegmenter(const GridSegmenterParams& params = GridSegmenterParams());
+
+  /// Replaces the parameters (rebuilds the grid if its geometry changed).
+  void setParams(const GridSegmenterParams& params);
+  const GridSegmenterParams& params() const { return params_; }
+
+  /// Labels every point of `cloud`: labels->size() == cloud.size() afterwards. Non-finite,
+  /// out-of-range and absurd points get kUnknown. Accepts clouds whose ring/time are zero.
+  void segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels);
+
+  const SegmentationStats& stats() const { return stats_; }
+  /// The grid of the last frame, and its per-cell classes (row-major, after Hough).
+  const SimpleGrid& grid() const { return grid_; }
+  const std::vector<SegmentClass>& cellClasses() const { return cell_class_; }
+  /// Local ground elevation [m] of each cell of the last frame (valid where cellHasGround()).
+  float cellGround(std::int32_t cell) const { return ground_z_[cell]; }
+  bool cellHasGround(std::int32_t cell) const { return ground_state_[cell] != kNoGround; }
+  const HoughWallRefiner& houghRefiner() const { return hough_; }
+
+ private:
+  enum GroundState : std::uint8_t { kNoGround = 0, kReached = 1, kFilled = 2 };
+  void growGround();
+  void fillTerrain();
+  void classifyCells();
+
+  GridSegmenterParams params_;
+  SimpleGrid grid_;
+  HoughWallRefiner hough_;
+  SegmentationStats stats_;
+  // Scratch, sized to the grid, reset only on the cells touched by the previous frame.
+  std::vector<SegmentClass> cell_class_;
+  std::vector<float> ground_z_;          // [m] local ground elevation per cell
+  std::vector<std::uint8_t> ground_state_;
+  std::vector<std::int32_t> queue_;
+  std::vector<std::int32_t> touched_;    // cells whose ground state was set this frame
+  std::vector<std::int32_t> frontier_, next_frontier_;
+  std::vector<float> fill_sum_;
+  std::vector<std::uint8_t> fill_cnt_;
+};
+
+/// Builds the foreground cloud of the detectors: only the finite kShort points, label =
+/// kShort, index = position of the point in `cloud`. `foreground` is cleared and filled; its
+/// header is copied from `cloud`.
+void extractForeground(const CloudXYZIRT& cloud, const std::vector<SegmentClass>& labels,
+                       LabeledCloud* foreground);
+
+/// Builds the labelled cloud: every point of `cloud` (non-finite ones included, label
+/// kUnknown), label = SegmentClass value, index = position in `cloud`.
+void buildLabeledCloud(const CloudXYZIRT& cloud, const std::vector<SegmentClass>& labels,
+                       LabeledCloud* labeled);
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,67 @@
+/// \file hough_wall_refiner.h
+/// Hough-transform based refinement of the grid segmentation (paper Sec. 3.1, Fig. 3):
+/// near the sensor, facade parts below the vertical field of view look like short objects;
+/// long straight lines of occupied cells are facades and walls, so short cells on them become
+/// tall. ROS-free.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "urban_detection/core/segment_class.h"
+
+namespace urban_detection {
+namespace core {
+
+/// Parameters of the probabilistic Hough refinement. Lengths are in metres and converted to
+/// cells with the grid's cell size.
+struct HoughWallRefinerParams {
+  bool enabled = true;                 // run the refinement at all
+  double max_range_m = 30.0;           // [m] only cells within this square half side are
+                                       //     rasterised (the misreading happens near the sensor)
+  int votes = 12;                      // [cells] accumulator threshold of cv::HoughLinesP
+  double min_line_length_m = 6.0;      // [m] shortest accepted line
+  double max_line_gap_m = 1.0;         // [m] largest gap bridged within one line
+  double theta_resolution_deg = 1.0;   // [deg] angular resolution of the accumulator
+  double min_tall_fraction = 0.3;      // [0..1] a line must lie on at least this fraction of
+                                       //     tall cells (rows of parked cars are not walls)
+  int line_half_width_cells = 0;       // [cells] relabel short cells up to this far from a line
+};
+
+/// Statistics of the last refine() call.
+struct HoughWallStats {
+  int lines_found = 0;     // lines returned by cv::HoughLinesP
+  int lines_accepted = 0;  // lines passing min_tall_fraction
+  int cells_relabeled = 0; // short cells turned tall
+};
+
+/// Relabels short cells lying on long straight structures as tall (paper Sec. 3.1).
+class HoughWallRefiner {
+ public:
+  explicit HoughWallRefiner(const HoughWallRefinerParams& params = HoughWallRefinerParams());
+
+  void setParams(const HoughWallRefinerParams& params) { params_ = params; }
+  const HoughWallRefinerParams& params() const { return params_; }
+
+  /// `cell_classes` is a row-major rows x cols grid of cell classes (cell size `cell_size_m`,
+  /// sensor at the grid centre). Tall and short cells within max_range_m are rasterised into a
+  /// binary image, cv::HoughLinesP finds line segments, and kShort cells on accepted segments
+  /// become kTall. Only kShort -> kTall changes are made.
+  HoughWallStats refine(int rows, int cols, double cell_size_m,
+                        std::vector<SegmentClass>* cell_classes);
+
+  /// Line segments accepted by the last refine() call, as (x0, y0, x1, y1) in cell
+  /// coordinates of the full grid (col, row).
+  const std::vector<cv::Vec4i>& acceptedLines() const { return accepted_; }
+
+ private:
+  HoughWallRefinerParams params_;
+  cv::Mat image_;                // scratch: binary occupancy image of the Hough window
+  std::vector<cv::Vec4i> lines_; // scratch: raw Hough output
+  std::vector<cv::Vec4i> accepted_;
+};
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,85 @@
+/// \file simple_grid.h
+/// The Simple Grid Model of the paper (Sec. 3, "Simple Grid Model"): a regular 2-D grid on
+/// the sensor's horizontal plane holding per-cell height statistics. ROS-free.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "urban_detection/core/point_types.h"
+
+namespace urban_detection {
+namespace core {
+
+/// Geometry of the simple grid.
+struct SimpleGridParams {
+  double cell_size_m = 0.5;   // [m] side W_S of a square cell
+  double max_range_m = 80.0;  // [m] half side of the square grid centred on the sensor;
+                              //     points outside it are not gridded
+};
+
+/// Height statistics of one cell. Heights are referenced to the ground below the sensor
+/// (z + sensor height), as in the paper.
+struct GridCell {
+  std::uint32_t count = 0;                             // points in the cell
+  float z_min = std::numeric_limits<float>::max();     // [m] lowest point height
+  float z_max = std::numeric_limits<float>::lowest();  // [m] highest point height
+  float z_sum = 0.0f;                                  // [m] sum of heights (mean = z_sum/count)
+
+  float zMean() const { return count > 0 ? z_sum / static_cast<float>(count) : 0.0f; }
+  float zRange() const { return count > 0 ? z_max - z_min : 0.0f; }
+};
+
+/// A bounded square grid of side 2 * max_range_m centred on the sensor. Each finite point
+/// within range goes to the cell containing its projection on the z = 0 plane. Buffers are
+/// kept between frames; build() only resets the cells the previous frame touched, so its cost
+/// is proportional to the number of points, not to the grid area.
+class SimpleGrid {
+ public:
+  /// Marks a point that has no cell (non-finite, beyond max_range_m or absurdly high/low).
+  static constexpr std::int32_t kNoCell = -1;
+
+  explicit SimpleGrid(const SimpleGridParams& params = SimpleGridParams());
+
+  /// Assigns every point of `cloud` to its cell. `z_offset_m` [m] is added to each z (the
+  /// sensor height, so heights become heights above the ground below the sensor).
+  /// Points with |z + z_offset_m| > max_abs_height_m are treated as invalid.
+  void build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs_height_m = 100.0f);
+
+  const SimpleGridParams& params() const { return params_; }
+  int rows() const { return side_; }  ///< cells along y
+  int cols() const { return side_; }  ///< cells along x
+  std::size_t numCells() const { return cells_.size(); }
+
+  /// Linear cell index (row * cols + col) of point i of the last cloud, or kNoCell.
+  std::int32_t pointCell(std::size_t i) const { return point_cell_[i]; }
+  const std::vector<std::int32_t>& pointCells() const { return point_cell_; }
+  /// Height of point i above the ground below the sensor [m] (valid when pointCell != kNoCell).
+  float pointHeight(std::size_t i) const { return point_z_[i]; }
+
+  const GridCell& cell(std::int32_t index) const { return cells_[index]; }
+  const GridCell& cell(int row, int col) const { return cells_[row * side_ + col]; }
+  /// Linear indices of the cells holding at least one point, in first-touch order.
+  const std::vector<std::int32_t>& occupiedCells() const { return occupied_; }
+
+  int rowOf(std::int32_t index) const { return index / side_; }
+  int colOf(std::int32_t index) const { return index % side_; }
+  /// Cell of a metric position, or kNoCell when outside the grid or non-finite.
+  std::int32_t cellAt(float x_m, float y_m) const;
+  /// Centre of a cell in the sensor frame [m].
+  void cellCenter(std::int32_t index, float* x_m, float* y_m) const;
+
+ private:
+  SimpleGridParams params_;
+  int side_ = 0;
+  float inv_cell_ = 1.0f;
+  float origin_m_ = 0.0f;  // [m] coordinate of the grid's lower-left corner (both axes)
+  std::vector<GridCell> cells_;
+  std::vector<std::int32_t> occupied_;
+  std::vector<std::int32_t> point_cell_;
+  std::vector<float> point_z_;
+};
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,256 @@
+#include "urban_detection/core/grid_segmenter.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace urban_detection {
+namespace core {
+
+namespace {
+
+SimpleGridParams gridParamsOf(const GridSegmenterParams& p) {
+  SimpleGridParams g;
+  g.cell_size_m = p.cell_size_m;
+  g.max_range_m = p.max_range_m;
+  return g;
+}
+
+bool isFinitePoint(const PointXYZIRT& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
+
+constexpr int kDr[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
+constexpr int kDc[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
+
+}  // namespace
+
+GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
+    : params_(params), grid_(gridParamsOf(params)), hough_(params.hough) {
+  const std::size_t n = grid_.numCells();
+  cell_class_.assign(n, SegmentClass::kUnknown);
+  ground_z_.assign(n, 0.0f);
+  ground_state_.assign(n, kNoGround);
+  fill_sum_.assign(n, 0.0f);
+  fill_cnt_.assign(n, 0);
+}
+
+void GridSegmenter::setParams(const GridSegmenterParams& params) {
+  const bool geometry_changed = params.cell_size_m != params_.cell_size_m ||
+                                params.max_range_m != params_.max_range_m;
+  params_ = params;
+  hough_.setParams(params.hough);
+  if (geometry_changed) *this = GridSegmenter(params);
+}
+
+void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels) {
+  // Reset only what the previous frame touched (the grid has 100k+ cells, a frame ~10k).
+  for (const std::int32_t c : grid_.occupiedCells()) cell_class_[c] = SegmentClass::kUnknown;
+  for (const std::int32_t c : touched_) ground_state_[c] = kNoGround;
+  touched_.clear();
+  stats_ = SegmentationStats();
+
+  grid_.build(cloud, static_cast<float>(params_.sensor_height_m),
+              static_cast<float>(params_.max_abs_height_m));
+  stats_.cells_occupied = static_cast<std::uint32_t>(grid_.occupiedCells().size());
+
+  const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
+  for (const std::int32_t c : grid_.occupiedCells()) {
+    if (grid_.cell(c).count < min_pts) cell_class_[c] = SegmentClass::kClutter;
+  }
+
+  growGround();
+  fillTerrain();
+  classifyCells();
+  if (params_.hough.enabled) {
+    stats_.hough = hough_.refine(grid_.rows(), grid_.cols(), grid_.params().cell_size_m,
+                                 &cell_class_);
+  }
+
+  // Per point: mixed cells are split by the height above the local ground.
+  const std::size_t n = cloud.size();
+  labels->resize(n);
+  const float tol = static_cast<float>(params_.ground_tolerance_m);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t c = grid_.pointCell(i);
+    SegmentClass label = SegmentClass::kUnknown;
+    if (c != SimpleGrid::kNoCell) {
+      label = cell_class_[c];
+      if ((label == SegmentClass::kShort || label == SegmentClass::kTall) &&
+          ground_state_[c] != kNoGround && grid_.pointHeight(i) - ground_z_[c] < tol) {
+        label = SegmentClass::kGround;
+      }
+    }
+    (*labels)[i] = label;
+    switch (label) {
+      case SegmentClass::kClutter: ++stats_.points_clutter; break;
+      case SegmentClass::kGround: ++stats_.points_ground; break;
+      case SegmentClass::kTall: ++stats_.points_tall; break;
+      case SegmentClass::kShort: ++stats_.points_short; break;
+      default: ++stats_.points_unknown; break;
+    }
+  }
+}
+
+// Region growing of the terrain from ground cells around the sensor. A flat cell joins when
+// its mean elevation is within ground_max_step_m of the cell it is reached from, and then
+// propagates further; a cell holding ground and object returns joins through its lowest point
+// but does not propagate, so the growing cannot climb a car body or a wall cell by cell.
+void GridSegmenter::growGround() {
+  const float flat = static_cast<float>(params_.ground_max_range_m);
+  const float step = static_cast<float>(params_.ground_max_step_m);
+  const float seed_h = static_cast<float>(params_.seed_max_abs_height_m);
+  const float seed_r2 = static_cast<float>(params_.seed_radius_m * params_.seed_radius_m);
+  const int rows = grid_.rows(), cols = grid_.cols();
+
+  queue_.clear();
+  for (const std::int32_t c : grid_.occupiedCells()) {
+    if (cell_class_[c] == SegmentClass::kClutter) continue;
+    const GridCell& cell = grid_.cell(c);
+    if (cell.zRange() >= flat || std::fabs(cell.zMean()) > seed_h) continue;
+    float x, y;
+    grid_.cellCenter(c, &x, &y);
+    if (x * x + y * y > seed_r2) continue;
+    ground_state_[c] = kReached;
+    ground_z_[c] = cell.zMean();
+    touched_.push_back(c);
+    queue_.push_back(c);
+  }
+  for (std::size_t head = 0; head < queue_.size(); ++head) {
+    const std::int32_t c = queue_[head];
+    const int r = grid_.rowOf(c), k = grid_.colOf(c);
+    const float g = ground_z_[c];
+    for (int d = 0; d < 8; ++d) {
+      const int nr = r + kDr[d], nk = k + kDc[d];
+      if (nr < 0 || nr >= rows || nk < 0 || nk >= cols) continue;
+      const std::int32_t nc = nr * cols + nk;
+      if (ground_state_[nc] != kNoGround) continue;
+      const GridCell& cell = grid_.cell(nc);
+      if (cell.count == 0 || cell_class_[nc] == SegmentClass::kClutter) continue;
+      const bool is_flat = cell.zRange() < flat;
+      const float e = is_flat ? cell.zMean() : cell.z_min;
+      if (std::fabs(e - g) >= step) continue;
+      ground_state_[nc] = kReached;
+      ground_z_[nc] = e;
+      touched_.push_back(nc);
+      if (is_flat) queue_.push_back(nc);
+    }
+  }
+  stats_.cells_ground_reached = static_cast<std::uint32_t>(touched_.size());
+}
+
+// Cells the growing did not reach (under a car roof, behind an occluder) take the mean ground
+// elevation of their already known neighbours, ring by ring.
+void GridSegmenter::fillTerrain() {
+  const int rows = grid_.rows(), cols = grid_.cols();
+  frontier_.assign(touched_.begin(), touched_.end());
+  for (int it = 0; it < params_.terrain_fill_iterations && !frontier_.empty(); ++it) {
+    next_frontier_.clear();
+    for (const std::int32_t c : frontier_) {
+      const int r = grid_.rowOf(c), k = grid_.colOf(c);
+      for (int d = 0; d < 8; ++d) {
+        const int nr = r + kDr[d], nk = k + kDc[d];
+        if (nr < 0 || nr >= rows || nk < 0 || nk >= cols) continue;
+        const std::int32_t nc = nr * cols + nk;
+        if (ground_state_[nc] != kNoGround) continue;
+        if (fill_cnt_[nc] == 0) next_frontier_.push_back(nc);
+        fill_sum_[nc] += ground_z_[c];
+        ++fill_cnt_[nc];
+      }
+    }
+    for (const std::int32_t nc : next_frontier_) {
+      ground_z_[nc] = fill_sum_[nc] / static_cast<float>(fill_cnt_[nc]);
+      ground_state_[nc] = kFilled;
+      fill_sum_[nc] = 0.0f;
+      fill_cnt_[nc] = 0;
+      touched_.push_back(nc);
+    }
+    frontier_.swap(next_frontier_);
+  }
+}
+
+void GridSegmenter::classifyCells() {
+  const float flat = static_cast<float>(params_.ground_max_range_m);
+  const float tol = static_cast<float>(params_.ground_tolerance_m);
+  const float tall_h = static_cast<float>(params_.tall_min_height_m);
+  const float tall_range = static_cast<float>(params_.tall_min_range_m);
+  const float terrain_offset = static_cast<float>(params_.terrain_max_offset_m);
+  for (const std::int32_t c : grid_.occupiedCells()) {
+    if (cell_class_[c] == SegmentClass::kClutter) continue;
+    const GridCell& cell = grid_.cell(c);
+    const std::uint8_t state = ground_state_[c];
+    // Without any terrain estimate the plane below the sensor is the reference.
+    const float g = state != kNoGround ? ground_z_[c] : 0.0f;
+    SegmentClass cls;
+    if (cell.z_max - g > tall_h || cell.zRange() > tall_range) {
+      cls = SegmentClass::kTall;
+    } else if (cell.z_max - g < tol) {
+      cls = SegmentClass::kGround;
+    } else if (state != kReached && cell.zRange() < flat &&
+               std::fabs(cell.zMean() - g) < terrain_offset) {
+      // A flat patch the growing did not reach, close to the surrounding terrain (paper: the
+      // neighbours' elevation within an allowed range): ground at its own elevation.
+      cls = SegmentClass::kGround;
+      if (state == kNoGround) touched_.push_back(c);
+      ground_state_[c] = kFilled;
+      ground_z_[c] = cell.zMean();
+    } else {
+      cls = SegmentClass::kShort;
+    }
+    cell_class_[c] = cls;
+  }
+}
+
+void extractForeground(const CloudXYZIRT& cloud, const std::vector<SegmentClass>& labels,
+                       LabeledCloud* foreground) {
+  foreground->clear();
+  foreground->header = cloud.header;
+  foreground->sensor_origin_ = cloud.sensor_origin_;
+  foreground->sensor_orientation_ = cloud.sensor_orientation_;
+  const std::size_t n = std::min(cloud.size(), labels.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (labels[i] != SegmentClass::kShort || !isFinitePoint(cloud[i])) continue;
+    LabeledPoint q;
+    q.x = cloud[i].x;
+    q.y = cloud[i].y;
+    q.z = cloud[i].z;
+    q.intensity = cloud[i].intensity;
+    q.label = static_cast<std::uint32_t>(SegmentClass::kShort);
+    q.index = static_cast<std::uint32_t>(i);
+    foreground->push_back(q);
+  }
+  foreground->width = static_cast<std::uint32_t>(foreground->size());
+  foreground->height = 1;
+  foreground->is_dense = true;
+}
+
+void buildLabeledCloud(const CloudXYZIRT& cloud, const std::vector<SegmentClass>& labels,
+                       LabeledCloud* labeled) {
+  labeled->clear();
+  labeled->header = cloud.header;
+  labeled->sensor_origin_ = cloud.sensor_origin_;
+  labeled->sensor_orientation_ = cloud.sensor_orientation_;
+  const std::size_t n = cloud.size();
+  labeled->resize(n);
+  bool dense = true;
+  for (std::size_t i = 0; i < n; ++i) {
+    LabeledPoint& q = (*labeled)[i];
+    q.x = cloud[i].x;
+    q.y = cloud[i].y;
+    q.z = cloud[i].z;
+    q.intensity = cloud[i].intensity;
+    q.label = static_cast<std::uint32_t>(i < labels.size() ? labels[i] : SegmentClass::kUnknown);
+    q.index = static_cast<std::uint32_t>(i);
+    dense = dense && isFinitePoint(cloud[i]);
+  }
+  if (cloud.height > 1 && cloud.width * cloud.height == n) {
+    labeled->width = cloud.width;
+    labeled->height = cloud.height;
+  } else {
+    labeled->width = static_cast<std::uint32_t>(n);
+    labeled->height = 1;
+  }
+  labeled->is_dense = dense;
+}
+
+}  // namespace core
+}  // namespace urban_detection

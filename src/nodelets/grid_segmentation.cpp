@@ -1,0 +1,94 @@
+// urban_detection/GridSegmentation: velodyne_points -> segmentation/labeled_points and
+// segmentation/foreground (paper Sec. 3.1). Thin wrapper around core::GridSegmenter.
+#include "urban_detection/core/point_types.h"
+
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <boost/make_shared.hpp>
+#include <nodelet/nodelet.h>
+#include <pcl_ros/point_cloud.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include "urban_detection/core/grid_segmenter.h"
+#include "urban_detection/ros/pointcloud2_input.h"
+#include "urban_detection/ros/segmentation_params.h"
+
+namespace urban_detection {
+
+class GridSegmentation : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    core::GridSegmenterParams params;
+    std::string error;
+    if (!ros_conv::loadGridSegmenterParams(pnh, &params, &error)) {
+      NODELET_FATAL("GridSegmentation: %s; the nodelet stays idle", error.c_str());
+      return;
+    }
+    segmenter_.reset(new core::GridSegmenter(params));
+    // Lazy: subscribe upstream only while someone listens to an output.
+    ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
+      connectCb();
+    };
+    std::lock_guard<std::mutex> lock(connect_mutex_);
+    labeled_pub_ = nh.advertise<LabeledCloud>("segmentation/labeled_points", 2, connect, connect);
+    foreground_pub_ = nh.advertise<LabeledCloud>("segmentation/foreground", 2, connect, connect);
+  }
+
+  void connectCb() {
+    std::lock_guard<std::mutex> lock(connect_mutex_);
+    const bool wanted =
+        labeled_pub_.getNumSubscribers() > 0 || foreground_pub_.getNumSubscribers() > 0;
+    if (wanted && !sub_) {
+      sub_ = getNodeHandle().subscribe("velodyne_points", 2, &GridSegmentation::cloudCb, this);
+    } else if (!wanted && sub_) {
+      sub_.shutdown();
+    }
+  }
+
+  void cloudCb(const sensor_msgs::PointCloud2ConstPtr& msg) {
+    ros_conv::PointCloud2InputInfo info;
+    std::string error;
+    if (!ros_conv::fromPointCloud2(*msg, &cloud_, &info, &error)) {
+      NODELET_ERROR_THROTTLE(5.0, "GridSegmentation: dropping velodyne_points: %s",
+                             error.c_str());
+      return;
+    }
+    if (!info.has_ring || !info.has_time) {
+      NODELET_INFO_ONCE("GridSegmentation: input has no ring/time fields (e.g. KITTI); "
+                        "they are set to 0");
+    }
+    segmenter_->segment(cloud_, &labels_);
+    const core::SegmentationStats& s = segmenter_->stats();
+    if (s.points_unknown > 0) {
+      NODELET_DEBUG_THROTTLE(5.0, "GridSegmentation: %u non-finite or out-of-range points",
+                             s.points_unknown);
+    }
+    if (labeled_pub_.getNumSubscribers() > 0) {
+      auto labeled = boost::make_shared<LabeledCloud>();
+      core::buildLabeledCloud(cloud_, labels_, labeled.get());
+      labeled_pub_.publish(boost::shared_ptr<const LabeledCloud>(labeled));
+    }
+    if (foreground_pub_.getNumSubscribers() > 0) {
+      auto foreground = boost::make_shared<LabeledCloud>();
+      core::extractForeground(cloud_, labels_, foreground.get());
+      foreground_pub_.publish(boost::shared_ptr<const LabeledCloud>(foreground));
+    }
+  }
+
+  std::unique_ptr<core::GridSegmenter> segmenter_;
+  CloudXYZIRT cloud_;                     // scratch: converted input
+  std::vector<core::SegmentClass> labels_;  // scratch: per-point classes
+  std::mutex connect_mutex_;
+  ros::Publisher labeled_pub_, foreground_pub_;
+  ros::Subscriber sub_;
+};
+
+}  // namespace urban_detection
+
+PLUGINLIB_EXPORT_CLASS(urban_detection::GridSegmentation, nodelet::Nodelet)

@@ -1,0 +1,87 @@
+#include "urban_detection/ros/segmentation_params.h"
+
+#include <sstream>
+
+namespace urban_detection {
+namespace ros_conv {
+
+namespace {
+
+class RangeChecker {
+ public:
+  explicit RangeChecker(std::string* error) : error_(error) {}
+  template <typename T>
+  void check(const char* name, T value, T lo, T hi) {
+    if (!ok_) return;
+    if (!(value >= lo && value <= hi)) {
+      std::ostringstream s;
+      s << "parameter '" << name << "' = " << value << " is outside [" << lo << ", " << hi << "]";
+      *error_ = s.str();
+      ok_ = false;
+    }
+  }
+  bool ok() const { return ok_; }
+
+ private:
+  std::string* error_;
+  bool ok_ = true;
+};
+
+}  // namespace
+
+bool validateGridSegmenterParams(const core::GridSegmenterParams& p, std::string* error) {
+  RangeChecker c(error);
+  c.check("sensor_height_m", p.sensor_height_m, -10.0, 10.0);
+  c.check("cell_size_m", p.cell_size_m, 0.05, 5.0);
+  c.check("max_range_m", p.max_range_m, 1.0, 250.0);
+  c.check("max_abs_height_m", p.max_abs_height_m, 1.0, 1000.0);
+  c.check("min_points_per_cell", p.min_points_per_cell, 1, 1000);
+  c.check("ground_max_range_m", p.ground_max_range_m, 0.01, 2.0);
+  c.check("ground_tolerance_m", p.ground_tolerance_m, 0.0, 2.0);
+  c.check("ground_max_step_m", p.ground_max_step_m, 0.0, 2.0);
+  c.check("seed_radius_m", p.seed_radius_m, 0.0, 250.0);
+  c.check("seed_max_abs_height_m", p.seed_max_abs_height_m, 0.0, 5.0);
+  c.check("terrain_fill_iterations", p.terrain_fill_iterations, 0, 100);
+  c.check("terrain_max_offset_m", p.terrain_max_offset_m, 0.0, 5.0);
+  c.check("tall_min_height_m", p.tall_min_height_m, 0.1, 20.0);
+  c.check("tall_min_range_m", p.tall_min_range_m, 0.1, 50.0);
+  c.check("hough/max_range_m", p.hough.max_range_m, 1.0, 250.0);
+  c.check("hough/votes", p.hough.votes, 1, 10000);
+  c.check("hough/min_line_length_m", p.hough.min_line_length_m, 0.0, 500.0);
+  c.check("hough/max_line_gap_m", p.hough.max_line_gap_m, 0.0, 100.0);
+  c.check("hough/theta_resolution_deg", p.hough.theta_resolution_deg, 0.1, 45.0);
+  c.check("hough/min_tall_fraction", p.hough.min_tall_fraction, 0.0, 1.0);
+  c.check("hough/line_half_width_cells", p.hough.line_half_width_cells, 0, 5);
+  return c.ok();
+}
+
+bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParams* p,
+                             std::string* error) {
+  nh.param("sensor_height_m", p->sensor_height_m, p->sensor_height_m);
+  nh.param("cell_size_m", p->cell_size_m, p->cell_size_m);
+  nh.param("max_range_m", p->max_range_m, p->max_range_m);
+  nh.param("max_abs_height_m", p->max_abs_height_m, p->max_abs_height_m);
+  nh.param("min_points_per_cell", p->min_points_per_cell, p->min_points_per_cell);
+  nh.param("ground_max_range_m", p->ground_max_range_m, p->ground_max_range_m);
+  nh.param("ground_tolerance_m", p->ground_tolerance_m, p->ground_tolerance_m);
+  nh.param("ground_max_step_m", p->ground_max_step_m, p->ground_max_step_m);
+  nh.param("seed_radius_m", p->seed_radius_m, p->seed_radius_m);
+  nh.param("seed_max_abs_height_m", p->seed_max_abs_height_m, p->seed_max_abs_height_m);
+  nh.param("terrain_fill_iterations", p->terrain_fill_iterations, p->terrain_fill_iterations);
+  nh.param("terrain_max_offset_m", p->terrain_max_offset_m, p->terrain_max_offset_m);
+  nh.param("tall_min_height_m", p->tall_min_height_m, p->tall_min_height_m);
+  nh.param("tall_min_range_m", p->tall_min_range_m, p->tall_min_range_m);
+  core::HoughWallRefinerParams& h = p->hough;
+  nh.param("hough/enabled", h.enabled, h.enabled);
+  nh.param("hough/max_range_m", h.max_range_m, h.max_range_m);
+  nh.param("hough/votes", h.votes, h.votes);
+  nh.param("hough/min_line_length_m", h.min_line_length_m, h.min_line_length_m);
+  nh.param("hough/max_line_gap_m", h.max_line_gap_m, h.max_line_gap_m);
+  nh.param("hough/theta_resolution_deg", h.theta_resolution_deg, h.theta_resolution_deg);
+  nh.param("hough/min_tall_fraction", h.min_tall_fraction, h.min_tall_fraction);
+  nh.param("hough/line_half_width_cells", h.line_half_width_cells, h.line_half_width_cells);
+  return validateGridSegmenterParams(*p, error);
+}
+
+}  // namespace ros_conv
+}  // namespace urban_detection
