@@ -25,12 +25,18 @@ DistanceWeight::DistanceWeight(const DistanceWeightParams& params, double table_
   }
 }
 
+double DistanceWeight::fitted(double d_m) const {
+  const double p = evalPolynomial(params_.coefficients, d_m);
+  return params_.log_fit ? std::exp(p) : p;
+}
+
 double DistanceWeight::exact(double d_m) const {
   if (!params_.enabled || !(d_m > params_.full_density_distance_m)) return 1.0;
-  const double p = evalPolynomial(params_.coefficients, std::min(d_m, params_.max_distance_m));
+  const double f = fitted(std::min(d_m, params_.max_distance_m));
+  const double f0 = fitted(params_.full_density_distance_m);
   const double w_max = std::max(1.0, params_.max_weight);
-  if (!(p > 1.0 / w_max)) return w_max;  // also p <= 0 and NaN
-  return std::clamp(1.0 / p, 1.0, w_max);
+  if (!(f > f0 / w_max)) return w_max;  // also f <= 0 and NaN
+  return std::clamp(f0 / f, 1.0, w_max);
 }
 
 std::vector<double> fitPolynomial(const std::vector<double>& x, const std::vector<double>& y,

@@ -4,20 +4,30 @@
 ///
 /// The paper measures the point density in 1 m wide rings around the sensor (1..80 m),
 /// normalises it by the ring area and then by its maximum, and fits a sixth-degree polynomial
-/// p(d) to this normalised density, which is ~1 where the sensor sees most and falls towards 0
-/// far away. It then "enriches" the density of far cells so that, after weighting, the
-/// sub-cells of an object have densities of the same order wherever the object stands.
-/// Dividing by the normalised density does exactly that, so the weight applied here is
+/// to this normalised density rho(d) (~1 where the sensor sees most, towards 0 far away). It
+/// then "enriches" the density of far cells so that, after weighting, the sub-cells of an
+/// object have densities of the same order wherever the object stands: the weight is the
+/// inverse of the fitted normalised density.
 ///
-///     w(d) = 1                                       for d <= full_density_distance_m
-///     w(d) = clamp(1 / p(min(d, max_distance_m)), 1, max_weight)   otherwise
-///     (w = max_weight where p <= 0)
+/// On real HDL-64E sweeps rho falls by four orders of magnitude between 5 and 80 m, and a
+/// sixth-degree polynomial fitted to rho itself oscillates around zero beyond ~20 m (negative
+/// "densities", fit rms ~0.1 on ../shared/data/kitti_raw; urban_detection_fit_density
+/// --linear shows it). So by default (`log_fit`) the sixth-degree polynomial p(d) is fitted
+/// to ln rho(d), and the fitted density is exp(p(d)) > 0. The weight applied here is
 ///
-/// where d is the horizontal distance from the sensor [m]. Below the distance of the density
-/// maximum the ring density is low only because the lowest beam meets the road a few metres
-/// out, not because objects there are sparse, so no enrichment is applied there; beyond the
-/// fitted range the polynomial is not extrapolated; and the clamp bounds the gain so that one
-/// stray far point cannot pass as a dense sub-cell. A weighted density is n * w(d).
+///     w(d) = 1                                               for d <= d0
+///     w(d) = clamp(f(d0) / f(min(d, max_distance_m)), 1, max_weight)   otherwise
+///     f = exp(p) with log_fit, f = p without (w = max_weight where f <= 0)
+///
+/// with d0 = full_density_distance_m, the maximum of the fitted density (so the weight is the
+/// inverse of the fitted density normalised by its maximum, continuous at d0).
+/// where d is the horizontal distance of the (sub-)cell centre from the sensor [m]. Below the
+/// distance of the density maximum rho is low only because the lowest beam meets the road a
+/// few metres out, not because objects there are sparse, so no enrichment is applied there;
+/// beyond the fitted range the polynomial is not extrapolated; and the clamp bounds the gain
+/// (the ring density is dominated by the road, whose density falls faster with distance than
+/// that of vertical object surfaces, so the unclamped weight over-compensates far away). A
+/// weighted density is n * w(d).
 #pragma once
 
 #include <cstddef>
@@ -29,16 +39,18 @@ namespace urban_detection {
 namespace core {
 
 /// Parameters of the distance weight; defaults are the fit on ../shared/data/kitti_raw (both
-/// drives, urban_detection_fit_density), mirrored in config/detection.yaml.
+/// drives, 62 sweeps: `urban_detection_fit_density ../shared/data/kitti_raw/drive_0005
+/// ../shared/data/kitti_raw/drive_0048`, fit rms 0.094), mirrored in config/detection.yaml.
 struct DistanceWeightParams {
   bool enabled = true;  // false: w(d) = 1 everywhere (no density compensation)
-  /// Polynomial p(d) = sum_k coefficients[k] * d^k of the normalised ring density, d in [m].
-  std::vector<double> coefficients = {
-      1.6066052035e-01,  -1.6002508522e-02, 5.5124405066e-03,  -5.2012316128e-04,
-      2.1010127296e-05,  -3.9342587013e-07, 2.7923429617e-09};
-  double full_density_distance_m = 8.0;  // [m] w = 1 up to here (the density maximum)
+  bool log_fit = true;   // true: the polynomial is of ln(normalised density), see above
+  /// Polynomial p(d) = sum_k coefficients[k] * d^k, d in [m].
+  std::vector<double> coefficients = {-3.2283822161e+00, 7.9045388742e-01,  -8.6082372620e-02,
+                                      3.3503074472e-03,  -6.2757445375e-05, 5.6547142417e-07,
+                                      -1.9682182937e-09};
+  double full_density_distance_m = 7.0;  // [m] d0: w = 1 up to here (fitted density maximum)
   double max_distance_m = 80.0;          // [m] p is evaluated at most here (fitted range)
-  double max_weight = 50.0;              // [-] upper clamp of w (>= 1)
+  double max_weight = 20.0;              // [-] upper clamp of w (>= 1)
 };
 
 /// Evaluates w(d) (see the file comment), through a lookup table of `step_m` resolution built
@@ -47,6 +59,8 @@ class DistanceWeight {
  public:
   explicit DistanceWeight(const DistanceWeightParams& params = DistanceWeightParams(),
                           double table_range_m = 120.0, double step_m = 0.05);
+  /// Fitted normalised density f(d) at `d_m` [m] (exp of the polynomial with log_fit).
+  double fitted(double d_m) const;
   /// Exact weight at horizontal distance `d_m` [m] (no table).
   double exact(double d_m) const;
   /// Table weight at horizontal distance `d_m` [m]; distances beyond the table range use the
