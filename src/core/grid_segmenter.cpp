@@ -28,10 +28,12 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
     : params_(params), grid_(gridParamsOf(params)), hough_(params.hough) {
   const std::size_t n = grid_.numCells();
   cell_class_.assign(n, SegmentClass::kUnknown);
+  wall_support_.assign(n, 0);
   ground_z_.assign(n, 0.0f);
   ground_state_.assign(n, kNoGround);
   fill_sum_.assign(n, 0.0f);
   fill_cnt_.assign(n, 0);
+  hops_.assign(n, 0);
 }
 
 void GridSegmenter::setParams(const GridSegmenterParams& params) {
@@ -44,7 +46,10 @@ void GridSegmenter::setParams(const GridSegmenterParams& params) {
 
 void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels) {
   // Reset only what the previous frame touched (the grid has 100k+ cells, a frame ~10k).
-  for (const std::int32_t c : grid_.occupiedCells()) cell_class_[c] = SegmentClass::kUnknown;
+  for (const std::int32_t c : grid_.occupiedCells()) {
+    cell_class_[c] = SegmentClass::kUnknown;
+    wall_support_[c] = 0;
+  }
   for (const std::int32_t c : touched_) ground_state_[c] = kNoGround;
   touched_.clear();
   stats_ = SegmentationStats();
@@ -63,19 +68,21 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   classifyCells();
   if (params_.hough.enabled) {
     stats_.hough = hough_.refine(grid_.rows(), grid_.cols(), grid_.params().cell_size_m,
-                                 &cell_class_);
+                                 &cell_class_, &wall_support_);
   }
 
   // Per point: mixed cells are split by the height above the local ground.
   const std::size_t n = cloud.size();
   labels->resize(n);
   const float tol = static_cast<float>(params_.ground_tolerance_m);
+  const bool sparse_ground = params_.ground_in_sparse_cells;
   for (std::size_t i = 0; i < n; ++i) {
     const std::int32_t c = grid_.pointCell(i);
     SegmentClass label = SegmentClass::kUnknown;
     if (c != SimpleGrid::kNoCell) {
       label = cell_class_[c];
-      if ((label == SegmentClass::kShort || label == SegmentClass::kTall) &&
+      if ((label == SegmentClass::kShort || label == SegmentClass::kTall ||
+           (label == SegmentClass::kClutter && sparse_ground)) &&
           ground_state_[c] != kNoGround && grid_.pointHeight(i) - ground_z_[c] < tol) {
         label = SegmentClass::kGround;
       }
@@ -115,27 +122,42 @@ void GridSegmenter::growGround() {
     touched_.push_back(c);
     queue_.push_back(c);
   }
+  std::uint32_t reached = static_cast<std::uint32_t>(queue_.size());
+  const int max_hops =
+      std::min(250, static_cast<int>(params_.ground_max_gap_m / grid_.params().cell_size_m));
   for (std::size_t head = 0; head < queue_.size(); ++head) {
     const std::int32_t c = queue_[head];
     const int r = grid_.rowOf(c), k = grid_.colOf(c);
     const float g = ground_z_[c];
+    const int hop = ground_state_[c] == kBridged ? hops_[c] : 0;
     for (int d = 0; d < 8; ++d) {
       const int nr = r + kDr[d], nk = k + kDc[d];
       if (nr < 0 || nr >= rows || nk < 0 || nk >= cols) continue;
       const std::int32_t nc = nr * cols + nk;
       if (ground_state_[nc] != kNoGround) continue;
       const GridCell& cell = grid_.cell(nc);
-      if (cell.count == 0 || cell_class_[nc] == SegmentClass::kClutter) continue;
+      if (cell.count == 0 || cell_class_[nc] == SegmentClass::kClutter) {
+        // Empty and sparse cells carry the terrain across the gaps between far rings and
+        // through shadows, for a limited distance; sparse cells keep it for their points.
+        if (hop >= max_hops) continue;
+        ground_state_[nc] = kBridged;
+        ground_z_[nc] = g;
+        hops_[nc] = static_cast<std::uint8_t>(hop + 1);
+        touched_.push_back(nc);
+        queue_.push_back(nc);
+        continue;
+      }
       const bool is_flat = cell.zRange() < flat;
       const float e = is_flat ? cell.zMean() : cell.z_min;
       if (std::fabs(e - g) >= step) continue;
       ground_state_[nc] = kReached;
       ground_z_[nc] = e;
       touched_.push_back(nc);
+      ++reached;
       if (is_flat) queue_.push_back(nc);
     }
   }
-  stats_.cells_ground_reached = static_cast<std::uint32_t>(touched_.size());
+  stats_.cells_ground_reached = reached;
 }
 
 // Cells the growing did not reach (under a car roof, behind an occluder) take the mean ground
@@ -174,13 +196,16 @@ void GridSegmenter::classifyCells() {
   const float tall_h = static_cast<float>(params_.tall_min_height_m);
   const float tall_range = static_cast<float>(params_.tall_min_range_m);
   const float terrain_offset = static_cast<float>(params_.terrain_max_offset_m);
+  const float sensor_h = static_cast<float>(params_.sensor_height_m);
+  const float tan_top = static_cast<float>(std::tan(params_.fov_top_elevation_deg * M_PI / 180.0));
+  const float half_diag = static_cast<float>(params_.cell_size_m * M_SQRT1_2);
   for (const std::int32_t c : grid_.occupiedCells()) {
     if (cell_class_[c] == SegmentClass::kClutter) continue;
     const GridCell& cell = grid_.cell(c);
     const std::uint8_t state = ground_state_[c];
     // Without any terrain estimate the plane below the sensor is the reference.
     const float g = state != kNoGround ? ground_z_[c] : 0.0f;
-    SegmentClass cls;
+    SegmentClass cls = SegmentClass::kShort;
     if (cell.z_max - g > tall_h || cell.zRange() > tall_range) {
       cls = SegmentClass::kTall;
     } else if (cell.z_max - g < tol) {
@@ -195,6 +220,12 @@ void GridSegmenter::classifyCells() {
       ground_z_[c] = cell.zMean();
     } else {
       cls = SegmentClass::kShort;
+      // Seen up to the upper edge of the field of view: the structure may be much taller than
+      // what is visible (paper Fig. 3). The nearest point of the cell gives the largest angle.
+      float x, y;
+      grid_.cellCenter(c, &x, &y);
+      const float d = std::max(0.0f, std::sqrt(x * x + y * y) - half_diag);
+      wall_support_[c] = cell.z_max - sensor_h >= d * tan_top ? 1 : 0;
     }
     cell_class_[c] = cls;
   }

@@ -12,10 +12,17 @@ HoughWallRefiner::HoughWallRefiner(const HoughWallRefinerParams& params) : param
 
 HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
                                         std::vector<SegmentClass>* cell_classes) {
+  return refine(rows, cols, cell_size_m, cell_classes, nullptr);
+}
+
+HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
+                                        std::vector<SegmentClass>* cell_classes,
+                                        const std::vector<std::uint8_t>* wall_support) {
   HoughWallStats stats;
   accepted_.clear();
   if (rows <= 0 || cols <= 0 || cell_size_m <= 0.0 ||
-      cell_classes->size() != static_cast<std::size_t>(rows) * cols) {
+      cell_classes->size() != static_cast<std::size_t>(rows) * cols ||
+      (wall_support && wall_support->size() != cell_classes->size())) {
     return stats;
   }
   // Window of the grid around the sensor (grid centre) that is rasterised.
@@ -43,35 +50,84 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
   stats.lines_found = static_cast<int>(lines_.size());
 
   const int w = params_.line_half_width_cells;
+  const int gap_cells = static_cast<int>(std::floor(max_gap));
+  auto isShort = [&](std::size_t idx) { return cls[idx] == SegmentClass::kShort; };
   for (const cv::Vec4i& l : lines_) {
-    const cv::Point a(l[0], l[1]), b(l[2], l[3]);
-    // A wall line must be supported by tall cells (the part of the facade seen above the
-    // height threshold); a row of parked cars is a line of short cells only.
-    int occupied = 0, tall = 0;
-    cv::LineIterator it(image_, a, b, 8);
+    // Walk the segment; a pixel is occupied / supporting when a cell within the half width is.
+    // The segment is extended across the whole window and the runs along it decide what is
+    // wall: HoughLinesP often returns only a fragment of a facade (it removes the pixels of a
+    // found segment and samples randomly), the extension recovers the rest of it.
+    cv::Point pa(l[0], l[1]), pb(l[2], l[3]);
+    if (params_.extend_lines) {
+      const double dx = pb.x - pa.x, dy = pb.y - pa.y, norm = std::hypot(dx, dy);
+      if (norm > 0.0) {
+        const double ext = image_.cols + image_.rows;
+        pa = cv::Point(cvRound(pa.x - dx / norm * ext), cvRound(pa.y - dy / norm * ext));
+        pb = cv::Point(cvRound(pb.x + dx / norm * ext), cvRound(pb.y + dy / norm * ext));
+        if (!cv::clipLine(image_.size(), pa, pb)) continue;
+      }
+    }
+    line_px_.clear();
+    cv::LineIterator it(image_, pa, pb, 8);
     for (int i = 0; i < it.count; ++i, ++it) {
       const cv::Point p = it.pos();
-      const SegmentClass s = cls[static_cast<std::size_t>(p.y + r0) * cols + (p.x + c0)];
-      if (s == SegmentClass::kTall) ++tall, ++occupied;
-      else if (s == SegmentClass::kShort) ++occupied;
-    }
-    if (occupied == 0 || tall < params_.min_tall_fraction * occupied) continue;
-    ++stats.lines_accepted;
-    accepted_.emplace_back(l[0] + c0, l[1] + r0, l[2] + c0, l[3] + r0);
-    cv::LineIterator it2(image_, a, b, 8);
-    for (int i = 0; i < it2.count; ++i, ++it2) {
-      const cv::Point p = it2.pos();
+      LinePixel px{p.x + c0, p.y + r0, false, false};
       for (int dr = -w; dr <= w; ++dr) {
         for (int dc = -w; dc <= w; ++dc) {
-          const int r = p.y + r0 + dr, c = p.x + c0 + dc;
+          const int r = px.row + dr, c = px.col + dc;
           if (r < r0 || r >= r1 || c < c0 || c >= c1) continue;
-          SegmentClass& s = cls[static_cast<std::size_t>(r) * cols + c];
-          if (s == SegmentClass::kShort) {
-            s = SegmentClass::kTall;
-            ++stats.cells_relabeled;
+          const std::size_t idx = static_cast<std::size_t>(r) * cols + c;
+          if (cls[idx] == SegmentClass::kTall) {
+            px.occupied = px.support = true;
+          } else if (isShort(idx)) {
+            px.occupied = true;
+            if (wall_support && (*wall_support)[idx]) px.support = true;
           }
         }
       }
+      line_px_.push_back(px);
+    }
+    // Split the segment into runs of occupied pixels (gaps up to max_line_gap). Hough joins
+    // collinear but separate things (a car, then 3 m of road, then a wall); only a run that is
+    // itself long and supported by wall evidence is a wall: a row of parked cars is a line of
+    // short cells below the sensor, without tall or field-of-view-truncated cells.
+    bool line_used = false;
+    const std::size_t n = line_px_.size();
+    std::size_t i = 0;
+    while (i < n) {
+      while (i < n && !line_px_[i].occupied) ++i;
+      if (i >= n) break;
+      const std::size_t start = i;
+      std::size_t last = i;
+      int occupied = 0, support = 0;
+      for (std::size_t j = i; j < n && static_cast<int>(j - last) <= gap_cells + 1; ++j) {
+        if (!line_px_[j].occupied) continue;
+        last = j;
+        ++occupied;
+        support += line_px_[j].support ? 1 : 0;
+      }
+      i = last + 1;
+      const double len = std::hypot(line_px_[last].col - line_px_[start].col,
+                                    line_px_[last].row - line_px_[start].row) + 1.0;
+      if (len < min_len || support < params_.min_tall_fraction * occupied) continue;
+      line_used = true;
+      for (std::size_t k = start; k <= last; ++k) {
+        for (int dr = -w; dr <= w; ++dr) {
+          for (int dc = -w; dc <= w; ++dc) {
+            const int r = line_px_[k].row + dr, c = line_px_[k].col + dc;
+            if (r < r0 || r >= r1 || c < c0 || c >= c1) continue;
+            const std::size_t idx = static_cast<std::size_t>(r) * cols + c;
+            if (isShort(idx)) {
+              cls[idx] = SegmentClass::kTall;
+              ++stats.cells_relabeled;
+            }
+          }
+        }
+      }
+    }
+    if (line_used) {
+      ++stats.lines_accepted;
+      accepted_.emplace_back(l[0] + c0, l[1] + r0, l[2] + c0, l[3] + r0);
     }
   }
   return stats;

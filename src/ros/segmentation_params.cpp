@@ -39,12 +39,14 @@ bool validateGridSegmenterParams(const core::GridSegmenterParams& p, std::string
   c.check("ground_max_range_m", p.ground_max_range_m, 0.01, 2.0);
   c.check("ground_tolerance_m", p.ground_tolerance_m, 0.0, 2.0);
   c.check("ground_max_step_m", p.ground_max_step_m, 0.0, 2.0);
+  c.check("ground_max_gap_m", p.ground_max_gap_m, 0.0, 20.0);
   c.check("seed_radius_m", p.seed_radius_m, 0.0, 250.0);
   c.check("seed_max_abs_height_m", p.seed_max_abs_height_m, 0.0, 5.0);
   c.check("terrain_fill_iterations", p.terrain_fill_iterations, 0, 100);
   c.check("terrain_max_offset_m", p.terrain_max_offset_m, 0.0, 5.0);
   c.check("tall_min_height_m", p.tall_min_height_m, 0.1, 20.0);
   c.check("tall_min_range_m", p.tall_min_range_m, 0.1, 50.0);
+  c.check("fov_top_elevation_deg", p.fov_top_elevation_deg, -30.0, 30.0);
   c.check("hough/max_range_m", p.hough.max_range_m, 1.0, 250.0);
   c.check("hough/votes", p.hough.votes, 1, 10000);
   c.check("hough/min_line_length_m", p.hough.min_line_length_m, 0.0, 500.0);
@@ -62,15 +64,18 @@ bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParam
   nh.param("max_range_m", p->max_range_m, p->max_range_m);
   nh.param("max_abs_height_m", p->max_abs_height_m, p->max_abs_height_m);
   nh.param("min_points_per_cell", p->min_points_per_cell, p->min_points_per_cell);
+  nh.param("ground_in_sparse_cells", p->ground_in_sparse_cells, p->ground_in_sparse_cells);
   nh.param("ground_max_range_m", p->ground_max_range_m, p->ground_max_range_m);
   nh.param("ground_tolerance_m", p->ground_tolerance_m, p->ground_tolerance_m);
   nh.param("ground_max_step_m", p->ground_max_step_m, p->ground_max_step_m);
+  nh.param("ground_max_gap_m", p->ground_max_gap_m, p->ground_max_gap_m);
   nh.param("seed_radius_m", p->seed_radius_m, p->seed_radius_m);
   nh.param("seed_max_abs_height_m", p->seed_max_abs_height_m, p->seed_max_abs_height_m);
   nh.param("terrain_fill_iterations", p->terrain_fill_iterations, p->terrain_fill_iterations);
   nh.param("terrain_max_offset_m", p->terrain_max_offset_m, p->terrain_max_offset_m);
   nh.param("tall_min_height_m", p->tall_min_height_m, p->tall_min_height_m);
   nh.param("tall_min_range_m", p->tall_min_range_m, p->tall_min_range_m);
+  nh.param("fov_top_elevation_deg", p->fov_top_elevation_deg, p->fov_top_elevation_deg);
   core::HoughWallRefinerParams& h = p->hough;
   nh.param("hough/enabled", h.enabled, h.enabled);
   nh.param("hough/max_range_m", h.max_range_m, h.max_range_m);
@@ -79,6 +84,7 @@ bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParam
   nh.param("hough/max_line_gap_m", h.max_line_gap_m, h.max_line_gap_m);
   nh.param("hough/theta_resolution_deg", h.theta_resolution_deg, h.theta_resolution_deg);
   nh.param("hough/min_tall_fraction", h.min_tall_fraction, h.min_tall_fraction);
+  nh.param("hough/extend_lines", h.extend_lines, h.extend_lines);
   nh.param("hough/line_half_width_cells", h.line_half_width_cells, h.line_half_width_cells);
   return validateGridSegmenterParams(*p, error);
 }

@@ -11,14 +11,18 @@
 ///     region growing over neighbouring candidates whose elevation differs by less than
 ///     ground_max_step_m per cell, so slopes, camber and curbs stay connected to the road while
 ///     car roofs and walls do not. Cells with both ground and object returns (a car over road)
-///     join via their lowest point. Cells the growing did not reach get the mean ground
+///     join via their lowest point; the growing crosses empty and sparse cells for up to
+///     ground_max_gap_m (the rings of a Velodyne are metres apart at range). Cells the growing
+///     did not reach get the mean ground
 ///     elevation of reached cells nearby (terrain_fill_iterations dilation steps).
 ///  4. Cell classes against the local ground g: tall when z_max - g > tall_min_height_m or
 ///     z_max - z_min > tall_min_range_m; ground when all points lie within ground_tolerance_m
 ///     of g; short otherwise.
 ///  5. HoughWallRefiner turns short cells on long straight walls into tall.
 ///  6. Per point: in ground-bearing cells a point within ground_tolerance_m of g is ground, the
-///     others take the cell class (mixed cells are split per point).
+///     others take the cell class (mixed cells are split per point). Sparse (clutter) cells of
+///     far road get the same per-point test against the filled terrain when
+///     ground_in_sparse_cells is set.
 #pragma once
 
 #include <cstdint>
@@ -39,19 +43,31 @@ struct GridSegmenterParams {
   double max_range_m = 80.0;          // [m] half side of the grid; farther points: kUnknown
   double max_abs_height_m = 50.0;     // [m] points farther than this from the ground plane
                                       //     (|z + sensor_height_m|) are kUnknown
-  int min_points_per_cell = 4;        // [points] fewer -> clutter (paper: 4-8)
+  int min_points_per_cell = 3;        // [points] fewer -> clutter (paper: 4-8; 3 keeps far
+                                      //     cyclists on SemanticKITTI)
+  bool ground_in_sparse_cells = true; // points of a clutter cell lying within
+                                      //     ground_tolerance_m of the terrain filled in from
+                                      //     neighbouring ground cells are ground (far road)
   double ground_max_range_m = 0.25;   // [m] z_max - z_min below this: ground candidate (paper)
-  double ground_tolerance_m = 0.20;   // [m] a point this close above the local ground is ground
+  double ground_tolerance_m = 0.10;   // [m] a point this close above the local ground is ground
   double ground_max_step_m = 0.20;    // [m] elevation step allowed between neighbouring ground
                                       //     cells (curbs, slopes)
+  double ground_max_gap_m = 2.0;      // [m] the terrain growing crosses empty or sparse cells
+                                      //     over at most this distance (gaps between far rings)
   double seed_radius_m = 12.0;        // [m] ground growing starts from candidates this close
   double seed_max_abs_height_m = 0.4; // [m] ... whose elevation is within this of z = 0
   int terrain_fill_iterations = 6;    // [cells] dilation steps filling the terrain of cells the
                                       //     growing did not reach
   double terrain_max_offset_m = 0.35; // [m] a flat cell the growing did not reach is ground when
                                       //     its mean is this close to the filled terrain
-  double tall_min_height_m = 1.40;    // [m] z_max above local ground beyond this: tall (paper)
+  double tall_min_height_m = 2.00;    // [m] z_max above local ground beyond this: tall (paper:
+                                      //     1.40, which makes standing people (1.7-1.9 m) tall
+                                      //     when heights are taken above the local ground)
   double tall_min_range_m = 3.10;     // [m] z_max - z_min beyond this: tall (paper)
+  double fov_top_elevation_deg = 1.0; // [deg] a cell whose highest point is seen at this
+                                      //     elevation or more may extend above the vertical
+                                      //     field of view (HDL-64E: +2 deg); it supports Hough
+                                      //     wall lines like a tall cell
   HoughWallRefinerParams hough;       // Hough wall refinement (paper Fig. 3)
 };
 
@@ -86,7 +102,7 @@ class GridSegmenter {
   const HoughWallRefiner& houghRefiner() const { return hough_; }
 
  private:
-  enum GroundState : std::uint8_t { kNoGround = 0, kReached = 1, kFilled = 2 };
+  enum GroundState : std::uint8_t { kNoGround = 0, kReached = 1, kFilled = 2, kBridged = 3 };
   void growGround();
   void fillTerrain();
   void classifyCells();
@@ -97,8 +113,10 @@ class GridSegmenter {
   SegmentationStats stats_;
   // Scratch, sized to the grid, reset only on the cells touched by the previous frame.
   std::vector<SegmentClass> cell_class_;
+  std::vector<std::uint8_t> wall_support_;  // cell top at the upper edge of the field of view
   std::vector<float> ground_z_;          // [m] local ground elevation per cell
   std::vector<std::uint8_t> ground_state_;
+  std::vector<std::uint8_t> hops_;       // empty cells crossed to reach a bridged cell
   std::vector<std::int32_t> queue_;
   std::vector<std::int32_t> touched_;    // cells whose ground state was set this frame
   std::vector<std::int32_t> frontier_, next_frontier_;

@@ -26,13 +26,23 @@ constexpr std::uint16_t kLowerBlockId = 0xDDFF;
 
 using RawPacket = std::array<std::uint8_t, kPacketSize>;
 
+/// Time between two consecutive firings (one upper + one lower block) [s]. The HDL-64E S2
+/// datasheet gives > 1.33 M points/s, i.e. 20.8 k firings of 64 lasers per second: 48 us per
+/// firing, 288 us per packet (~3472 packets/s whatever the spin rate). The 32 pulses of a block
+/// are emitted within that period; every point of a firing gets the firing's start time.
+constexpr double kFiringPeriodS = 48.0e-6;
+
 /// Why a packet was rejected (nothing of a rejected packet is emitted).
 enum class PacketStatus {
   kOk,
   kWrongSize,       // not 1206 bytes
   kUnknownBlockId,  // a block id other than 0xEEFF / 0xDDFF
   kBadAzimuth,      // azimuth >= 36000
-  kDualReturn,      // S3 dual-return packet: rejected with a clear status, never misread
+  kDualReturn,      // S3 dual-return packet: rejected with a clear status, never misread.
+                    // Rule: two blocks of one packet with the same block id and the same
+                    // azimuth (a single-return packet never fires one bank twice at one angle;
+                    // a dual-return packet carries the strongest and last echo of a firing in
+                    // two blocks at the same angle). Status bytes are not used for this.
 };
 const char* toString(PacketStatus status);
 
@@ -44,11 +54,11 @@ struct DecoderParams {
 
 /// Counters of one decode call (accumulate them across calls for diagnostics).
 struct DecodeStats {
-  std::size_t packets = 0;         // packets seen
-  std::size_t bad_packets = 0;     // packets rejected (any non-kOk status)
-  std::size_t points = 0;          // points emitted
-  std::size_t no_return = 0;       // raw distance 0 (no echo)
-  std::size_t out_of_range = 0;    // dropped by min/max range
+  std::size_t packets = 0;       // packets seen
+  std::size_t bad_packets = 0;   // packets rejected (any non-kOk status)
+  std::size_t points = 0;        // points emitted
+  std::size_t no_return = 0;     // raw distance 0 (no echo)
+  std::size_t out_of_range = 0;  // dropped by min/max range
 };
 
 /// Decodes packets with the full per-laser correction model (rotational and vertical
@@ -70,14 +80,41 @@ class PacketDecoder {
                       CloudXYZIRT* cloud, DecodeStats* stats, std::vector<std::uint8_t>* laser,
                       std::vector<std::uint16_t>* raw_azimuth) const;
 
+  /// Checks a packet without decoding it (size, block ids, azimuths, dual return).
+  static PacketStatus validate(const std::uint8_t* data, std::size_t size);
+
   const Calibration& calibration() const { return calibration_; }
   const DecoderParams& params() const { return params_; }
 
+  /// Per-laser constants of the correction model in float, one array per term so the
+  /// per-block loop vectorises (implementation detail).
+  struct LaserTables {
+    using Row = std::array<float, kNumLasers>;
+    Row cos_rot, sin_rot;      // [-] of the rotational correction
+    Row cos_vert, sin_vert;    // [-] of the vertical correction
+    Row dist_corr;             // [m] far-field distance correction
+    Row vert_off_sin;          // [m] vert_offset * sin_vert
+    Row vert_off_cos;          // [m] vert_offset * cos_vert
+    Row horiz_off;             // [m] horizontal offset
+    Row two_pt_ax, two_pt_bx;  // [m], [-]: near-range correction along x = ax + bx * |x|
+    Row two_pt_ay, two_pt_by;  // [m], [-]: same along y
+    Row focal_offset;          // [-] 256 * (1 - focal_distance / 131.07 m)^2
+    Row focal_slope;           // [-]
+    Row min_intensity, max_intensity;
+    std::array<std::uint16_t, kNumLasers> ring;
+  };
+
  private:
+  template <bool kRecord>
+  PacketStatus decodeImpl(const std::uint8_t* data, std::size_t size, double packet_time_s,
+                          CloudXYZIRT* cloud, DecodeStats* stats, std::vector<std::uint8_t>* laser,
+                          std::vector<std::uint16_t>* raw_azimuth) const;
+
   Calibration calibration_;
   DecoderParams params_;
   // Precomputed tables (implementation detail, free to change).
   std::vector<float> cos_azimuth_, sin_azimuth_;  // [36000] cos/sin of raw azimuth
+  LaserTables table_;
 };
 
 /// Time offset of firing `firing` (0..5) within a packet [s]; each firing fires an upper and a
@@ -89,7 +126,7 @@ std::uint16_t blockAzimuth(const std::uint8_t* data, int block);
 
 /// One firing of all 64 lasers at one azimuth, in raw units.
 struct Firing {
-  std::uint16_t azimuth = 0;                   // [1/100 deg] 0..35999
+  std::uint16_t azimuth = 0;                         // [1/100 deg] 0..35999
   std::array<std::uint16_t, kNumLasers> distance{};  // [distance_resolution] 0 = no return
   std::array<std::uint8_t, kNumLasers> intensity{};  // raw intensity
 };
@@ -100,8 +137,11 @@ class PacketEncoder {
  public:
   explicit PacketEncoder(const Calibration& calibration);
 
-  /// Packs 6 firings into one packet.
+  /// Packs 6 firings into one packet (status bytes 0).
   RawPacket encode(const Firing* firings6, std::uint32_t timestamp_us) const;
+  /// Same with explicit status type/value bytes (bytes 1204 and 1205).
+  RawPacket encode(const Firing* firings6, std::uint32_t timestamp_us, std::uint8_t status_type,
+                   std::uint8_t status_value) const;
 
   /// Inverse correction model: the raw distance [units] and raw azimuth [1/100 deg] of laser
   /// `laser` for which the decoder reproduces the point (x, y, z) [m] to within one raw unit.
@@ -112,7 +152,14 @@ class PacketEncoder {
   /// Ray of laser `laser` at raw azimuth `raw_azimuth` in the sensor frame: origin [m] and unit
   /// direction, such that a surface hit at distance d along the ray is decoded at
   /// origin + d * direction (far-field model, used by the simulator's ray caster).
+  /// The distance d along ray() is the corrected far-field distance
+  /// raw * distance_resolution + dist_correction; the two-point near-range correction moves
+  /// decoded points by up to a few centimetres below ~25 m (use invert() for exact raw values).
   void ray(int laser, std::uint16_t raw_azimuth, float origin[3], float direction[3]) const;
+
+  /// Raw distance [units] of laser `laser` for the far-field distance `d_m` along ray().
+  /// Returns false outside 1..65535 raw units.
+  bool rawDistance(int laser, double d_m, std::uint16_t* raw_distance) const;
 
   const Calibration& calibration() const { return calibration_; }
 
@@ -127,9 +174,13 @@ class RevolutionCutter {
   explicit RevolutionCutter(double cut_angle_deg = 0.0);
 
   /// Feeds the first block azimuth of the next packet; returns true if this packet starts a new
-  /// revolution (the azimuth crossed the cut angle since the previous packet).
+  /// revolution: the cut angle lies in (previous azimuth, this azimuth], going in the sense of
+  /// rotation (increasing azimuth, modulo 360 deg). The first packet after construction or
+  /// reset() returns false (no crossing observed yet), so the revolution it belongs to is
+  /// partial and callers drop it.
   bool startsNewRevolution(std::uint16_t first_block_azimuth);
   void reset();
+  double cutAngleDeg() const { return cut_ / 100.0; }
 
  private:
   int cut_;   // [1/100 deg]

@@ -21,13 +21,17 @@ struct HoughWallRefinerParams {
   bool enabled = true;                 // run the refinement at all
   double max_range_m = 30.0;           // [m] only cells within this square half side are
                                        //     rasterised (the misreading happens near the sensor)
-  int votes = 12;                      // [cells] accumulator threshold of cv::HoughLinesP
+  int votes = 8;                       // [cells] accumulator threshold of cv::HoughLinesP
   double min_line_length_m = 6.0;      // [m] shortest accepted line
   double max_line_gap_m = 1.0;         // [m] largest gap bridged within one line
   double theta_resolution_deg = 1.0;   // [deg] angular resolution of the accumulator
-  double min_tall_fraction = 0.3;      // [0..1] a line must lie on at least this fraction of
-                                       //     tall cells (rows of parked cars are not walls)
-  int line_half_width_cells = 0;       // [cells] relabel short cells up to this far from a line
+  double min_tall_fraction = 0.9;      // [0..1] a run of occupied cells along a line must lie
+                                       //     on at least this fraction of wall-supporting cells
+                                       //     (tall, or reaching the top of the field of view):
+                                       //     rows of parked cars are not walls
+  bool extend_lines = true;            // walk each Hough segment across the whole window, so a
+                                       //     facade fragment found by Hough recovers the facade
+  int line_half_width_cells = 1;       // [cells] relabel short cells up to this far from a line
 };
 
 /// Statistics of the last refine() call.
@@ -47,10 +51,18 @@ class HoughWallRefiner {
 
   /// `cell_classes` is a row-major rows x cols grid of cell classes (cell size `cell_size_m`,
   /// sensor at the grid centre). Tall and short cells within max_range_m are rasterised into a
-  /// binary image, cv::HoughLinesP finds line segments, and kShort cells on accepted segments
-  /// become kTall. Only kShort -> kTall changes are made.
+  /// binary image, cv::HoughLinesP finds line segments; each segment is split into runs of
+  /// occupied cells (gaps up to max_line_gap_m), and kShort cells of runs at least
+  /// min_line_length_m long with at least min_tall_fraction wall support become kTall.
+  /// Only kShort -> kTall changes are made.
   HoughWallStats refine(int rows, int cols, double cell_size_m,
                         std::vector<SegmentClass>* cell_classes);
+  /// As above; `wall_support` (same layout, may be null) marks further cells that count as
+  /// wall evidence for min_tall_fraction besides the tall ones (e.g. short cells whose top
+  /// reaches the upper edge of the sensor's field of view, so their true height is unknown).
+  HoughWallStats refine(int rows, int cols, double cell_size_m,
+                        std::vector<SegmentClass>* cell_classes,
+                        const std::vector<std::uint8_t>* wall_support);
 
   /// Line segments accepted by the last refine() call, as (x0, y0, x1, y1) in cell
   /// coordinates of the full grid (col, row).
@@ -61,6 +73,12 @@ class HoughWallRefiner {
   cv::Mat image_;                // scratch: binary occupancy image of the Hough window
   std::vector<cv::Vec4i> lines_; // scratch: raw Hough output
   std::vector<cv::Vec4i> accepted_;
+  struct LinePixel {
+    int col, row;       // full-grid cell coordinates
+    bool occupied;      // a tall or short cell within the half width
+    bool support;       // a tall or wall-supporting cell within the half width
+  };
+  std::vector<LinePixel> line_px_;  // scratch: pixels of the segment being examined
 };
 
 }  // namespace core

@@ -1,0 +1,23 @@
+/// \file params_yaml.h
+/// Loading of the core parameter structs from the config/*.yaml files without a ROS master
+/// (offline tools: evaluation, benchmark). The files are the ones the launch files load into
+/// the parameter server, so a tuned file works unchanged in both places. ROS-free.
+#pragma once
+
+#include <string>
+
+#include "urban_detection/core/grid_segmenter.h"
+
+namespace urban_detection {
+namespace core {
+
+/// Overrides the fields of `params` present in the YAML file `path` (segmentation.yaml layout:
+/// GridSegmenterParams field names, the Hough fields under `hough:`). When `section` is not
+/// empty and the file has a top-level map of that name, that map is read instead of the root.
+/// Unknown keys and values of the wrong type are errors (a typo must not be silently ignored).
+/// Returns false with `error` set; `params` may then be partly updated.
+bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& section,
+                                 GridSegmenterParams* params, std::string* error);
+
+}  // namespace core
+}  // namespace urban_detection

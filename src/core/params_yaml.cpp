@@ -1,0 +1,111 @@
+#include "urban_detection/core/params_yaml.h"
+
+#include <functional>
+#include <map>
+
+#include <yaml-cpp/yaml.h>
+
+namespace urban_detection {
+namespace core {
+
+namespace {
+
+// Binds YAML keys of one map to struct fields; apply() rejects unknown keys.
+class FieldTable {
+ public:
+  template <typename T>
+  void bind(const std::string& key, T* field) {
+    setters_[key] = [field](const YAML::Node& n) { *field = n.as<T>(); };
+  }
+  void bindMap(const std::string& key, std::function<bool(const YAML::Node&, std::string*)> f) {
+    maps_[key] = std::move(f);
+  }
+  bool apply(const YAML::Node& node, const std::string& where, std::string* error) const {
+    if (!node.IsMap()) {
+      *error = where + ": expected a map of parameters";
+      return false;
+    }
+    for (const auto& kv : node) {
+      const std::string key = kv.first.as<std::string>();
+      const auto s = setters_.find(key);
+      if (s != setters_.end()) {
+        try {
+          s->second(kv.second);
+        } catch (const YAML::Exception& e) {
+          *error = where + key + ": wrong type (" + e.what() + ")";
+          return false;
+        }
+        continue;
+      }
+      const auto m = maps_.find(key);
+      if (m != maps_.end()) {
+        if (!m->second(kv.second, error)) return false;
+        continue;
+      }
+      *error = where + key + ": unknown parameter";
+      return false;
+    }
+    return true;
+  }
+
+ private:
+  std::map<std::string, std::function<void(const YAML::Node&)>> setters_;
+  std::map<std::string, std::function<bool(const YAML::Node&, std::string*)>> maps_;
+};
+
+bool loadRoot(const std::string& path, const std::string& section, YAML::Node* root,
+              std::string* error) {
+  try {
+    *root = YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    *error = path + ": " + e.what();
+    return false;
+  }
+  if (!section.empty() && root->IsMap() && (*root)[section]) *root = (*root)[section];
+  return true;
+}
+
+}  // namespace
+
+bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& section,
+                                 GridSegmenterParams* p, std::string* error) {
+  YAML::Node root;
+  if (!loadRoot(path, section, &root, error)) return false;
+  HoughWallRefinerParams& h = p->hough;
+  FieldTable hough;
+  hough.bind("enabled", &h.enabled);
+  hough.bind("max_range_m", &h.max_range_m);
+  hough.bind("votes", &h.votes);
+  hough.bind("min_line_length_m", &h.min_line_length_m);
+  hough.bind("max_line_gap_m", &h.max_line_gap_m);
+  hough.bind("theta_resolution_deg", &h.theta_resolution_deg);
+  hough.bind("min_tall_fraction", &h.min_tall_fraction);
+  hough.bind("line_half_width_cells", &h.line_half_width_cells);
+  hough.bind("extend_lines", &h.extend_lines);
+  FieldTable t;
+  t.bind("sensor_height_m", &p->sensor_height_m);
+  t.bind("cell_size_m", &p->cell_size_m);
+  t.bind("max_range_m", &p->max_range_m);
+  t.bind("max_abs_height_m", &p->max_abs_height_m);
+  t.bind("min_points_per_cell", &p->min_points_per_cell);
+  t.bind("ground_in_sparse_cells", &p->ground_in_sparse_cells);
+  t.bind("ground_max_range_m", &p->ground_max_range_m);
+  t.bind("ground_tolerance_m", &p->ground_tolerance_m);
+  t.bind("ground_max_step_m", &p->ground_max_step_m);
+  t.bind("ground_max_gap_m", &p->ground_max_gap_m);
+  t.bind("seed_radius_m", &p->seed_radius_m);
+  t.bind("seed_max_abs_height_m", &p->seed_max_abs_height_m);
+  t.bind("terrain_fill_iterations", &p->terrain_fill_iterations);
+  t.bind("terrain_max_offset_m", &p->terrain_max_offset_m);
+  t.bind("tall_min_height_m", &p->tall_min_height_m);
+  t.bind("tall_min_range_m", &p->tall_min_range_m);
+  t.bind("fov_top_elevation_deg", &p->fov_top_elevation_deg);
+  const std::string where = path + ": ";
+  t.bindMap("hough", [&hough, where](const YAML::Node& n, std::string* err) {
+    return hough.apply(n, where + "hough/", err);
+  });
+  return t.apply(root, where, error);
+}
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,90 @@
+// Decode benchmark: one 600 rpm HDL-64E revolution (348 packets, 133,632 returns) of a synthetic
+// street scene, encoded with the packet encoder and decoded with the given calibration.
+//
+//   taskset -c 0 urban_detection_bench_decode [--calibration=FILE] [benchmark flags]
+//
+// Without --calibration the SZTAKI S2.1 file is taken from $UD_SHARED_DATA/calibration (or
+// ../shared/data/calibration), else the nominal geometry. Each iteration decodes the whole
+// revolution into a reused cloud; the per-revolution times are kept and reported as median,
+// p95 and points per second (counters), besides Google Benchmark's own mean.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "synthetic_scene.h"
+#include "urban_detection/core/hdl64e_packet.h"
+
+namespace uc = urban_detection::core;
+namespace ut = urban_detection::tools;
+
+namespace {
+
+std::string g_calibration_path;
+constexpr int kPacketsPerRevolution = 348;
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t i = std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1) + 0.5));
+  return v[i];
+}
+
+void BM_DecodeRevolution600Rpm(benchmark::State& state) {
+  const uc::Calibration cal = ut::findCalibration(g_calibration_path);
+  ut::SceneParams scene;
+  scene.rpm = 600.0;
+  const std::vector<uc::RawPacket> packets =
+      ut::scanScene(uc::PacketEncoder(cal), scene, kPacketsPerRevolution);
+  uc::PacketDecoder decoder(cal, uc::DecoderParams{});
+  urban_detection::CloudXYZIRT cloud;
+  cloud.reserve(kPacketsPerRevolution * 384);
+  std::vector<double> times_s;
+  times_s.reserve(1 << 16);
+  std::size_t points = 0;
+
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    cloud.clear();
+    uc::DecodeStats stats;
+    for (int i = 0; i < kPacketsPerRevolution; ++i) {
+      decoder.decode(packets[i].data(), packets[i].size(), i * 6 * uc::kFiringPeriodS, &cloud,
+                     &stats);
+    }
+    benchmark::DoNotOptimize(cloud.points.data());
+    benchmark::ClobberMemory();
+    const auto t1 = std::chrono::steady_clock::now();
+    times_s.push_back(std::chrono::duration<double>(t1 - t0).count());
+    points = stats.points;
+  }
+  const double median = percentile(times_s, 0.5), p95 = percentile(times_s, 0.95);
+  state.counters["points"] = static_cast<double>(points);
+  state.counters["median_ms"] = median * 1e3;
+  state.counters["p95_ms"] = p95 * 1e3;
+  state.counters["Mpoints_per_s_median"] = median > 0 ? points / median / 1e6 : 0.0;
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(points));
+  state.SetLabel(cal.source);
+}
+
+}  // namespace
+
+BENCHMARK(BM_DecodeRevolution600Rpm)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--calibration=", 0) == 0) {
+      g_calibration_path = arg.substr(14);
+    } else {
+      std::fprintf(stderr, "usage: %s [--calibration=FILE] [--benchmark_* flags]\n", argv[0]);
+      return 2;
+    }
+  }
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

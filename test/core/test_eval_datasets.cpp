@@ -1,0 +1,287 @@
+// Dataset readers of the evaluation: KITTI box -> LiDAR geometry on a hand-computed box, the
+// camera frustum and DontCare rules, SemanticKITTI label decoding, file readers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include "urban_detection/core/eval_datasets.h"
+#include "urban_detection/core/kitti_io.h"
+
+namespace urban_detection {
+namespace core {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kPi = 3.14159265358979323846;
+
+// A calibration whose transform is easy to invert by hand: camera x = -LiDAR y,
+// camera y = -LiDAR z - 0.08, camera z = LiDAR x - 0.27; no rectification; a 700 px focal
+// length with the principal point at (600, 180).
+KittiCalibration handCalibration() {
+  KittiCalibration c;
+  c.tr_velo_to_cam << 0, -1, 0, 0,  //
+      0, 0, -1, -0.08,              //
+      1, 0, 0, -0.27;
+  c.r0_rect.setIdentity();
+  c.p2 << 700, 0, 600, 0,  //
+      0, 700, 180, 0,      //
+      0, 0, 1, 0;
+  return c;
+}
+
+KittiLabel carLabel() {
+  // Car 4.0 m long, 1.6 m wide, 1.5 m high, bottom centre at camera (2.0, 1.7, 15.0), heading
+  // along the camera z axis (rotation_y = pi/2).
+  KittiLabel l;
+  EXPECT_TRUE(parseKittiLabelLine(
+      "Car 0.00 0 0.0 500 150 700 250 1.50 1.60 4.00 2.00 1.70 15.00 1.5707963267948966", &l));
+  return l;
+}
+
+PointXYZIRT pt(float x, float y, float z) {
+  PointXYZIRT p;
+  p.x = x;
+  p.y = y;
+  p.z = z;
+  p.intensity = 0.f;
+  p.ring = 0;
+  p.time = 0.f;
+  return p;
+}
+
+TEST(KittiObject, ParsesLabelLine) {
+  const KittiLabel l = carLabel();
+  EXPECT_EQ(l.type, "Car");
+  EXPECT_DOUBLE_EQ(l.height_m, 1.5);
+  EXPECT_DOUBLE_EQ(l.width_m, 1.6);
+  EXPECT_DOUBLE_EQ(l.length_m, 4.0);
+  EXPECT_DOUBLE_EQ(l.location.z(), 15.0);
+  EXPECT_DOUBLE_EQ(l.bbox[2], 700.0);
+  KittiLabel bad;
+  EXPECT_FALSE(parseKittiLabelLine("Car 0.00 0 0.0 500 150", &bad));
+  EXPECT_FALSE(parseKittiLabelLine("Car x 0 0.0 500 150 700 250 1 1 1 1 1 1 1", &bad));
+}
+
+TEST(KittiObject, BoxCornersInLidarFrameByHand) {
+  // By hand: with rotation_y = pi/2 the length runs along camera z and the width along camera
+  // x, so the box spans camera x in [1.2, 2.8], y in [0.2, 1.7], z in [13, 17]. In the LiDAR
+  // frame: x = z_cam + 0.27 in [13.27, 17.27], y = -x_cam in [-2.8, -1.2], z = -(y_cam + 0.08):
+  // bottom -1.78, top -0.28. Corner 0 (+l, +w) is camera (2.8, 1.7, 13).
+  const auto c = kittiBoxCornersVelo(carLabel(), handCalibration());
+  const Eigen::Vector3d expected[8] = {
+      {13.27, -2.8, -1.78}, {13.27, -1.2, -1.78}, {17.27, -1.2, -1.78}, {17.27, -2.8, -1.78},
+      {13.27, -2.8, -0.28}, {13.27, -1.2, -0.28}, {17.27, -1.2, -0.28}, {17.27, -2.8, -0.28}};
+  for (int k = 0; k < 8; ++k) {
+    EXPECT_NEAR((c[k] - expected[k]).norm(), 0.0, 1e-9) << "corner " << k << ": "
+                                                         << c[k].transpose();
+  }
+}
+
+TEST(KittiObject, CalibrationRoundTripWithRectification) {
+  KittiCalibration c = handCalibration();
+  const double a = 10.0 * kPi / 180.0;
+  c.r0_rect << 1, 0, 0, 0, std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a);
+  const Eigen::Vector3d p(12.0, -3.0, 0.5);
+  EXPECT_NEAR((c.rectToVelo(c.veloToRect(p)) - p).norm(), 0.0, 1e-12);
+  // Without rectification the hand formula holds.
+  const Eigen::Vector3d r = handCalibration().veloToRect(p);
+  EXPECT_NEAR((r - Eigen::Vector3d(3.0, -0.58, 11.73)).norm(), 0.0, 1e-12);
+}
+
+TEST(KittiObject, CameraFrustum) {
+  const KittiCalibration c = handCalibration();
+  // Straight ahead: camera (0, -0.08, 9.73) -> u = 600, v = 180 - 700 * 0.08 / 9.73.
+  double u, v;
+  ASSERT_TRUE(c.project({10.0, 0.0, 0.0}, &u, &v));
+  EXPECT_NEAR(u, 600.0, 1e-9);
+  EXPECT_NEAR(v, 180.0 - 700.0 * 0.08 / 9.73, 1e-9);
+  EXPECT_TRUE(inKittiCameraFrustum(c, {10.0, 0.0, 0.0}, 1242, 375));
+  // Behind the camera and beside it.
+  EXPECT_FALSE(inKittiCameraFrustum(c, {-5.0, 0.0, 0.0}, 1242, 375));
+  EXPECT_FALSE(inKittiCameraFrustum(c, {0.2, 0.0, 0.0}, 1242, 375));  // depth -0.07
+  EXPECT_FALSE(inKittiCameraFrustum(c, {1.0, 10.0, 0.0}, 1242, 375));
+  // Right edge at depth 14 m (LiDAR x 14.27): u = 600 + 50 * x_cam -> x_cam 12.8 gives
+  // u = 1240 (inside), 12.9 gives 1245 (outside).
+  EXPECT_TRUE(inKittiCameraFrustum(c, {14.27, -12.8, -0.08}, 1242, 375));
+  EXPECT_FALSE(inKittiCameraFrustum(c, {14.27, -12.9, -0.08}, 1242, 375));
+  // Bottom edge: y_cam 3.0 gives v = 330 (inside), 4.5 gives v = 405 (outside).
+  EXPECT_TRUE(inKittiCameraFrustum(c, {14.27, 0.0, -3.08}, 1242, 375));
+  EXPECT_FALSE(inKittiCameraFrustum(c, {14.27, 0.0, -4.58}, 1242, 375));
+  // A smaller image moves the edge.
+  EXPECT_FALSE(inKittiCameraFrustum(c, {14.27, 0.0, -3.08}, 1242, 320));
+}
+
+TEST(KittiObject, GroundTruthRoles) {
+  KittiLabel dont_care;
+  ASSERT_TRUE(parseKittiLabelLine(
+      "DontCare -1 -1 -10 690 170 720 190 -1 -1 -1 -1000 -1000 -1000 -10", &dont_care));
+  KittiLabel ped;
+  ASSERT_TRUE(parseKittiLabelLine(
+      "Pedestrian 0 0 0 0 0 10 10 1.8 0.6 0.8 -1.0 1.7 8.0 0.0", &ped));
+  CloudXYZIRT cloud;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cloud.push_back(pt(15.27f, -2.0f, -1.0f));   // 0 car, 0.78 m above its bottom
+  cloud.push_back(pt(15.27f, -2.0f, -1.7f));   // 1 car, 0.08 m above bottom: excluded
+  cloud.push_back(pt(15.27f, -2.85f, -1.0f));  // 2 0.05 m outside the side: within margin
+  cloud.push_back(pt(15.27f, -2.95f, -1.0f));  // 3 0.15 m outside: background, u 737.7 v 222.9
+  cloud.push_back(pt(-5.0f, 0.0f, 0.0f));      // 4 behind the camera: don't care
+  cloud.push_back(pt(1.0f, 10.0f, 0.0f));      // 5 left of the image: don't care
+  cloud.push_back(pt(20.27f, -3.0f, 0.0f));    // 6 projects to (705, 177.2): DontCare box
+  cloud.push_back(pt(17.2f, -2.0f, -0.35f));   // 7 car, near the top rear corner
+  cloud.push_back(pt(17.45f, -2.0f, -1.0f));   // 8 0.18 m behind the car: background
+  cloud.push_back(pt(nan, 0.0f, 0.0f));        // 9 non-finite: excluded
+  cloud.push_back(pt(8.27f, 1.0f, -1.08f));    // 10 pedestrian: camera (-1.0, 1.0, 8.0)
+  KittiGroundTruthParams params;
+  params.min_points = 1;
+  EvalFrame gt;
+  buildKittiGroundTruth(cloud, {carLabel(), dont_care, ped}, handCalibration(), params, 1242,
+                        375, &gt);
+  ASSERT_EQ(gt.objects.size(), 2u);
+  EXPECT_EQ(gt.objects[0].label, "Car");
+  EXPECT_EQ(gt.objects[1].label, "Pedestrian");
+  EXPECT_EQ(gt.objects[1].id, 3u);  // third label line
+  const std::vector<std::int32_t> obj = {0, -1, 0, -1, -1, -1, -1, 0, -1, -1, 1};
+  const std::vector<PointRole> role = {
+      PointRole::kScored,   PointRole::kExcluded, PointRole::kScored,   PointRole::kScored,
+      PointRole::kDontCare, PointRole::kDontCare, PointRole::kDontCare, PointRole::kScored,
+      PointRole::kScored,   PointRole::kExcluded, PointRole::kScored};
+  EXPECT_EQ(gt.object_of_point, obj);
+  EXPECT_EQ(gt.role, role);
+  EXPECT_EQ(gt.objects[0].num_points, 3u);
+  EXPECT_EQ(gt.objects[1].num_points, 1u);
+}
+
+TEST(KittiObject, CalibrationFileErrors) {
+  const fs::path dir = fs::temp_directory_path() / "ud_eval_calib_test";
+  fs::create_directories(dir);
+  const std::string good = (dir / "good.txt").string(), bad = (dir / "bad.txt").string();
+  {
+    std::ofstream f(good);
+    f << "P2: 700 0 600 0 0 700 180 0 0 0 1 0\nR0_rect: 1 0 0 0 1 0 0 0 1\n"
+      << "Tr_velo_to_cam: 0 -1 0 0 0 0 -1 -0.08 1 0 0 -0.27\n";
+    std::ofstream g(bad);
+    g << "P2: 700 0 600 0 0 700 180 0 0 0 1 0\nR0_rect: 1 0 0\n";
+  }
+  KittiCalibration c;
+  std::string err;
+  ASSERT_TRUE(readKittiCalibration(good, &c, &err)) << err;
+  EXPECT_TRUE(c.tr_velo_to_cam.isApprox(handCalibration().tr_velo_to_cam));
+  EXPECT_FALSE(readKittiCalibration(bad, &c, &err));
+  EXPECT_NE(err.find("R0_rect"), std::string::npos) << err;
+  EXPECT_FALSE(readKittiCalibration((dir / "missing.txt").string(), &c, &err));
+  fs::remove_all(dir);
+}
+
+TEST(FileReaders, PngHeaderAndListing) {
+  const fs::path dir = fs::temp_directory_path() / "ud_eval_png_test";
+  fs::create_directories(dir);
+  // Signature, IHDR chunk length 13, "IHDR", width 0x04DA = 1242, height 0x0177 = 375.
+  const unsigned char png[24] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13,
+                                 'I', 'H', 'D', 'R', 0, 0, 0x04, 0xDA, 0, 0, 0x01, 0x77};
+  {
+    std::ofstream f((dir / "b.png").string(), std::ios::binary);
+    f.write(reinterpret_cast<const char*>(png), sizeof(png));
+    std::ofstream g((dir / "a.png").string(), std::ios::binary);
+    g.write(reinterpret_cast<const char*>(png), 20);  // truncated header
+    std::ofstream h((dir / "c.txt").string());
+    h << "not a png, long enough to fill a header......";
+  }
+  int w = 0, h = 0;
+  ASSERT_TRUE(readPngSize((dir / "b.png").string(), &w, &h));
+  EXPECT_EQ(w, 1242);
+  EXPECT_EQ(h, 375);
+  EXPECT_FALSE(readPngSize((dir / "a.png").string(), &w, &h));
+  EXPECT_FALSE(readPngSize((dir / "c.txt").string(), &w, &h));
+  EXPECT_FALSE(readPngSize((dir / "missing.png").string(), &w, &h));
+  const auto files = listFiles(dir.string(), ".png");
+  ASSERT_EQ(files.size(), 2u);
+  EXPECT_EQ(fs::path(files[0]).filename(), "a.png");
+  EXPECT_EQ(fs::path(files[1]).filename(), "b.png");
+  EXPECT_TRUE(listFiles((dir / "nope").string(), ".png").empty());
+  fs::remove_all(dir);
+}
+
+TEST(SemanticKitti, LabelDecoding) {
+  // Low 16 bits class, high 16 bits instance.
+  EXPECT_EQ(semanticKittiClass(0x00D5000Au), 10);
+  EXPECT_EQ(semanticKittiInstance(0x00D5000Au), 213);
+  EXPECT_EQ(semanticKittiClass((1u << 16) | 255u), 255);
+  EXPECT_EQ(semanticKittiInstance((1u << 16) | 255u), 1);
+  EXPECT_EQ(semanticKittiClass(0xFFFF0000u), 0);
+  EXPECT_EQ(semanticKittiInstance(0xFFFF0000u), 65535);
+  EXPECT_EQ(semanticKittiCategory(10), SemanticKittiCategory::kThing);
+  EXPECT_EQ(semanticKittiCategory(254), SemanticKittiCategory::kThing);
+  EXPECT_EQ(semanticKittiCategory(80), SemanticKittiCategory::kDontCare);
+  EXPECT_EQ(semanticKittiCategory(99), SemanticKittiCategory::kDontCare);
+  EXPECT_EQ(semanticKittiCategory(50), SemanticKittiCategory::kBackground);
+  EXPECT_EQ(semanticKittiCategory(72), SemanticKittiCategory::kBackground);
+  EXPECT_EQ(semanticKittiClassName(31), "bicyclist");
+}
+
+TEST(SemanticKitti, GroundTruthFromLabels) {
+  auto lab = [](std::uint32_t cls, std::uint32_t inst) { return (inst << 16) | cls; };
+  std::vector<std::uint32_t> labels;
+  for (int i = 0; i < 12; ++i) labels.push_back(lab(10, 5));   // car 5: 12 points
+  for (int i = 0; i < 3; ++i) labels.push_back(lab(10, 7));    // car 7: 3 points, too few
+  labels.push_back(lab(10, 0));                                 // car without instance
+  labels.push_back(lab(80, 0));                                 // pole
+  labels.push_back(lab(40, 0));                                 // road
+  for (int i = 0; i < 10; ++i) labels.push_back(lab(252, 5));  // moving car, same instance id
+  SemanticKittiGroundTruthParams params;
+  params.min_points = 10;
+  EvalFrame gt;
+  buildSemanticKittiGroundTruth(labels, params, &gt);
+  ASSERT_EQ(gt.objects.size(), 3u);
+  EXPECT_EQ(gt.objects[0].label, "car");
+  EXPECT_EQ(gt.objects[0].num_points, 12u);
+  EXPECT_FALSE(gt.objects[0].ignored);
+  EXPECT_TRUE(gt.objects[1].ignored);
+  EXPECT_EQ(gt.objects[2].label, "moving-car");
+  EXPECT_EQ(gt.object_of_point[0], 0);
+  EXPECT_EQ(gt.object_of_point[12], 1);
+  EXPECT_EQ(gt.object_of_point[15], -1);
+  EXPECT_EQ(gt.role[15], PointRole::kDontCare);
+  EXPECT_EQ(gt.role[16], PointRole::kDontCare);
+  EXPECT_EQ(gt.role[17], PointRole::kScored);
+  EXPECT_EQ(gt.object_of_point[18], 2);
+}
+
+// On the shared frames, checked against counts obtained separately with numpy.
+TEST(SharedData, KittiAndSemanticKittiFrames) {
+  const fs::path root(UD_SHARED_DATA);
+  const fs::path ko = root / "kitti_object", sk = root / "semantic_kitti/sequences/00";
+  if (!fs::exists(ko / "velodyne/000000.bin") || !fs::exists(sk / "labels/000000.label")) {
+    GTEST_SKIP() << "shared data not found under " << root;
+  }
+  CloudXYZIRT cloud;
+  std::string err;
+  ASSERT_TRUE(readKittiBin((ko / "velodyne/000000.bin").string(), &cloud, &err)) << err;
+  EXPECT_EQ(cloud.size(), 115384u);
+  KittiCalibration calib;
+  ASSERT_TRUE(readKittiCalibration((ko / "calib/000000.txt").string(), &calib, &err)) << err;
+  std::vector<KittiLabel> labels;
+  ASSERT_TRUE(readKittiLabels((ko / "label_2/000000.txt").string(), &labels, &err)) << err;
+  EvalFrame gt;
+  buildKittiGroundTruth(cloud, labels, calib, KittiGroundTruthParams(), 1242, 375, &gt);
+  ASSERT_EQ(gt.objects.size(), 1u);
+  EXPECT_EQ(gt.objects[0].label, "Pedestrian");
+  EXPECT_GT(gt.objects[0].num_points, 100u);  // a pedestrian at 8.4 m
+
+  std::vector<std::uint32_t> sl;
+  ASSERT_TRUE(readSemanticKittiLabels((sk / "labels/000000.label").string(), &sl, &err)) << err;
+  EXPECT_EQ(sl.size(), 124668u);
+  buildSemanticKittiGroundTruth(sl, SemanticKittiGroundTruthParams(), &gt);
+  // 13 cars and one moving motorcyclist; car 217 has 5 points (< 10): ignored.
+  ASSERT_EQ(gt.objects.size(), 14u);
+  int ignored = 0;
+  for (const auto& o : gt.objects) ignored += o.ignored ? 1 : 0;
+  EXPECT_EQ(ignored, 1);
+}
+
+}  // namespace
+}  // namespace core
+}  // namespace urban_detection

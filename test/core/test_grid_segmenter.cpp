@@ -1,0 +1,486 @@
+// Tests of the simple-grid segmentation (paper Sec. 3.1) on synthetic scenes.
+#include "urban_detection/core/point_types.h"
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "segmentation_scene.h"
+#include "urban_detection/core/grid_segmenter.h"
+#include "urban_detection/core/simple_grid.h"
+
+namespace urban_detection {
+namespace {
+
+using core::GridSegmenter;
+using core::GridSegmenterParams;
+using core::SegmentClass;
+
+constexpr float kKittiHeight = 1.73f;
+
+PointXYZIRT pt(float x, float y, float z) {
+  PointXYZIRT p;
+  p.x = x;
+  p.y = y;
+  p.z = z;
+  p.intensity = 1.0f;
+  p.ring = 0;
+  p.time = 0.0f;
+  return p;
+}
+
+int countLabel(const std::vector<SegmentClass>& labels, SegmentClass c) {
+  int n = 0;
+  for (SegmentClass l : labels) n += l == c;
+  return n;
+}
+
+// ------------------------------------------------------------------------------------------
+// SimpleGrid
+
+TEST(SimpleGrid, CellStatisticsMatchHandComputedValues) {
+  core::SimpleGridParams gp;
+  gp.cell_size_m = 1.0;
+  gp.max_range_m = 10.0;
+  core::SimpleGrid grid(gp);
+  CloudXYZIRT cloud;
+  cloud.push_back(pt(0.2f, 0.3f, -1.0f));  // cell containing (0.5, 0.5)
+  cloud.push_back(pt(0.7f, 0.9f, 0.5f));   // same cell
+  cloud.push_back(pt(0.1f, 0.1f, -0.5f));  // same cell
+  cloud.push_back(pt(-0.5f, 0.5f, 2.0f));  // neighbouring cell in -x
+  grid.build(cloud, 1.0f);                 // heights become z + 1
+  ASSERT_EQ(grid.rows(), 20);
+  const std::int32_t c = grid.pointCell(0);
+  EXPECT_EQ(grid.pointCell(1), c);
+  EXPECT_EQ(grid.pointCell(2), c);
+  EXPECT_EQ(grid.pointCell(3), c - 1);
+  EXPECT_EQ(grid.rowOf(c), 10);
+  EXPECT_EQ(grid.colOf(c), 10);
+  const core::GridCell& cell = grid.cell(c);
+  EXPECT_EQ(cell.count, 3u);
+  EXPECT_FLOAT_EQ(cell.z_min, 0.0f);
+  EXPECT_FLOAT_EQ(cell.z_max, 1.5f);
+  EXPECT_FLOAT_EQ(cell.zMean(), (0.0f + 1.5f + 0.5f) / 3.0f);
+  EXPECT_FLOAT_EQ(grid.pointHeight(3), 3.0f);
+  float x, y;
+  grid.cellCenter(c, &x, &y);
+  EXPECT_FLOAT_EQ(x, 0.5f);
+  EXPECT_FLOAT_EQ(y, 0.5f);
+  EXPECT_EQ(grid.occupiedCells().size(), 2u);
+}
+
+TEST(SimpleGrid, SkipsNonFiniteHugeAndOutOfRangePoints) {
+  core::SimpleGridParams gp;
+  gp.cell_size_m = 0.5;
+  gp.max_range_m = 20.0;
+  core::SimpleGrid grid(gp);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  CloudXYZIRT cloud;
+  cloud.push_back(pt(nan, 1.0f, 0.0f));
+  cloud.push_back(pt(1.0f, inf, 0.0f));
+  cloud.push_back(pt(1.0f, 1.0f, -inf));
+  cloud.push_back(pt(1e30f, 1.0f, 0.0f));
+  cloud.push_back(pt(1.0f, 1.0f, 1e30f));
+  cloud.push_back(pt(25.0f, 0.0f, 0.0f));  // beyond max range
+  cloud.push_back(pt(1.0f, 1.0f, 0.0f));   // the only valid one
+  grid.build(cloud, 1.73f);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(grid.pointCell(i), core::SimpleGrid::kNoCell) << i;
+  EXPECT_NE(grid.pointCell(6), core::SimpleGrid::kNoCell);
+  EXPECT_EQ(grid.occupiedCells().size(), 1u);
+}
+
+TEST(SimpleGrid, RebuildResetsTheCellsOfThePreviousFrame) {
+  core::SimpleGrid grid;
+  CloudXYZIRT a, b;
+  a.push_back(pt(3.0f, 3.0f, 5.0f));
+  b.push_back(pt(3.1f, 3.1f, -1.0f));
+  grid.build(a, 0.0f);
+  grid.build(b, 0.0f);
+  const core::GridCell& cell = grid.cell(grid.pointCell(0));
+  EXPECT_EQ(cell.count, 1u);
+  EXPECT_FLOAT_EQ(cell.z_max, -1.0f);
+}
+
+// ------------------------------------------------------------------------------------------
+// Ground: flat, sloped, cambered, curbs
+
+TEST(GridSegmenter, FlatGroundIsGround) {
+  CloudXYZIRT cloud;
+  test::sampleSurface(&cloud, kKittiHeight, -30.f, 30.f, -30.f, 30.f, 0.2f,
+                      [](float, float) { return 0.0f; });
+  GridSegmenter seg;
+  std::vector<SegmentClass> labels;
+  seg.segment(cloud, &labels);
+  ASSERT_EQ(labels.size(), cloud.size());
+  EXPECT_EQ(countLabel(labels, SegmentClass::kGround), static_cast<int>(cloud.size()));
+}
+
+TEST(GridSegmenter, FivePercentSlopeWithCamberStaysGround) {
+  // 5 % uphill along x (3 m higher at 60 m, far beyond the ground tolerance and the seed
+  // height) with a 2.5 % camber falling to both sides of the road centre line.
+  CloudXYZIRT cloud;
+  test::sampleSurface(&cloud, kKittiHeight, -20.f, 60.f, -15.f, 15.f, 0.2f,
+                      [](float x, float y) { return 0.05f * x - 0.025f * std::fabs(y); });
+  GridSegmenter seg;
+  std::vector<SegmentClass> labels;
+  seg.segment(cloud, &labels);
+  EXPECT_EQ(countLabel(labels, SegmentClass::kGround), static_cast<int>(cloud.size()));
+  // The plane below the sensor alone would not do: at x = 60 the road is 3 m up, above the
+  // tall threshold, so the terrain model must follow it.
+  EXPECT_GT(0.05f * 60.0f, static_cast<float>(seg.params().tall_min_height_m));
+}
+
+TEST(GridSegmenter, CurbAndSidewalkStayGround) {
+  // Road for y < 5, a 0.15 m curb face at y = 5, sidewalk up to y = 9, then a second 0.12 m
+  // step to a raised footpath: all of it is ground.
+  CloudXYZIRT cloud;
+  auto h = [](float, float y) { return y < 5.0f ? 0.0f : (y < 9.0f ? 0.15f : 0.27f); };
+  test::sampleSurface(&cloud, kKittiHeight, -30.f, 30.f, -10.f, 14.f, 0.2f, h);
+  for (float x = -30.f; x <= 30.f; x += 0.2f) {  // the curb face
+    for (float z = 0.0f; z <= 0.15f; z += 0.05f) cloud.push_back(pt(x, 5.0f, z - kKittiHeight));
+  }
+  GridSegmenter seg;
+  std::vector<SegmentClass> labels;
+  seg.segment(cloud, &labels);
+  EXPECT_EQ(countLabel(labels, SegmentClass::kGround), static_cast<int>(cloud.size()));
+}
+
+// ------------------------------------------------------------------------------------------
+// Objects
+
+TEST(GridSegmenter, FacadeIsTallAndCarIsShort) {
+  // KITTI geometry: a 3.5 m facade 14 m to the left (seen up to 1.73 + 14 tan 2 = 2.2 m,
+  // above the 2.0 m tall threshold), a 4.5 x 1.8 x 1.5 m car 8 m ahead on the right.
+  std::vector<test::Box> boxes = {{-25.f, 14.f, 0.f, 25.f, 14.5f, 3.5f, 1},
+                                  {8.f, -5.f, 0.f, 12.5f, -3.2f, 1.5f, 2}};
+  std::vector<int> tags;
+  CloudXYZIRT cloud = test::rayCast(kKittiHeight, boxes, &tags);
+  GridSegmenter seg;
+  std::vector<SegmentClass> labels;
+  seg.segment(cloud, &labels);
+  // Object points within a few cm of the ground are legitimately ground (the local ground
+  // estimate of a mixed cell is its lowest point): judge objects from twice the tolerance up.
+  const float tol = 2.0f * static_cast<float>(seg.params().ground_tolerance_m);
+  int wall = 0, wall_tall = 0, car = 0, car_short = 0, car_tall = 0, ground = 0, ground_ok = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const float h = cloud[i].z + kKittiHeight;
+    // Beyond ~35 m the rings of this 64-beam pattern are more than ground_max_gap_m apart and
+    // their cells hold fewer than min_points_per_cell points: clutter by design.
+    if (tags[i] == 0 && std::hypot(cloud[i].x, cloud[i].y) < 35.0f) {
+      ++ground;
+      ground_ok += labels[i] == SegmentClass::kGround;
+    } else if (tags[i] == 1 && h > tol) {
+      ++wall;
+      wall_tall += labels[i] == SegmentClass::kTall;
+    } else if (tags[i] == 2 && h > tol) {
+      ++car;
+      car_short += labels[i] == SegmentClass::kShort;
+      car_tall += labels[i] == SegmentClass::kTall;
+    }
+  }
+  ASSERT_GT(wall, 500);
+  ASSERT_GT(car, 300);
+  EXPECT_EQ(wall_tall, wall);
+  // A roof-edge return alone in its cell is clutter (sparse cell), never tall.
+  EXPECT_EQ(car_tall, 0);
+  EXPECT_GE(car_short, car - car / 100);
+  EXPECT_EQ(ground_ok, ground);
+}
+
+TEST(GridSegmenter, MixedCellIsSplitPerPointByHeightAboveLocalGround) {
+  // One 0.5 m cell holding road points and the lower edge of a car body 0.4-1.2 m up.
+  CloudXYZIRT cloud;
+  test::sampleSurface(&cloud, kKittiHeight, -10.f, 10.f, -10.f, 10.f, 0.1f,
+                      [](float, float) { return 0.0f; });
+  const std::size_t n_ground = cloud.size();
+  for (float z = 0.4f; z <= 1.2f; z += 0.1f) {
+    for (float y = 4.05f; y < 6.0f; y += 0.1f) cloud.push_back(pt(6.05f, y, z - kKittiHeight));
+  }
+  GridSegmenter seg;
+  std::vector<SegmentClass> labels;
+  seg.segment(cloud, &labels);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    ASSERT_EQ(labels[i], i < n_ground ? SegmentClass::kGround : SegmentClass::kShort) << i;
+  }
+}
+
+TEST(GridSegmenter, SparseCellsAreClutter) {
+  CloudXYZIRT cloud;
+  test::sampleSurface(&cloud, kKittiHeight, -10.f, 10.f, -10.f, 10.f, 0.1f,
+                      [](float, float) { return 0.0f; });
+  const std::size_t first = cloud.size();
+  // Two points floating 1 m up just beyond the road's edge (a bird, a wire) and two isolated
+  // points 40 m away where there is no terrain at all.
+  cloud.push_back(pt(11.1f, 11.1f, 1.0f - kKittiHeight));
+  cloud.push_back(pt(11.2f, 11.2f, 1.1f - kKittiHeight));
+  cloud.push_back(pt(40.1f, -30.1f, 0.0f - kKittiHeight));
+  cloud.push_back(pt(40.2f, -30.2f, 0.3f - kKittiHeight));
+  GridSegmenter seg;
+  std::vector<SegmentClass> labels;
+  seg.segment(cloud, &labels);
+  ASSERT_GE(seg.params().min_points_per_cell, 3);
+  for (std::size_t i = first; i < cloud.size(); ++i) EXPECT_EQ(labels[i], SegmentClass::kClutter);
+}
+
+TEST(GridSegmenter, SparseFarRoadIsGroundOnlyWhenEnabled) {
+  CloudXYZIRT cloud;
+  test::sampleSurface(&cloud, kKittiHeight, -10.f, 20.f, -10.f, 10.f, 0.1f,
+                      [](float, float) { return 0.0f; });
+  const std::size_t first = cloud.size();
+  cloud.push_back(pt(21.1f, 0.1f, 0.02f - kKittiHeight));  // 1-point cells next to the road
+  cloud.push_back(pt(21.7f, 0.1f, 0.0f - kKittiHeight));
+  GridSegmenterParams p;
+  GridSegmenter seg(p);
+  std::vector<SegmentClass> labels;
+  seg.segment(cloud, &labels);
+  EXPECT_EQ(labels[first], SegmentClass::kGround);
+  EXPECT_EQ(labels[first + 1], SegmentClass::kGround);
+  p.ground_in_sparse_cells = false;
+  seg.setParams(p);
+  seg.segment(cloud, &labels);
+  EXPECT_EQ(labels[first], SegmentClass::kClutter);
+  EXPECT_EQ(labels[first + 1], SegmentClass::kClutter);
+}
+
+// ------------------------------------------------------------------------------------------
+// Hough wall refinement (paper Fig. 3)
+
+// The paper's situation: a sensor mounted lower (1.2 m) and the paper's 1.40 m tall threshold.
+// A facade 4 m to the side is seen only up to 1.2 + d tan(2 deg), i.e. below 1.4 m for
+// d < 5.7 m: without refinement those cells are short objects.
+struct FacadeScene {
+  FacadeScene() {
+    boxes = {{-25.f, 4.f, 0.f, 25.f, 4.4f, 8.f, 1},       // facade along x
+             {6.f, -6.f, 0.f, 10.5f, -4.2f, 1.1f, 2}};     // an isolated low car
+    cloud = test::rayCast(1.2f, boxes, &tags);
+    params.sensor_height_m = 1.2;
+    params.tall_min_height_m = 1.4;
+  }
+  std::vector<test::Box> boxes;
+  std::vector<int> tags;
+  CloudXYZIRT cloud;
+  GridSegmenterParams params;
+};
+
+TEST(HoughWallRefiner, FacadeSeenOnlyBelowTallThresholdNearTheSensorBecomesTall) {
+  FacadeScene s;
+  std::vector<SegmentClass> labels;
+  auto count = [&](int tag, SegmentClass c, float min_h) {
+    int n = 0;
+    for (std::size_t i = 0; i < s.cloud.size(); ++i) {
+      n += s.tags[i] == tag && s.cloud[i].z + 1.2f > min_h && labels[i] == c;
+    }
+    return n;
+  };
+  const float above = 2.0f * static_cast<float>(s.params.ground_tolerance_m);
+  s.params.hough.enabled = false;
+  GridSegmenter without(s.params);
+  without.segment(s.cloud, &labels);
+  const int short_without = count(1, SegmentClass::kShort, above);
+  EXPECT_GT(short_without, 100) << "the scene must reproduce the misreading";
+
+  s.params.hough.enabled = true;
+  GridSegmenter with(s.params);
+  with.segment(s.cloud, &labels);
+  EXPECT_EQ(count(1, SegmentClass::kShort, above), 0);
+  EXPECT_GT(with.stats().hough.cells_relabeled, 0);
+  // The car is left alone.
+  int car = 0;
+  for (std::size_t i = 0; i < s.cloud.size(); ++i) car += s.tags[i] == 2 && s.cloud[i].z + 1.2f > above;
+  EXPECT_GT(car, 100);
+  EXPECT_EQ(count(2, SegmentClass::kTall, above), 0);
+  EXPECT_GE(count(2, SegmentClass::kShort, above), car - car / 100);
+}
+
+TEST(HoughWallRefiner, RowOfParkedCarsIsNotAWall) {
+  // Five cars bumper to bumper (0.8 m gaps) along the kerb: a long straight line of short
+  // cells, but none is tall or reaches the top of the field of view.
+  std::vector<test::Box> boxes;
+  for (int k = 0; k < 5; ++k) {
+    const float x0 = -12.f + k * 5.3f;
+    boxes.push_back({x0, 5.f, 0.f, x0 + 4.5f, 6.8f, 1.5f, 2});
+  }
+  std::vector<int> tags;
+  CloudXYZIRT cloud = test::rayCast(kKittiHeight, boxes, &tags);
+  GridSegmenter seg;
+  std::vector<SegmentClass> labels;
+  seg.segment(cloud, &labels);
+  int car = 0, car_short = 0, car_tall = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (tags[i] != 2 || cloud[i].z + kKittiHeight <= 2.0 * seg.params().ground_tolerance_m) {
+      continue;
+    }
+    ++car;
+    car_short += labels[i] == SegmentClass::kShort;
+    car_tall += labels[i] == SegmentClass::kTall;
+  }
+  ASSERT_GT(car, 1000);
+  EXPECT_EQ(car_tall, 0);
+  EXPECT_GE(car_short, car - car / 100);  // single roof-edge returns are clutter
+}
+
+// ASCII-art cell grid: 'T' tall, 's' short, '.' ground, '!' short with wall support.
+struct AsciiGrid {
+  explicit AsciiGrid(const std::vector<std::string>& rows_top_down) {
+    rows = static_cast<int>(rows_top_down.size());
+    cols = static_cast<int>(rows_top_down[0].size());
+    classes.assign(static_cast<std::size_t>(rows) * cols, SegmentClass::kGround);
+    support.assign(classes.size(), 0);
+    for (int r = 0; r < rows; ++r) {
+      for (int c = 0; c < cols; ++c) {
+        const char ch = rows_top_down[rows - 1 - r][c];
+        const std::size_t i = static_cast<std::size_t>(r) * cols + c;
+        if (ch == 'T') classes[i] = SegmentClass::kTall;
+        if (ch == 's' || ch == '!') classes[i] = SegmentClass::kShort;
+        if (ch == '!') support[i] = 1;
+      }
+    }
+  }
+  std::string row(int r_top_down) const {
+    std::string s;
+    const int r = rows - 1 - r_top_down;
+    for (int c = 0; c < cols; ++c) {
+      const SegmentClass k = classes[static_cast<std::size_t>(r) * cols + c];
+      s += k == SegmentClass::kTall ? 'T' : (k == SegmentClass::kShort ? 's' : '.');
+    }
+    return s;
+  }
+  int rows = 0, cols = 0;
+  std::vector<SegmentClass> classes;
+  std::vector<std::uint8_t> support;
+};
+
+TEST(HoughWallRefiner, AsciiWallRunIsRelabelledAndCarsAreNot) {
+  // 1 m cells. Row 1: a wall, tall at both ends, its middle seen short but reaching the top
+  // of the field of view ('!'). Row 4: a wall run broken by a 4 m gap from a car ('sss'):
+  // the car is not part of the run. Row 7: cars in a row, never a wall.
+  AsciiGrid g({"................................",
+               "TTTTT!!!!!!!!!!!!!!TTTTTTT......",
+               "................................",
+               "................................",
+               "TTTTTTTTTTTTTT....sss...........",
+               "................................",
+               "................................",
+               "ssss.ssss.ssss.ssss.ssss........",
+               "................................"});
+  core::HoughWallRefinerParams p;
+  p.max_range_m = 100.0;
+  p.votes = 6;
+  p.min_line_length_m = 6.0;
+  p.max_line_gap_m = 1.0;
+  p.line_half_width_cells = 0;
+  p.min_tall_fraction = 0.8;
+  core::HoughWallRefiner refiner(p);
+  const core::HoughWallStats st = refiner.refine(g.rows, g.cols, 1.0, &g.classes, &g.support);
+  EXPECT_EQ(g.row(1), "TTTTTTTTTTTTTTTTTTTTTTTTTT......");
+  EXPECT_EQ(g.row(4), "TTTTTTTTTTTTTT....sss...........");
+  EXPECT_EQ(g.row(7), "ssss.ssss.ssss.ssss.ssss........");
+  EXPECT_EQ(st.cells_relabeled, 14);
+  // Without the wall-support evidence the middle of row 1 is 14 short of 21 cells: rejected.
+  AsciiGrid h({"................................",
+               "TTTTT!!!!!!!!!!!!!!TTTTTTT......",
+               "................................"});
+  refiner.refine(h.rows, h.cols, 1.0, &h.classes);
+  EXPECT_EQ(h.row(1), "TTTTTssssssssssssssTTTTTTT......");
+}
+
+TEST(HoughWallRefiner, RejectsInconsistentInput) {
+  core::HoughWallRefiner refiner;
+  std::vector<SegmentClass> cls(10, SegmentClass::kShort);
+  EXPECT_EQ(refiner.refine(4, 4, 0.5, &cls).cells_relabeled, 0);  // size mismatch
+  EXPECT_EQ(refiner.refine(0, 0, 0.5, &cls).lines_found, 0);
+}
+
+// ------------------------------------------------------------------------------------------
+// Degenerate input, outputs, frame-to-frame state
+
+TEST(GridSegmenter, EmptyAndAllNaNClouds) {
+  GridSegmenter seg;
+  std::vector<SegmentClass> labels(7, SegmentClass::kTall);
+  CloudXYZIRT empty;
+  seg.segment(empty, &labels);
+  EXPECT_TRUE(labels.empty());
+  CloudXYZIRT bad;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int i = 0; i < 100; ++i) bad.push_back(pt(nan, nan, nan));
+  bad.push_back(pt(inf, 0.f, 0.f));
+  bad.push_back(pt(1e30f, 1e30f, 1e30f));
+  bad.push_back(pt(-1e30f, 3.f, -1.7f));
+  seg.segment(bad, &labels);
+  ASSERT_EQ(labels.size(), bad.size());
+  EXPECT_EQ(countLabel(labels, SegmentClass::kUnknown), static_cast<int>(bad.size()));
+  EXPECT_EQ(seg.stats().points_unknown, bad.size());
+  LabeledCloud fg;
+  core::extractForeground(bad, labels, &fg);
+  EXPECT_TRUE(fg.empty());
+}
+
+TEST(GridSegmenter, ForegroundAndLabelledCloudCarryIndices) {
+  std::vector<test::Box> boxes = {{8.f, -5.f, 0.f, 12.5f, -3.2f, 1.5f, 2}};
+  std::vector<int> tags;
+  CloudXYZIRT cloud = test::rayCast(kKittiHeight, boxes, &tags);
+  cloud.push_back(pt(std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f));
+  tags.push_back(-1);
+  cloud.header.frame_id = "velodyne";
+  cloud.header.stamp = 123456;
+  GridSegmenter seg;
+  std::vector<SegmentClass> labels;
+  seg.segment(cloud, &labels);
+  LabeledCloud fg, all;
+  core::extractForeground(cloud, labels, &fg);
+  core::buildLabeledCloud(cloud, labels, &all);
+  ASSERT_EQ(all.size(), cloud.size());
+  EXPECT_FALSE(all.is_dense);
+  EXPECT_EQ(all.back().label, static_cast<std::uint32_t>(SegmentClass::kUnknown));
+  EXPECT_EQ(fg.header.frame_id, "velodyne");
+  EXPECT_EQ(fg.header.stamp, 123456u);
+  ASSERT_EQ(fg.size(), static_cast<std::size_t>(countLabel(labels, SegmentClass::kShort)));
+  ASSERT_GT(fg.size(), 100u);
+  for (const LabeledPoint& q : fg) {
+    ASSERT_LT(q.index, cloud.size());
+    EXPECT_EQ(tags[q.index], 2);  // only car points are foreground here
+    EXPECT_EQ(q.x, cloud[q.index].x);
+    EXPECT_EQ(q.z, cloud[q.index].z);
+    EXPECT_EQ(q.label, static_cast<std::uint32_t>(SegmentClass::kShort));
+  }
+  for (std::size_t i = 0; i + 1 < all.size(); ++i) {
+    EXPECT_EQ(all[i].index, i);
+    EXPECT_EQ(all[i].label, static_cast<std::uint32_t>(labels[i]));
+  }
+}
+
+TEST(GridSegmenter, ReusedSegmenterMatchesAFreshOne) {
+  // Scratch buffers are reset between frames: frame B after frame A gives exactly what a
+  // fresh segmenter gives on B.
+  std::vector<int> tags;
+  CloudXYZIRT a = test::rayCast(kKittiHeight, {{-25.f, 6.f, 0.f, 25.f, 6.5f, 6.f, 1},
+                                               {5.f, -4.f, 0.f, 9.5f, -2.2f, 1.5f, 2}}, &tags);
+  CloudXYZIRT b = test::rayCast(kKittiHeight, {{10.f, -20.f, 0.f, 10.5f, 20.f, 4.f, 1},
+                                               {-9.f, 2.f, 0.f, -4.5f, 3.8f, 1.6f, 2}}, &tags);
+  GridSegmenter reused, fresh;
+  std::vector<SegmentClass> la, lb, lf;
+  reused.segment(a, &la);
+  reused.segment(b, &lb);
+  fresh.segment(b, &lf);
+  EXPECT_EQ(lb, lf);
+}
+
+TEST(GridSegmenter, RingAndTimeAreNotNeeded) {
+  std::vector<int> tags;
+  CloudXYZIRT cloud = test::rayCast(kKittiHeight, {{8.f, -5.f, 0.f, 12.5f, -3.2f, 1.5f, 2}}, &tags);
+  CloudXYZIRT zeroed = cloud;
+  for (auto& p : zeroed) p.ring = 0, p.time = 0.f;
+  GridSegmenter s1, s2;
+  std::vector<SegmentClass> l1, l2;
+  s1.segment(cloud, &l1);
+  s2.segment(zeroed, &l2);
+  EXPECT_EQ(l1, l2);
+}
+
+}  // namespace
+}  // namespace urban_detection

@@ -1,0 +1,236 @@
+// pcap I/O: write -> read -> decode, foreign and malformed frames, truncated captures.
+#include <gtest/gtest.h>
+#include <pcap/pcap.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/pcap_io.h"
+
+namespace uc = urban_detection::core;
+
+namespace {
+
+std::string tempPath(const std::string& name) {
+  return ::testing::TempDir() + "ud_pcap_" + std::to_string(::getpid()) + "_" + name;
+}
+
+// Packets of a sensor looking at a 10 m cylinder, azimuth advancing 0.2 deg per firing.
+std::vector<uc::RawPacket> makePackets(int count) {
+  const uc::PacketEncoder encoder(uc::Calibration::nominalHdl64eS2());
+  std::vector<uc::RawPacket> out;
+  for (int p = 0; p < count; ++p) {
+    uc::Firing f[6];
+    for (int i = 0; i < 6; ++i) {
+      f[i].azimuth = static_cast<std::uint16_t>(((p * 6 + i) * 20) % 36000);
+      for (int l = 0; l < 64; ++l) {
+        f[i].distance[l] = static_cast<std::uint16_t>(5000 + l);
+        f[i].intensity[l] = static_cast<std::uint8_t>(l);
+      }
+    }
+    out.push_back(encoder.encode(f, static_cast<std::uint32_t>(p * 288)));
+  }
+  return out;
+}
+
+// An IPv4/UDP datagram (without link header).
+std::vector<std::uint8_t> ipUdp(const std::vector<std::uint8_t>& payload, int dport,
+                                int ihl_words = 5, std::uint16_t frag = 0x4000) {
+  std::vector<std::uint8_t> ip(ihl_words * 4 + 8 + payload.size(), 0);
+  const std::size_t total = ip.size();
+  ip[0] = static_cast<std::uint8_t>(0x40 | ihl_words);
+  ip[2] = total >> 8;
+  ip[3] = total & 0xFF;
+  ip[6] = frag >> 8;
+  ip[7] = frag & 0xFF;
+  ip[8] = 64;
+  ip[9] = 17;
+  std::uint8_t* udp = ip.data() + ihl_words * 4;
+  udp[0] = 2368 >> 8;
+  udp[1] = 2368 & 0xFF;
+  udp[2] = static_cast<std::uint8_t>(dport >> 8);
+  udp[3] = dport & 0xFF;
+  udp[4] = (8 + payload.size()) >> 8;
+  udp[5] = (8 + payload.size()) & 0xFF;
+  std::copy(payload.begin(), payload.end(), udp + 8);
+  return ip;
+}
+
+std::vector<std::uint8_t> ethernet(const std::vector<std::uint8_t>& ip, std::uint16_t type = 0x0800,
+                                   bool vlan = false) {
+  std::vector<std::uint8_t> f(12, 0xAA);
+  if (vlan) {
+    f.push_back(0x81);
+    f.push_back(0x00);
+    f.push_back(0x00);
+    f.push_back(0x05);
+  }
+  f.push_back(type >> 8);
+  f.push_back(type & 0xFF);
+  f.insert(f.end(), ip.begin(), ip.end());
+  return f;
+}
+
+void dumpFrames(const std::string& path, int linktype,
+                const std::vector<std::vector<std::uint8_t>>& frames) {
+  pcap_t* dead = pcap_open_dead(linktype, 65535);
+  pcap_dumper_t* d = pcap_dump_open(dead, path.c_str());
+  ASSERT_NE(d, nullptr);
+  int i = 0;
+  for (const auto& f : frames) {
+    pcap_pkthdr h{};
+    h.ts.tv_sec = 1000 + i++;
+    h.caplen = h.len = static_cast<bpf_u_int32>(f.size());
+    pcap_dump(reinterpret_cast<u_char*>(d), &h, f.data());
+  }
+  pcap_dump_close(d);
+  pcap_close(dead);
+}
+
+}  // namespace
+
+TEST(PcapIo, WriteReadDecodeRoundTrip) {
+  const std::string path = tempPath("roundtrip.pcap");
+  const auto packets = makePackets(50);
+  {
+    uc::PcapWriter writer(path);
+    for (std::size_t i = 0; i < packets.size(); ++i) writer.write(packets[i], 1.7e9 + i * 288e-6);
+  }
+  uc::PcapReader reader(path);
+  const uc::Calibration cal = uc::Calibration::nominalHdl64eS2();
+  uc::PacketDecoder decoder(cal, uc::DecoderParams{});
+  urban_detection::CloudXYZIRT from_file, direct;
+  uc::PcapPacket pkt;
+  std::size_t n = 0;
+  while (reader.next(&pkt) == uc::PcapReader::Result::kPacket) {
+    ASSERT_LT(n, packets.size());
+    EXPECT_EQ(pkt.data, packets[n]);
+    EXPECT_NEAR(pkt.stamp_s, 1.7e9 + n * 288e-6, 2e-6);
+    EXPECT_EQ(decoder.decode(pkt.data.data(), pkt.data.size(), 0.0, &from_file, nullptr),
+              uc::PacketStatus::kOk);
+    decoder.decode(packets[n].data(), packets[n].size(), 0.0, &direct, nullptr);
+    ++n;
+  }
+  EXPECT_EQ(n, packets.size());
+  EXPECT_EQ(reader.next(&pkt), uc::PcapReader::Result::kEnd);
+  EXPECT_EQ(reader.skipped(), 0u);
+  ASSERT_EQ(from_file.size(), 50u * 384u);
+  ASSERT_EQ(from_file.size(), direct.size());
+  for (std::size_t i = 0; i < direct.size(); i += 97) {
+    EXPECT_EQ(from_file[i].x, direct[i].x);
+    EXPECT_EQ(from_file[i].ring, direct[i].ring);
+  }
+  // rewind starts over.
+  reader.rewind();
+  ASSERT_EQ(reader.next(&pkt), uc::PcapReader::Result::kPacket);
+  EXPECT_EQ(pkt.data, packets[0]);
+  std::remove(path.c_str());
+}
+
+TEST(PcapIo, TruncatedCaptureReportsTruncatedNotCrash) {
+  const std::string path = tempPath("truncated.pcap");
+  const auto packets = makePackets(10);
+  {
+    uc::PcapWriter writer(path);
+    for (const auto& p : packets) writer.write(p, 100.0);
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  ASSERT_EQ(bytes.size(), 24u + 10u * (16u + 14u + 20u + 8u + 1206u));
+  bytes.resize(bytes.size() - 500);  // cut into the last record
+  std::ofstream(path, std::ios::binary).write(bytes.data(), bytes.size());
+
+  uc::PcapReader reader(path);
+  uc::PcapPacket pkt;
+  int read = 0;
+  uc::PcapReader::Result r;
+  while ((r = reader.next(&pkt)) == uc::PcapReader::Result::kPacket) ++read;
+  EXPECT_EQ(read, 9);
+  EXPECT_EQ(r, uc::PcapReader::Result::kTruncated);
+
+  // A file cut inside its global header is not a capture: the constructor names the file.
+  bytes.resize(10);
+  std::ofstream(path, std::ios::binary).write(bytes.data(), bytes.size());
+  try {
+    uc::PcapReader bad(path);
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  std::remove(path.c_str());
+  EXPECT_THROW(uc::PcapReader("/nonexistent/x.pcap"), std::runtime_error);
+}
+
+TEST(PcapIo, ForeignAndMalformedFramesAreSkipped) {
+  const std::string path = tempPath("mixed.pcap");
+  const auto packets = makePackets(3);
+  const std::vector<std::uint8_t> payload(packets[0].begin(), packets[0].end());
+  const std::vector<std::uint8_t> payload2(packets[1].begin(), packets[1].end());
+  const std::vector<std::uint8_t> payload3(packets[2].begin(), packets[2].end());
+  std::vector<std::vector<std::uint8_t>> frames = {
+      ethernet(std::vector<std::uint8_t>(28, 1), 0x0806),        // ARP
+      ethernet(ipUdp(payload, 2369)),                            // other port
+      ethernet(ipUdp(std::vector<std::uint8_t>(512, 7), 2368)),  // position packet size
+      ethernet(ipUdp(payload, 2368, 5, 0x2000)),                 // first fragment
+      std::vector<std::uint8_t>(9, 0xAA),                        // runt frame
+      ethernet(ipUdp(payload, 2368)),                            // good
+      ethernet(ipUdp(payload2, 2368), 0x0800, true),             // good, VLAN tagged
+      ethernet(ipUdp(payload3, 2368, 6)),                        // good, IP options
+  };
+  // A frame whose UDP length claims more than the record holds.
+  auto lying = ethernet(ipUdp(payload, 2368));
+  lying.resize(lying.size() - 100);
+  frames.push_back(lying);
+  dumpFrames(path, DLT_EN10MB, frames);
+
+  uc::PcapReader reader(path);
+  uc::PcapPacket pkt;
+  ASSERT_EQ(reader.next(&pkt), uc::PcapReader::Result::kPacket);
+  EXPECT_EQ(pkt.data, packets[0]);
+  ASSERT_EQ(reader.next(&pkt), uc::PcapReader::Result::kPacket);
+  EXPECT_EQ(pkt.data, packets[1]);
+  ASSERT_EQ(reader.next(&pkt), uc::PcapReader::Result::kPacket);
+  EXPECT_EQ(pkt.data, packets[2]);
+  EXPECT_EQ(reader.next(&pkt), uc::PcapReader::Result::kEnd);
+  EXPECT_EQ(reader.skipped(), 6u);
+  std::remove(path.c_str());
+}
+
+TEST(PcapIo, LinuxCookedCapture) {
+  const std::string path = tempPath("sll.pcap");
+  const auto packets = makePackets(1);
+  std::vector<std::uint8_t> frame(16, 0);
+  frame[14] = 0x08;  // protocol IPv4
+  frame[15] = 0x00;
+  const auto ip = ipUdp(std::vector<std::uint8_t>(packets[0].begin(), packets[0].end()), 2368);
+  frame.insert(frame.end(), ip.begin(), ip.end());
+  dumpFrames(path, DLT_LINUX_SLL, {frame});
+  uc::PcapReader reader(path);
+  uc::PcapPacket pkt;
+  ASSERT_EQ(reader.next(&pkt), uc::PcapReader::Result::kPacket);
+  EXPECT_EQ(pkt.data, packets[0]);
+  EXPECT_DOUBLE_EQ(pkt.stamp_s, 1000.0);
+  EXPECT_EQ(reader.next(&pkt), uc::PcapReader::Result::kEnd);
+  std::remove(path.c_str());
+}
+
+TEST(PcapIo, OtherPortOption) {
+  const std::string path = tempPath("port.pcap");
+  const auto packets = makePackets(1);
+  dumpFrames(
+      path, DLT_EN10MB,
+      {ethernet(ipUdp(std::vector<std::uint8_t>(packets[0].begin(), packets[0].end()), 2370))});
+  uc::PcapPacket pkt;
+  uc::PcapReader default_port(path);
+  EXPECT_EQ(default_port.next(&pkt), uc::PcapReader::Result::kEnd);
+  EXPECT_EQ(default_port.skipped(), 1u);
+  uc::PcapReader port_2370(path, 2370);
+  EXPECT_EQ(port_2370.next(&pkt), uc::PcapReader::Result::kPacket);
+  std::remove(path.c_str());
+}
