@@ -1,0 +1,62 @@
+/// \file udp_receiver.h
+/// Receiving HDL-64E data packets from a UDP socket (POSIX), ROS-free.
+///
+/// The sensor sends one 1206-byte datagram per packet, about 3,500 per second at any rpm, to
+/// port 2368. The receiver binds that port, optionally accepts only one sender address, and
+/// waits with a timeout so that the reading thread can be stopped cleanly.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "urban_detection/core/hdl64e_packet.h"
+
+namespace urban_detection {
+namespace core {
+
+/// Parameters of UdpReceiver.
+struct UdpReceiverParams {
+  int port = 2368;                     // [1..65535] local UDP port (0 = any free port)
+  std::string device_ip;               // accept only this IPv4 sender; empty = any sender
+  int rcvbuf_bytes = 8 * 1024 * 1024;  // [bytes] requested SO_RCVBUF (kernel may cap it)
+};
+
+/// A bound, non-blocking UDP socket delivering whole 1206-byte packets.
+class UdpReceiver {
+ public:
+  /// Opens and binds the socket. Throws std::runtime_error with the system's reason (port in
+  /// use, permission) or std::invalid_argument for a malformed device_ip.
+  explicit UdpReceiver(const UdpReceiverParams& params);
+  ~UdpReceiver();
+  UdpReceiver(const UdpReceiver&) = delete;
+  UdpReceiver& operator=(const UdpReceiver&) = delete;
+
+  enum class Result {
+    kPacket,       // `packet` holds a 1206-byte datagram from an accepted sender
+    kTimeout,      // nothing arrived within the timeout
+    kWrongSize,    // a datagram of another size arrived (dropped; its size in `size`)
+    kOtherSender,  // a datagram from a sender other than device_ip (dropped)
+    kError,        // the socket reported an error (errno text in lastError())
+  };
+
+  /// Returns the next datagram, waiting at most `timeout_ms` [ms] when none is queued.
+  Result receive(RawPacket* packet, int timeout_ms, std::size_t* size = nullptr);
+
+  /// Port actually bound (useful with port 0).
+  int port() const { return port_; }
+  /// Receive buffer size granted by the kernel [bytes] (Linux reports twice the usable size).
+  int rcvbufBytes() const { return rcvbuf_bytes_; }
+  const std::string& lastError() const { return last_error_; }
+
+ private:
+  int fd_ = -1;
+  int port_ = 0;
+  int rcvbuf_bytes_ = 0;
+  bool filter_sender_ = false;
+  std::uint32_t device_addr_ = 0;  // network byte order
+  std::string last_error_;
+};
+
+}  // namespace core
+}  // namespace urban_detection

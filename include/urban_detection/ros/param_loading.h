@@ -1,0 +1,46 @@
+/// \file param_loading.h
+/// Reading ROS parameters into params structs with range checks.
+///
+/// Every loader reads an optional private parameter (the struct's in-class default stays when it
+/// is not set) and throws ParamError with one message naming the fully resolved parameter, the
+/// value and the accepted range. Nodelets catch it in onInit(), log it once and stay inactive,
+/// so a bad parameter never takes the nodelet manager down.
+#pragma once
+
+#include <ros/node_handle.h>
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace urban_detection {
+
+/// A missing, mistyped or out-of-range parameter. The message is meant for the user as is.
+class ParamError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Throws ParamError unless min <= value <= max (NaN is rejected). `name` is the name shown to
+/// the user, `unit` is appended to the range ("m", "s", "deg"; may be empty).
+template <typename T>
+void checkRange(const std::string& name, T value, T min, T max, const std::string& unit = "") {
+  bool ok = value >= min && value <= max;  // false for NaN
+  if (ok) return;
+  std::ostringstream msg;
+  msg << "parameter '" << name << "' = " << value << " is out of range: accepted [" << min
+      << ", " << max << "]" << (unit.empty() ? "" : " ") << unit;
+  throw ParamError(msg.str());
+}
+
+/// Reads `name` (relative to `nh`, usually the private node handle) into `*value` when set, then
+/// checks the range. A parameter of the wrong type is an error, not silently ignored.
+void loadParam(const ros::NodeHandle& nh, const std::string& name, double* value, double min,
+               double max, const std::string& unit = "");
+void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value, int min,
+               int max, const std::string& unit = "");
+void loadParam(const ros::NodeHandle& nh, const std::string& name, bool* value);
+void loadParam(const ros::NodeHandle& nh, const std::string& name, std::string* value);
+
+}  // namespace urban_detection

@@ -1,0 +1,102 @@
+#include "urban_detection/core/udp_receiver.h"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace urban_detection {
+namespace core {
+namespace {
+
+std::string errnoText(const std::string& what) { return what + ": " + std::strerror(errno); }
+
+}  // namespace
+
+UdpReceiver::UdpReceiver(const UdpReceiverParams& params) {
+  if (!params.device_ip.empty()) {
+    in_addr addr{};
+    if (inet_pton(AF_INET, params.device_ip.c_str(), &addr) != 1) {
+      throw std::invalid_argument("device_ip '" + params.device_ip + "' is not an IPv4 address");
+    }
+    filter_sender_ = true;
+    device_addr_ = addr.s_addr;
+  }
+  if (params.port < 0 || params.port > 65535) {
+    throw std::invalid_argument("UDP port " + std::to_string(params.port) + " out of [0, 65535]");
+  }
+  fd_ = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd_ < 0) throw std::runtime_error(errnoText("cannot create a UDP socket"));
+
+  // No SO_REUSEADDR: on Linux it lets several UDP sockets bind one port, and only one of them
+  // would get each packet. A second receiver on the port must fail loudly instead. (UDP has no
+  // TIME_WAIT, so a restarted node rebinds at once without it.)
+  // A revolution is ~350 packets (~420 kB) at 600 rpm; a large buffer absorbs scheduling
+  // hiccups of the reading thread. The kernel caps the request at net.core.rmem_max.
+  int rcvbuf = params.rcvbuf_bytes;
+  setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof(rcvbuf));
+  socklen_t len = sizeof(rcvbuf_bytes_);
+  getsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf_bytes_, &len);
+
+  sockaddr_in local{};
+  local.sin_family = AF_INET;
+  local.sin_port = htons(static_cast<std::uint16_t>(params.port));
+  local.sin_addr.s_addr = htonl(INADDR_ANY);
+  if (bind(fd_, reinterpret_cast<const sockaddr*>(&local), sizeof(local)) != 0) {
+    const std::string reason = errnoText("cannot bind UDP port " + std::to_string(params.port));
+    close(fd_);
+    throw std::runtime_error(reason);
+  }
+  sockaddr_in bound{};
+  len = sizeof(bound);
+  getsockname(fd_, reinterpret_cast<sockaddr*>(&bound), &len);
+  port_ = ntohs(bound.sin_port);
+  fcntl(fd_, F_SETFL, fcntl(fd_, F_GETFL) | O_NONBLOCK);
+}
+
+UdpReceiver::~UdpReceiver() {
+  if (fd_ >= 0) close(fd_);
+}
+
+UdpReceiver::Result UdpReceiver::receive(RawPacket* packet, int timeout_ms, std::size_t* size) {
+  // One byte more than a packet so that oversized datagrams are recognised (MSG_TRUNC makes
+  // recvfrom report their true length).
+  std::uint8_t buffer[kPacketSize + 1];
+  sockaddr_in sender{};
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    socklen_t sender_len = sizeof(sender);
+    const ssize_t n = recvfrom(fd_, buffer, sizeof(buffer), MSG_TRUNC,
+                               reinterpret_cast<sockaddr*>(&sender), &sender_len);
+    if (n >= 0) {
+      if (size) *size = static_cast<std::size_t>(n);
+      if (filter_sender_ && sender.sin_addr.s_addr != device_addr_) return Result::kOtherSender;
+      if (static_cast<std::size_t>(n) != kPacketSize) return Result::kWrongSize;
+      std::memcpy(packet->data(), buffer, kPacketSize);
+      return Result::kPacket;
+    }
+    if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+      last_error_ = errnoText("recvfrom");
+      return Result::kError;
+    }
+    if (attempt == 1) break;
+    // Nothing queued: wait for data, bounded so the caller can check for shutdown.
+    pollfd pfd{fd_, POLLIN, 0};
+    const int ready = poll(&pfd, 1, timeout_ms);
+    if (ready == 0) return Result::kTimeout;
+    if (ready < 0) {
+      if (errno == EINTR) return Result::kTimeout;
+      last_error_ = errnoText("poll");
+      return Result::kError;
+    }
+  }
+  return Result::kTimeout;
+}
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,48 @@
+#include "urban_detection/ros/packet_params.h"
+
+#include <arpa/inet.h>
+
+namespace urban_detection {
+
+PacketSourceParams loadPacketSourceParams(const ros::NodeHandle& nh) {
+  PacketSourceParams p;
+  loadParam(nh, "port", &p.port, 1, 65535);
+  loadParam(nh, "device_ip", &p.device_ip);
+  in_addr addr{};
+  if (!p.device_ip.empty() && inet_pton(AF_INET, p.device_ip.c_str(), &addr) != 1) {
+    throw ParamError("parameter '" + nh.resolveName("device_ip") + "' = '" + p.device_ip +
+                     "' is not an IPv4 address (or empty for any sender)");
+  }
+  loadParam(nh, "rcvbuf_bytes", &p.rcvbuf_bytes, 64 * 1024, 512 * 1024 * 1024, "bytes");
+  loadParam(nh, "pcap", &p.pcap);
+  loadParam(nh, "rate", &p.rate, 0.0, 1000.0, "(0 = as fast as possible)");
+  loadParam(nh, "loop", &p.loop);
+  loadParam(nh, "use_pcap_time", &p.use_pcap_time);
+  loadParam(nh, "cut_angle", &p.cut_angle_deg, 0.0, 360.0, "deg");
+  loadParam(nh, "frame_id", &p.frame_id);
+  if (p.frame_id.empty()) throw ParamError("parameter '" + nh.resolveName("frame_id") +
+                                           "' must not be empty");
+  loadParam(nh, "queue_size", &p.queue_size, 1, 1000);
+  return p;
+}
+
+PacketToCloudParams loadPacketToCloudParams(const ros::NodeHandle& nh) {
+  PacketToCloudParams p;
+  loadParam(nh, "calibration", &p.calibration);
+  loadParam(nh, "min_range", &p.decoder.min_range_m, 0.0, 250.0, "m");
+  loadParam(nh, "max_range", &p.decoder.max_range_m, 0.1, 250.0, "m");
+  if (p.decoder.min_range_m >= p.decoder.max_range_m) {
+    std::ostringstream msg;
+    msg << "parameters '" << nh.resolveName("min_range") << "' = " << p.decoder.min_range_m
+        << " and '" << nh.resolveName("max_range") << "' = " << p.decoder.max_range_m
+        << ": accepted min_range < max_range";
+    throw ParamError(msg.str());
+  }
+  loadParam(nh, "fixed_frame", &p.fixed_frame);
+  loadParam(nh, "target_frame", &p.target_frame);
+  loadParam(nh, "tf_timeout", &p.tf_timeout_s, 0.0, 10.0, "s");
+  loadParam(nh, "queue_size", &p.queue_size, 1, 100);
+  return p;
+}
+
+}  // namespace urban_detection

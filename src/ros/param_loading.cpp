@@ -1,0 +1,39 @@
+#include "urban_detection/ros/param_loading.h"
+
+namespace urban_detection {
+namespace {
+
+// NodeHandle::getParam() returns false both for "not set" and for "set with another type";
+// telling the two apart lets a typo such as `port: "2368"` fail loudly instead of being ignored.
+template <typename T>
+void readOptional(const ros::NodeHandle& nh, const std::string& name, T* value,
+                  const char* type_name) {
+  if (!nh.hasParam(name)) return;
+  if (!nh.getParam(name, *value)) {
+    throw ParamError("parameter '" + nh.resolveName(name) + "' must be " + type_name);
+  }
+}
+
+}  // namespace
+
+void loadParam(const ros::NodeHandle& nh, const std::string& name, double* value, double min,
+               double max, const std::string& unit) {
+  readOptional(nh, name, value, "a number");
+  checkRange(nh.resolveName(name), *value, min, max, unit);
+}
+
+void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value, int min, int max,
+               const std::string& unit) {
+  readOptional(nh, name, value, "an integer");
+  checkRange(nh.resolveName(name), *value, min, max, unit);
+}
+
+void loadParam(const ros::NodeHandle& nh, const std::string& name, bool* value) {
+  readOptional(nh, name, value, "a boolean");
+}
+
+void loadParam(const ros::NodeHandle& nh, const std::string& name, std::string* value) {
+  readOptional(nh, name, value, "a string");
+}
+
+}  // namespace urban_detection

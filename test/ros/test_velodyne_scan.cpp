@@ -1,0 +1,155 @@
+// ScanAssembler (packets -> whole revolutions) and decodeScan (VelodyneScan -> cloud), no master.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "urban_detection/ros/velodyne_scan.h"
+
+namespace urban_detection {
+namespace {
+
+constexpr std::size_t kReturnsPerPacket = 384;
+
+// Packets 6 deg apart (1 deg per firing), first block at `first_az_deg`, all returns at 10 m.
+std::vector<core::RawPacket> makePackets(int count, double first_az_deg) {
+  const core::PacketEncoder encoder(core::Calibration::nominalHdl64eS2());
+  std::vector<core::RawPacket> packets;
+  for (int i = 0; i < count; ++i) {
+    core::Firing firings[6];
+    for (int k = 0; k < 6; ++k) {
+      const double az = std::fmod(first_az_deg + 6.0 * i + k, 360.0);
+      firings[k].azimuth = static_cast<std::uint16_t>(std::lround(az * 100.0)) % 36000;
+      firings[k].distance.fill(5000);
+      firings[k].intensity.fill(50);
+    }
+    packets.push_back(encoder.encode(firings, 0));
+  }
+  return packets;
+}
+
+TEST(ScanAssembler, PublishesOnlyWholeRevolutionsCutAtTheCutAngle) {
+  // Cut at 90 deg: a partial revolution from 30.5 deg, two whole ones, one packet more.
+  ScanAssembler assembler(90.0, "lidar");
+  const auto packets = makePackets(10 + 2 * 60 + 1, 30.5);  // 30.5 + 6 * 10 = 90.5: first cut
+  std::vector<VelodyneScan::Ptr> scans;
+  std::vector<std::size_t> at_packet;
+  for (std::size_t i = 0; i < packets.size(); ++i) {
+    auto scan = assembler.add(packets[i], ros::Time(10.0 + 0.001 * static_cast<double>(i)));
+    if (scan) scans.push_back(scan), at_packet.push_back(i);
+  }
+  ASSERT_EQ(scans.size(), 2u);
+  EXPECT_EQ(at_packet[0], 70u);  // packet 70 (90.5 deg again) closes the first whole revolution
+  EXPECT_EQ(at_packet[1], 130u);
+  EXPECT_EQ(assembler.partialDropped(), 1u);
+  for (std::size_t s = 0; s < 2; ++s) {
+    ASSERT_EQ(scans[s]->packets.size(), 60u);
+    EXPECT_EQ(scans[s]->header.frame_id, "lidar");
+    EXPECT_EQ(scans[s]->header.stamp, scans[s]->packets.front().stamp);
+    EXPECT_EQ(core::blockAzimuth(scans[s]->packets.front().data.data(), 0), 9050);
+    const std::size_t first = 10 + 60 * s;
+    EXPECT_NEAR(scans[s]->packets.front().stamp.toSec(), 10.0 + 0.001 * first, 1e-9);
+    EXPECT_TRUE(std::equal(packets[first].begin(), packets[first].end(),
+                           scans[s]->packets.front().data.begin()));
+  }
+  EXPECT_NE(scans[0], scans[1]);  // fresh messages
+  assembler.reset();              // the open revolution (one packet) is dropped
+  EXPECT_EQ(assembler.partialDropped(), 2u);
+}
+
+TEST(ScanAssembler, StuckAzimuthIsCutAtTheSafetyLimitAndDropped) {
+  ScanAssembler assembler(0.0, "velodyne");
+  const auto packet = makePackets(1, 45.5).front();
+  std::size_t returned = 0;
+  for (std::size_t i = 0; i < ScanAssembler::kMaxPacketsPerScan + 5; ++i) {
+    if (assembler.add(packet, ros::Time(1.0))) ++returned;
+  }
+  EXPECT_EQ(returned, 0u);
+  EXPECT_EQ(assembler.forcedCuts(), 1u);
+}
+
+TEST(DecodeScan, PointTimesFollowPacketStampsAndBadPacketsAreDroppedWhole) {
+  const core::Calibration calibration = core::Calibration::nominalHdl64eS2();
+  const core::PacketDecoder decoder(calibration, core::DecoderParams());
+  auto packets = makePackets(3, 0.5);
+  packets[1][0] = 0x00;  // block 0 id 0xEEFF -> 0xEE00: unknown block id
+  VelodyneScan scan;
+  scan.header.frame_id = "velodyne";
+  const double stamps[3] = {5.0, 5.010, 5.020};
+  for (int i = 0; i < 3; ++i) {
+    scan.packets.emplace_back();
+    toMessage(packets[i], ros::Time(stamps[i]), &scan.packets.back());
+  }
+  CloudXYZIRT cloud;
+  ScanDecodeStats stats;
+  decodeScan(decoder, scan, PacketTransformFn(), &cloud, &stats);
+  EXPECT_EQ(cloud.size(), 2 * kReturnsPerPacket);
+  EXPECT_EQ(cloud.width, cloud.size());
+  EXPECT_EQ(cloud.height, 1u);
+  EXPECT_EQ(stats.decode.bad_packets, 1u);
+  EXPECT_EQ(stats.decode.points, 2 * kReturnsPerPacket);
+  EXPECT_EQ(stats.last_bad_status, core::PacketStatus::kUnknownBlockId);
+
+  // Reference: the decoder called directly with the times relative to the first packet.
+  CloudXYZIRT reference;
+  core::DecodeStats ref_stats;
+  decoder.decode(packets[0].data(), packets[0].size(), 0.0, &reference, &ref_stats);
+  decoder.decode(packets[2].data(), packets[2].size(), 0.020, &reference, &ref_stats);
+  ASSERT_EQ(reference.size(), cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    EXPECT_FLOAT_EQ(cloud.points[i].x, reference.points[i].x);
+    EXPECT_FLOAT_EQ(cloud.points[i].time, reference.points[i].time);
+  }
+  // Second packet's points start 20 ms after the first packet's, plus firing offsets < 0.3 ms.
+  EXPECT_NEAR(cloud.points[kReturnsPerPacket].time, 0.020, 1e-6);
+  EXPECT_LT(cloud.points[kReturnsPerPacket - 1].time, 0.0003);
+}
+
+TEST(DecodeScan, EachPacketGetsTheTransformAtItsOwnStamp) {
+  const core::PacketDecoder decoder(core::Calibration::nominalHdl64eS2(), core::DecoderParams());
+  const auto packets = makePackets(3, 0.5);
+  VelodyneScan scan;
+  for (int i = 0; i < 3; ++i) {
+    scan.packets.emplace_back();
+    toMessage(packets[i], ros::Time(7.0 + 0.1 * i), &scan.packets.back());
+  }
+  CloudXYZIRT plain;
+  ScanDecodeStats plain_stats;
+  decodeScan(decoder, scan, PacketTransformFn(), &plain, &plain_stats);
+
+  // A platform moving at 10 m/s along x: the packet at 7.1 s is shifted by 1 m; no transform is
+  // available for the packet at 7.2 s.
+  std::vector<double> asked;
+  const PacketTransformFn moving = [&](const ros::Time& t, Eigen::Affine3f* transform) {
+    asked.push_back(t.toSec());
+    if (t.toSec() > 7.15) return false;
+    *transform = Eigen::Translation3f(10.0f * static_cast<float>(t.toSec() - 7.0), 0.f, 0.f);
+    return true;
+  };
+  CloudXYZIRT moved;
+  ScanDecodeStats stats;
+  decodeScan(decoder, scan, moving, &moved, &stats);
+  ASSERT_EQ(asked.size(), 3u);
+  EXPECT_DOUBLE_EQ(asked[1], 7.1);
+  EXPECT_EQ(stats.tf_failures, 1u);
+  ASSERT_EQ(moved.size(), 2 * kReturnsPerPacket);
+  for (std::size_t i = 0; i < moved.size(); ++i) {
+    const float shift = i < kReturnsPerPacket ? 0.0f : 1.0f;
+    EXPECT_NEAR(moved.points[i].x, plain.points[i].x + shift, 1e-4);
+    EXPECT_FLOAT_EQ(moved.points[i].y, plain.points[i].y);
+    EXPECT_FLOAT_EQ(moved.points[i].z, plain.points[i].z);
+  }
+}
+
+TEST(DecodeScan, EmptyScanGivesAnEmptyCloud) {
+  const core::PacketDecoder decoder(core::Calibration::nominalHdl64eS2(), core::DecoderParams());
+  CloudXYZIRT cloud;
+  ScanDecodeStats stats;
+  decodeScan(decoder, VelodyneScan(), PacketTransformFn(), &cloud, &stats);
+  EXPECT_TRUE(cloud.empty());
+  EXPECT_EQ(cloud.width, 0u);
+  EXPECT_EQ(stats.decode.packets, 0u);
+}
+
+}  // namespace
+}  // namespace urban_detection

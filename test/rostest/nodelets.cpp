@@ -1,0 +1,547 @@
+// PacketSource and PacketToCloud loaded into this process with nodelet::Loader: the process is
+// a nodelet manager, and the test's own subscribers sit in the same manager as the nodelets.
+// Covers zero copy, laziness, UDP on 127.0.0.1, pcap replay, bad packets and bad parameters.
+#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+
+#include <arpa/inet.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <nodelet/loader.h>
+#include <pcl_conversions/pcl_conversions.h>
+#include <pcl_ros/point_cloud.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sys/socket.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <unistd.h>
+#include <urban_detection/VelodyneScan.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/pcap_io.h"
+#include "urban_detection/ros/velodyne_scan.h"
+
+namespace urban_detection {
+namespace {
+
+constexpr int kPacketsPerRevolution = 60;  // a coarse but valid spin: 1 deg between firings
+constexpr std::uint16_t kDistanceRaw = 5000;  // 10 m at 2 mm per unit: inside every range
+constexpr std::size_t kReturnsPerPacket = 384;
+
+bool waitFor(const std::function<bool()>& done, double timeout_s) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (std::chrono::steady_clock::now() < end) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return done();
+}
+
+template <typename M>
+struct Collector {
+  std::mutex mutex;
+  std::vector<boost::shared_ptr<const M>> msgs;
+  void callback(const boost::shared_ptr<const M>& msg) {
+    std::lock_guard<std::mutex> lock(mutex);
+    msgs.push_back(msg);
+  }
+  std::size_t size() {
+    std::lock_guard<std::mutex> lock(mutex);
+    return msgs.size();
+  }
+  boost::shared_ptr<const M> at(std::size_t i) {
+    std::lock_guard<std::mutex> lock(mutex);
+    return msgs.at(i);
+  }
+};
+
+// Packets of a spin starting at `first_az_deg` with 6 deg per packet (1 deg per firing). The
+// azimuths are offset by half a degree from the cut angle 0 so the cut is unambiguous.
+std::vector<core::RawPacket> makePackets(int count, double first_az_deg) {
+  const core::PacketEncoder encoder(core::Calibration::nominalHdl64eS2());
+  std::vector<core::RawPacket> packets;
+  for (int i = 0; i < count; ++i) {
+    core::Firing firings[6];
+    for (int k = 0; k < 6; ++k) {
+      const double az = std::fmod(first_az_deg + 6.0 * i + k, 360.0);
+      firings[k].azimuth = static_cast<std::uint16_t>(std::lround(az * 100.0)) % 36000;
+      firings[k].distance.fill(kDistanceRaw);
+      firings[k].intensity.fill(static_cast<std::uint8_t>(40 + k));
+    }
+    packets.push_back(encoder.encode(firings, static_cast<std::uint32_t>(i * 1667)));
+  }
+  return packets;
+}
+
+VelodyneScan::Ptr makeScan(const std::vector<core::RawPacket>& packets, ros::Time stamp,
+                           double packet_period_s) {
+  auto scan = boost::make_shared<VelodyneScan>();
+  scan->header.frame_id = "velodyne";
+  scan->header.stamp = stamp;
+  for (const core::RawPacket& raw : packets) {
+    scan->packets.emplace_back();
+    toMessage(raw, stamp, &scan->packets.back());
+    stamp += ros::Duration(packet_period_s);
+  }
+  return scan;
+}
+
+int freeUdpPort() {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
+  socklen_t len = sizeof(addr);
+  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  close(fd);
+  return ntohs(addr.sin_port);
+}
+
+class UdpSender {
+ public:
+  explicit UdpSender(int port, const char* from_ip = "127.0.0.1") {
+    fd_ = socket(AF_INET, SOCK_DGRAM, 0);
+    sockaddr_in local{};
+    local.sin_family = AF_INET;
+    inet_pton(AF_INET, from_ip, &local.sin_addr);
+    bind(fd_, reinterpret_cast<sockaddr*>(&local), sizeof(local));
+    to_.sin_family = AF_INET;
+    to_.sin_port = htons(static_cast<std::uint16_t>(port));
+    inet_pton(AF_INET, "127.0.0.1", &to_.sin_addr);
+  }
+  ~UdpSender() { close(fd_); }
+  void send(const std::uint8_t* data, std::size_t size) {
+    sendto(fd_, data, size, 0, reinterpret_cast<sockaddr*>(&to_), sizeof(to_));
+    // Paced like the sensor's burst rate, so the default kernel buffer never overflows.
+    std::this_thread::sleep_for(std::chrono::microseconds(300));
+  }
+
+ private:
+  int fd_;
+  sockaddr_in to_{};
+};
+
+// Latest value of `key` in a /diagnostics status whose name contains `name`, or -1.
+struct DiagnosticsWatcher {
+  std::mutex mutex;
+  std::vector<diagnostic_msgs::DiagnosticStatus> statuses;
+  ros::Subscriber sub;
+  DiagnosticsWatcher() {
+    sub = ros::NodeHandle().subscribe("/diagnostics", 50, &DiagnosticsWatcher::callback, this);
+  }
+  void callback(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex);
+    statuses.insert(statuses.end(), msg->status.begin(), msg->status.end());
+  }
+  long value(const std::string& name, const std::string& key) {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (auto it = statuses.rbegin(); it != statuses.rend(); ++it) {
+      if (it->name.find(name) == std::string::npos) continue;
+      for (const auto& kv : it->values) {
+        if (kv.key == key) return std::stol(kv.value);
+      }
+    }
+    return -1;
+  }
+};
+
+// Messages this process logged on /rosout (the nodelets log through it too).
+struct RosoutWatcher {
+  std::mutex mutex;
+  std::vector<rosgraph_msgs::Log> logs;
+  ros::Subscriber sub;
+  RosoutWatcher() { sub = ros::NodeHandle().subscribe("/rosout", 100, &RosoutWatcher::cb, this); }
+  void cb(const rosgraph_msgs::Log::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex);
+    logs.push_back(*msg);
+  }
+  bool contains(std::uint8_t level, const std::string& text) {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& log : logs) {
+      if (log.level == level && log.msg.find(text) != std::string::npos) return true;
+    }
+    return false;
+  }
+};
+
+void decodeReference(const VelodyneScan& scan, CloudXYZIRT* cloud) {
+  const core::PacketDecoder decoder(core::Calibration::nominalHdl64eS2(), core::DecoderParams());
+  ScanDecodeStats stats;
+  decodeScan(decoder, scan, PacketTransformFn(), cloud, &stats);
+}
+
+// ------------------------------------------------------------------------------------------
+// Zero copy: the cloud PacketToCloud publishes reaches a subscriber in the same manager as the
+// very object it built. The proof uses the cloud's sensor pose (sensor_origin_ and
+// sensor_orientation_): PacketToCloud sets it, and it is not part of the PointCloud2 wire format,
+// so any serialisation on the way would reset it to zero/identity. A second subscription that
+// forces serialisation (sensor_msgs/PointCloud2) shows that the check can fail.
+TEST(PacketToCloud, ZeroCopyInsideTheManagerAndPerPacketTransform) {
+  ros::NodeHandle nh("/zc");
+  tf2_ros::StaticTransformBroadcaster broadcaster;
+  geometry_msgs::TransformStamped sensor_in_base;
+  sensor_in_base.header.frame_id = "base_link";
+  sensor_in_base.child_frame_id = "velodyne";
+  sensor_in_base.transform.translation.x = 1.0;
+  sensor_in_base.transform.translation.y = 2.0;
+  sensor_in_base.transform.translation.z = 3.0;
+  sensor_in_base.transform.rotation.z = std::sqrt(0.5);  // yaw +90 deg
+  sensor_in_base.transform.rotation.w = std::sqrt(0.5);
+  broadcaster.sendTransform(sensor_in_base);
+
+  ros::param::set("/zc/packet_to_cloud/target_frame", "base_link");
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/zc/packet_to_cloud", "urban_detection/PacketToCloud", {}, {}));
+
+  // Advertise before subscribing downstream: roscpp can miss an in-process connection when a
+  // publisher is advertised while a subscription to its topic is being set up in another thread.
+  ros::Publisher pub = nh.advertise<VelodyneScan>("velodyne_packets", 5);
+  Collector<CloudXYZIRT> same_type;
+  Collector<sensor_msgs::PointCloud2> serialised;
+  ros::Subscriber sub1 = nh.subscribe("velodyne_points", 5, &Collector<CloudXYZIRT>::callback,
+                                      &same_type);
+  ros::Subscriber sub2 = nh.subscribe(
+      "velodyne_points", 5, &Collector<sensor_msgs::PointCloud2>::callback, &serialised);
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
+
+  const auto scan = makeScan(makePackets(kPacketsPerRevolution, 0.5), ros::Time(100.0), 0.0);
+  ASSERT_TRUE(waitFor([&] {
+    if (same_type.size() == 0) pub.publish(scan);  // retried until tf_static has arrived
+    return same_type.size() > 0 && serialised.size() > 0;
+  }, 10.0));
+
+  const auto cloud = same_type.at(0);
+  EXPECT_EQ(cloud->header.frame_id, "base_link");
+  EXPECT_FLOAT_EQ(cloud->sensor_origin_.x(), 1.0f);
+  EXPECT_FLOAT_EQ(cloud->sensor_origin_.y(), 2.0f);
+  EXPECT_FLOAT_EQ(cloud->sensor_origin_.z(), 3.0f);
+  EXPECT_NEAR(cloud->sensor_orientation_.z(), std::sqrt(0.5), 1e-6);
+
+  CloudXYZIRT copy;  // the same message after serialisation: the sensor pose is lost
+  pcl::fromROSMsg(*serialised.at(0), copy);
+  EXPECT_EQ(copy.size(), cloud->size());
+  EXPECT_FLOAT_EQ(copy.sensor_origin_.x(), 0.0f);
+
+  // Points: the reference decode in the sensor frame, rotated by +90 deg and shifted.
+  CloudXYZIRT reference;
+  decodeReference(*scan, &reference);
+  ASSERT_EQ(reference.size(), kPacketsPerRevolution * kReturnsPerPacket);
+  ASSERT_EQ(cloud->size(), reference.size());
+  for (std::size_t i = 0; i < cloud->size(); i += 97) {
+    EXPECT_NEAR(cloud->points[i].x, 1.0f - reference.points[i].y, 1e-4);
+    EXPECT_NEAR(cloud->points[i].y, 2.0f + reference.points[i].x, 1e-4);
+    EXPECT_NEAR(cloud->points[i].z, 3.0f + reference.points[i].z, 1e-4);
+    EXPECT_EQ(cloud->points[i].ring, reference.points[i].ring);
+  }
+}
+
+// Lazy: no subscription to the packets while nobody listens to the points.
+TEST(PacketToCloud, SubscribesUpstreamOnlyWhileSomeoneListens) {
+  ros::NodeHandle nh("/lazy");
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/lazy/packet_to_cloud", "urban_detection/PacketToCloud", {}, {}));
+  ros::Publisher pub = nh.advertise<VelodyneScan>("velodyne_packets", 5);
+  ros::Duration(1.0).sleep();
+  EXPECT_EQ(pub.getNumSubscribers(), 0u);
+
+  Collector<CloudXYZIRT> clouds;
+  ros::Subscriber sub =
+      nh.subscribe("velodyne_points", 5, &Collector<CloudXYZIRT>::callback, &clouds);
+  EXPECT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
+  sub.shutdown();
+  EXPECT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 0; }, 10.0));
+  sub = nh.subscribe("velodyne_points", 5, &Collector<CloudXYZIRT>::callback, &clouds);
+  EXPECT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
+}
+
+// Bad packets inside a scan are dropped whole and counted; the good ones are all decoded.
+TEST(PacketToCloud, DropsBadPacketsWholeAndCountsThem) {
+  ros::NodeHandle nh("/badscan");
+  DiagnosticsWatcher diagnostics;
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/badscan/packet_to_cloud", "urban_detection/PacketToCloud", {}, {}));
+  ros::Publisher pub = nh.advertise<VelodyneScan>("velodyne_packets", 5);  // first (see above)
+  Collector<CloudXYZIRT> clouds;
+  ros::Subscriber sub =
+      nh.subscribe("velodyne_points", 5, &Collector<CloudXYZIRT>::callback, &clouds);
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
+
+  auto packets = makePackets(10, 0.5);
+  packets[2][100] = 0x12;  // block 1 id 0xEEFF -> 0x12FF: unknown block id
+  packets[5][1] = 0x00;    // block 0 id -> 0x00FF
+  packets[7][2] = 0xFF;    // block 0 azimuth 0xFF.. >= 36000
+  packets[7][3] = 0xFF;
+  pub.publish(makeScan(packets, ros::Time(200.0), 0.000288));
+  auto empty = boost::make_shared<VelodyneScan>();
+  empty->header.frame_id = "velodyne";
+  pub.publish(empty);
+  ASSERT_TRUE(waitFor([&] { return clouds.size() == 1; }, 10.0));
+  EXPECT_EQ(clouds.at(0)->size(), 7 * kReturnsPerPacket);
+  EXPECT_TRUE(waitFor([&] {
+    return diagnostics.value("badscan/packet_to_cloud", "bad_packets") == 3 &&
+           diagnostics.value("badscan/packet_to_cloud", "empty_scans") == 1;
+  }, 10.0));
+  ros::Duration(0.3).sleep();
+  EXPECT_EQ(clouds.size(), 1u);  // the empty scan produced no cloud
+}
+
+// Bad parameters and a bad calibration file: one clear error, the nodelet stays inactive, the
+// manager (this process) keeps running.
+TEST(PacketToCloud, BadParametersAndCalibrationFailInitClearly) {
+  RosoutWatcher rosout;
+  nodelet::Loader manager(false);
+  ros::param::set("/badparam/packet_to_cloud/min_range", 50.0);
+  ros::param::set("/badparam/packet_to_cloud/max_range", 10.0);
+  manager.load("/badparam/packet_to_cloud", "urban_detection/PacketToCloud", {}, {});
+  ros::param::set("/badrange/packet_to_cloud/max_range", 1000.0);
+  manager.load("/badrange/packet_to_cloud", "urban_detection/PacketToCloud", {}, {});
+
+  const std::string calibration = "/tmp/urban_detection_bad_calibration.yaml";
+  FILE* f = std::fopen(calibration.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("lasers:\n  - {laser_id: 0, rot_correction: not-a-number}\n", f);
+  std::fclose(f);
+  ros::param::set("/badcal/packet_to_cloud/calibration", calibration);
+  manager.load("/badcal/packet_to_cloud", "urban_detection/PacketToCloud", {}, {});
+
+  EXPECT_TRUE(waitFor([&] {
+    return rosout.contains(rosgraph_msgs::Log::FATAL, "max_range") &&
+           rosout.contains(rosgraph_msgs::Log::FATAL, "accepted [0.1, 250] m") &&
+           rosout.contains(rosgraph_msgs::Log::FATAL, calibration);
+  }, 10.0));
+  for (const char* ns : {"/badparam", "/badrange", "/badcal"}) {
+    Collector<CloudXYZIRT> clouds;
+    ros::Subscriber sub = ros::NodeHandle(ns).subscribe(
+        "velodyne_points", 1, &Collector<CloudXYZIRT>::callback, &clouds);
+    ros::Duration(0.5).sleep();
+    EXPECT_EQ(sub.getNumPublishers(), 0u) << ns;
+  }
+  std::remove(calibration.c_str());
+}
+
+// ------------------------------------------------------------------------------------------
+// UDP on 127.0.0.1: half a revolution, a whole one and the start of the next, sent by a
+// "sensor": exactly the whole revolution arrives, with the sent bytes, cut at the cut angle; the
+// partial revolutions at both ends are not published.
+TEST(PacketSource, UdpRevolutionsCutAtTheCutAngle) {
+  const int port = freeUdpPort();
+  ros::NodeHandle nh("/udp");
+  ros::param::set("/udp/packet_source/port", port);
+  ros::param::set("/udp/packet_source/device_ip", "127.0.0.1");
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/udp/packet_source", "urban_detection/PacketSource", {}, {}));
+  Collector<VelodyneScan> scans;
+  ros::Subscriber sub =
+      nh.subscribe("velodyne_packets", 10, &Collector<VelodyneScan>::callback, &scans);
+  ASSERT_TRUE(waitFor([&] { return sub.getNumPublishers() == 1; }, 10.0));
+
+  // 30 packets of a partial revolution (180.5 .. 354.5 deg), one whole, 5 of the next.
+  std::vector<core::RawPacket> packets = makePackets(30, 180.5);
+  const std::vector<core::RawPacket> whole = makePackets(kPacketsPerRevolution, 0.5);
+  packets.insert(packets.end(), whole.begin(), whole.end());
+  const std::vector<core::RawPacket> next = makePackets(5, 0.5);
+  packets.insert(packets.end(), next.begin(), next.end());
+  UdpSender sender(port);
+  const ros::Time before = ros::Time::now();
+  for (const auto& p : packets) sender.send(p.data(), p.size());
+
+  ASSERT_TRUE(waitFor([&] { return scans.size() >= 1; }, 10.0));
+  const auto scan = scans.at(0);
+  ASSERT_EQ(scan->packets.size(), static_cast<std::size_t>(kPacketsPerRevolution));
+  EXPECT_EQ(scan->header.frame_id, "velodyne");
+  EXPECT_EQ(scan->header.stamp, scan->packets.front().stamp);
+  EXPECT_GE(scan->header.stamp, before);
+  for (int i = 0; i < kPacketsPerRevolution; ++i) {
+    EXPECT_TRUE(std::equal(whole[i].begin(), whole[i].end(), scan->packets[i].data.begin()))
+        << "packet " << i;
+    if (i > 0) {
+      EXPECT_GE(scan->packets[i].stamp, scan->packets[i - 1].stamp);
+    }
+  }
+  CloudXYZIRT cloud;
+  decodeReference(*scan, &cloud);
+  EXPECT_EQ(cloud.size(), kPacketsPerRevolution * kReturnsPerPacket);
+  ros::Duration(0.3).sleep();
+  EXPECT_EQ(scans.size(), 1u);  // the leading partial revolution was dropped, the next is open
+}
+
+// Datagrams of the wrong size or from another sender never crash the source, never enter a
+// scan, and are counted on /diagnostics.
+TEST(PacketSource, BadUdpDatagramsAreDroppedAndCounted) {
+  const int port = freeUdpPort();
+  ros::NodeHandle nh("/badudp");
+  DiagnosticsWatcher diagnostics;
+  ros::param::set("/badudp/packet_source/port", port);
+  ros::param::set("/badudp/packet_source/device_ip", "127.0.0.1");
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/badudp/packet_source", "urban_detection/PacketSource", {}, {}));
+  Collector<VelodyneScan> scans;
+  ros::Subscriber sub =
+      nh.subscribe("velodyne_packets", 10, &Collector<VelodyneScan>::callback, &scans);
+  ASSERT_TRUE(waitFor([&] { return sub.getNumPublishers() == 1; }, 10.0));
+
+  UdpSender sender(port), stranger(port, "127.0.0.2");
+  const std::vector<std::uint8_t> garbage(1500, 0xAB);
+  std::vector<core::RawPacket> packets = makePackets(30, 180.5);  // partial, then 2 whole
+  const std::vector<core::RawPacket> more = makePackets(2 * kPacketsPerRevolution + 1, 0.5);
+  packets.insert(packets.end(), more.begin(), more.end());
+  int bad = 0, foreign = 0;
+  for (std::size_t i = 0; i < packets.size(); ++i) {
+    if (i % 10 == 3) sender.send(garbage.data(), 100), ++bad;
+    if (i % 10 == 6) sender.send(garbage.data(), 1300), ++bad;
+    if (i % 10 == 8) sender.send(garbage.data(), 0), ++bad;
+    if (i % 20 == 9) stranger.send(packets[i].data(), packets[i].size()), ++foreign;
+    sender.send(packets[i].data(), packets[i].size());
+  }
+  ASSERT_TRUE(waitFor([&] { return scans.size() >= 2; }, 10.0));
+  for (std::size_t s = 0; s < 2; ++s) {
+    EXPECT_EQ(scans.at(s)->packets.size(), static_cast<std::size_t>(kPacketsPerRevolution));
+  }
+  EXPECT_TRUE(waitFor([&] {
+    return diagnostics.value("badudp/packet_source", "bad_size_packets") == bad &&
+           diagnostics.value("badudp/packet_source", "partial_revolutions_dropped") == 1 &&
+           diagnostics.value("badudp/packet_source", "other_sender_packets") == foreign &&
+           diagnostics.value("badudp/packet_source", "packets") ==
+               static_cast<long>(packets.size());
+  }, 10.0)) << "bad " << bad << " foreign " << foreign;
+}
+
+// pcap written with PcapWriter -> PacketSource replay (half speed) -> PacketToCloud -> clouds.
+TEST(PacketSource, PcapReplayThroughPacketToCloud) {
+  const std::string pcap = "/tmp/urban_detection_test_replay_" + std::to_string(getpid()) +
+                           ".pcap";
+  const double packet_period_s = 0.1 / kPacketsPerRevolution;  // 600 rpm
+  const double t0 = 1700000000.0;
+  {
+    core::PcapWriter writer(pcap);
+    // A partial revolution, three whole ones, and the first packet of the next one.
+    auto packets = makePackets(10, 300.5);
+    const auto whole = makePackets(3 * kPacketsPerRevolution + 1, 0.5);
+    packets.insert(packets.end(), whole.begin(), whole.end());
+    for (std::size_t i = 0; i < packets.size(); ++i) {
+      writer.write(packets[i], t0 + static_cast<double>(i) * packet_period_s);
+    }
+  }
+  ros::NodeHandle nh("/pcap");
+  ros::param::set("/pcap/packet_source/pcap", pcap);
+  ros::param::set("/pcap/packet_source/rate", 0.5);
+  ros::param::set("/pcap/packet_to_cloud/queue_size", 10);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/pcap/packet_source", "urban_detection/PacketSource", {}, {}));
+  ASSERT_TRUE(manager.load("/pcap/packet_to_cloud", "urban_detection/PacketToCloud", {}, {}));
+  std::vector<ros::WallTime> arrivals;
+  std::mutex mutex;
+  Collector<CloudXYZIRT> clouds;
+  ros::Subscriber sub = nh.subscribe<CloudXYZIRT>(
+      "velodyne_points", 10, [&](const boost::shared_ptr<const CloudXYZIRT>& cloud) {
+        {
+          std::lock_guard<std::mutex> lock(mutex);
+          arrivals.push_back(ros::WallTime::now());
+        }
+        clouds.callback(cloud);
+      });
+  // Replay starts only once the chain is connected (lazy source), so no revolution is lost.
+  ASSERT_TRUE(waitFor([&] { return clouds.size() == 3; }, 20.0));
+  std::remove(pcap.c_str());
+  for (std::size_t i = 0; i < 3; ++i) {
+    const auto cloud = clouds.at(i);
+    EXPECT_EQ(cloud->size(), kPacketsPerRevolution * kReturnsPerPacket);
+    EXPECT_EQ(cloud->header.frame_id, "velodyne");
+    float max_time = 0;
+    for (const auto& p : cloud->points) {
+      EXPECT_NEAR(std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z), 10.0f, 0.01f);
+      max_time = std::max(max_time, p.time);
+      ASSERT_GE(p.time, 0.0f);
+    }
+    // Last packet starts 59 periods after the first; its firings last under 0.3 ms.
+    EXPECT_GE(max_time, 59 * packet_period_s);
+    EXPECT_LT(max_time, 59 * packet_period_s + 0.0004);
+    if (i > 0) {  // stamps keep the recorded spacing whatever the replay rate
+      const double dt_s = (pcl_conversions::fromPCL(cloud->header.stamp) -
+                           pcl_conversions::fromPCL(clouds.at(i - 1)->header.stamp)).toSec();
+      EXPECT_NEAR(dt_s, 0.1, 1e-4);
+    }
+  }
+  // At half speed the third revolution comes 2 x 0.2 s after the first; as fast as possible
+  // would take milliseconds.
+  std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_GT((arrivals[2] - arrivals[0]).toSec(), 0.3);
+}
+
+// Loop replay: every pass yields the file's whole revolution; stamps keep increasing across
+// passes (shifted by the file's span plus one packet period).
+TEST(PacketSource, PcapLoopKeepsStampsIncreasing) {
+  const std::string pcap = "/tmp/urban_detection_test_loop_" + std::to_string(getpid()) + ".pcap";
+  const double packet_period_s = 0.1 / kPacketsPerRevolution;
+  std::size_t count = 0;
+  {
+    core::PcapWriter writer(pcap);
+    auto packets = makePackets(10, 300.5);
+    const auto whole = makePackets(kPacketsPerRevolution + 1, 0.5);
+    packets.insert(packets.end(), whole.begin(), whole.end());
+    for (const auto& packet : packets) {
+      writer.write(packet, 1700000000.0 + static_cast<double>(count++) * packet_period_s);
+    }
+  }
+  ros::NodeHandle nh("/loop");
+  ros::param::set("/loop/packet_source/pcap", pcap);
+  ros::param::set("/loop/packet_source/rate", 5.0);
+  ros::param::set("/loop/packet_source/loop", true);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/loop/packet_source", "urban_detection/PacketSource", {}, {}));
+  Collector<VelodyneScan> scans;
+  ros::Subscriber sub =
+      nh.subscribe("velodyne_packets", 100, &Collector<VelodyneScan>::callback, &scans);
+  ASSERT_TRUE(waitFor([&] { return scans.size() >= 5; }, 20.0));
+  sub.shutdown();
+  manager.clear();
+  std::remove(pcap.c_str());
+  for (std::size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(scans.at(i)->packets.size(), static_cast<std::size_t>(kPacketsPerRevolution));
+    if (i > 0) {
+      EXPECT_NEAR((scans.at(i)->header.stamp - scans.at(i - 1)->header.stamp).toSec(),
+                  static_cast<double>(count) * packet_period_s, 1e-5);
+    }
+  }
+}
+
+TEST(PacketSource, BadParametersFailInitClearly) {
+  RosoutWatcher rosout;
+  nodelet::Loader manager(false);
+  ros::param::set("/badsrc/packet_source/port", 70000);
+  manager.load("/badsrc/packet_source", "urban_detection/PacketSource", {}, {});
+  ros::param::set("/badip/packet_source/device_ip", "192.168.1");
+  manager.load("/badip/packet_source", "urban_detection/PacketSource", {}, {});
+  ros::param::set("/nopcap/packet_source/pcap", "/nonexistent/drive.pcap");
+  manager.load("/nopcap/packet_source", "urban_detection/PacketSource", {}, {});
+  EXPECT_TRUE(waitFor([&] {
+    return rosout.contains(rosgraph_msgs::Log::FATAL, "'/badsrc/packet_source/port' = 70000") &&
+           rosout.contains(rosgraph_msgs::Log::FATAL, "192.168.1") &&
+           rosout.contains(rosgraph_msgs::Log::FATAL, "/nonexistent/drive.pcap");
+  }, 10.0));
+}
+
+}  // namespace
+}  // namespace urban_detection
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_nodelets");
+  ros::NodeHandle nh;
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  ros::shutdown();
+  return result;
+}
