@@ -141,6 +141,7 @@ bool setParam(core::GridSegmenterParams* p, const std::string& kv) {
       {"hough.max_range_m", &p->hough.max_range_m},
       {"hough.min_line_length_m", &p->hough.min_line_length_m},
       {"hough.max_line_gap_m", &p->hough.max_line_gap_m},
+      {"hough.theta_resolution_deg", &p->hough.theta_resolution_deg},
       {"hough.min_tall_fraction", &p->hough.min_tall_fraction}};
   std::map<std::string, int*> di = {{"min_points_per_cell", &p->min_points_per_cell},
                                     {"terrain_fill_iterations", &p->terrain_fill_iterations},
