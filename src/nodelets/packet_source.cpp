@@ -55,6 +55,11 @@ class PacketSource : public nodelet::Nodelet {
                                                   [this](const ros::WallTimerEvent&) {
                                                     updater_->update();
                                                   });
+    if (receiver_ && receiver_->rcvbufBytes() / 2 < params_.rcvbuf_bytes) {
+      NODELET_WARN("UDP receive buffer limited to %d bytes instead of rcvbuf_bytes = %d: raise "
+                   "net.core.rmem_max (sysctl) or run with CAP_NET_ADMIN, or bursts may be lost",
+                   receiver_->rcvbufBytes() / 2, params_.rcvbuf_bytes);
+    }
     if (receiver_) {
       NODELET_INFO("PacketSource: UDP port %d%s%s, receive buffer %d bytes", receiver_->port(),
                    params_.device_ip.empty() ? "" : " from ", params_.device_ip.c_str(),
