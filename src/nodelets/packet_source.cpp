@@ -189,6 +189,8 @@ class PacketSource : public nodelet::Nodelet {
     const std::uint64_t bad = bad_size_ + other_sender_;
     if (bad > reported_bad_) {
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "dropping bad or foreign packets");
+    } else if (pcap_ && running_ && pub_.getNumSubscribers() == 0) {
+      stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "replay paused: no subscriber");
     } else if (packets_ == reported_packets_ && running_) {
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no packets");
     } else {
