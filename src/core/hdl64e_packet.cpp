@@ -189,7 +189,8 @@ PacketStatus PacketDecoder::decodeImpl(const std::uint8_t* data, std::size_t siz
   // ones. Invalid returns are computed and discarded, which is cheaper than branching.
   alignas(32) float raw_f[kLasersPerBlock], raw_i[kLasersPerBlock];
   alignas(32) float px[kLasersPerBlock], py[kLasersPerBlock], pz[kLasersPerBlock];
-  alignas(32) float pi[kLasersPerBlock], dist[kLasersPerBlock];
+  alignas(32) float pi[kLasersPerBlock];
+  alignas(32) std::int32_t has_return[kLasersPerBlock], valid[kLasersPerBlock];
   for (int b = 0; b < kBlocksPerPacket; ++b) {
     const std::uint8_t* block = data + b * kBlockSize;
     const int bank = readU16(block) == kLowerBlockId ? kLasersPerBlock : 0;
@@ -236,17 +237,17 @@ PacketStatus PacketDecoder::decodeImpl(const std::uint8_t* data, std::size_t siz
       const float near = 1.0f - raw_f[j] * kInvFullRaw;
       const float in = raw_i[j] + f_slope[j] * std::fabs(f_off[j] - 256.0f * near * near);
       pi[j] = std::min(std::max(in, i_min[j]), i_max[j]);
-      dist[j] = d;
+      has_return[j] = raw_f[j] != 0.0f;
+      valid[j] = has_return[j] & (d >= min_range) & (d <= max_range);
     }
     for (int j = 0; j < kLasersPerBlock; ++j) {
-      if (raw_f[j] == 0.0f) {
-        ++no_return;
-        continue;
-      }
-      if (!(dist[j] >= min_range && dist[j] <= max_range)) {
-        ++out_of_range;
-        continue;
-      }
+      no_return += static_cast<std::size_t>(1 - has_return[j]);
+      out_of_range += static_cast<std::size_t>(has_return[j] - valid[j]);
+    }
+    // Branch-free compaction: every slot is written, only valid ones advance the cursor (the
+    // buffer has room for all 384 returns of a packet). Real scans have many no-return slots
+    // in irregular patterns, where branches would mispredict.
+    for (int j = 0; j < kLasersPerBlock; ++j) {
       PointXYZIRT& p = out[n];
       p.x = px[j];
       p.y = py[j];
@@ -255,11 +256,11 @@ PacketStatus PacketDecoder::decodeImpl(const std::uint8_t* data, std::size_t siz
       p.intensity = pi[j];
       p.ring = t.ring[bank + j];
       p.time = time;
-      ++n;
-      if (kRecord) {
+      if (kRecord && valid[j]) {
         if (laser != nullptr) laser->push_back(static_cast<std::uint8_t>(bank + j));
         if (raw_azimuth != nullptr) raw_azimuth->push_back(azimuth);
       }
+      n += static_cast<std::size_t>(valid[j]);
     }
   }
   points.resize(base + n);

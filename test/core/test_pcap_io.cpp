@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -232,5 +233,39 @@ TEST(PcapIo, OtherPortOption) {
   EXPECT_EQ(default_port.skipped(), 1u);
   uc::PcapReader port_2370(path, 2370);
   EXPECT_EQ(port_2370.next(&pkt), uc::PcapReader::Result::kPacket);
+  std::remove(path.c_str());
+}
+
+TEST(PcapIo, CorruptedCapturesNeverCrash) {
+  const std::string path = tempPath("corrupt.pcap");
+  {
+    uc::PcapWriter writer(path);
+    for (const auto& p : makePackets(8)) writer.write(p, 5.0);
+  }
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<char> original((std::istreambuf_iterator<char>(in)),
+                                   std::istreambuf_iterator<char>());
+  in.close();
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<std::size_t> pos(24, original.size() - 1);  // after the header
+  std::uniform_int_distribution<int> byte(0, 255);
+  std::uniform_int_distribution<std::size_t> cut(24, original.size());
+  int truncated = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<char> bytes = original;
+    for (int k = 0; k < 8; ++k) bytes[pos(rng)] = static_cast<char>(byte(rng));
+    if (trial % 3 == 0) bytes.resize(cut(rng));
+    std::ofstream(path, std::ios::binary).write(bytes.data(), bytes.size());
+    uc::PcapReader reader(path);
+    uc::PcapPacket pkt;
+    uc::PcapReader::Result r;
+    int packets = 0;
+    while ((r = reader.next(&pkt)) == uc::PcapReader::Result::kPacket) {
+      ASSERT_LE(++packets, 8);
+    }
+    truncated += r == uc::PcapReader::Result::kTruncated;
+    EXPECT_LE(static_cast<std::size_t>(packets) + reader.skipped(), 8u);
+  }
+  EXPECT_GT(truncated, 50);  // every third file is cut at a random place
   std::remove(path.c_str());
 }

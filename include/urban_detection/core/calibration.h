@@ -26,7 +26,7 @@ struct LaserCorrection {
   double dist_correction_y_m = 0.0;        // [m] range offset at 1.93 m along y (two-point)
   double vert_offset_correction_m = 0.0;   // [m] vertical offset of the laser origin
   double horiz_offset_correction_m = 0.0;  // [m] horizontal offset of the laser origin
-  double focal_distance = 0.0;             // [m in file units] intensity focal distance
+  double focal_distance = 0.0;             // [m] intensity focal distance (db.xml: cm)
   double focal_slope = 0.0;                // [-] intensity focal slope
   int min_intensity = 0;                   // [0..255]
   int max_intensity = 255;                 // [0..255]

@@ -145,7 +145,13 @@ class PacketEncoder {
 
   /// Inverse correction model: the raw distance [units] and raw azimuth [1/100 deg] of laser
   /// `laser` for which the decoder reproduces the point (x, y, z) [m] to within one raw unit.
-  /// Returns false if the point is not reachable by that laser (beyond the raw range).
+  /// The point is assumed to lie on the laser's beam surface (e.g. a ray() hit or a decoded
+  /// point): the horizontal position is inverted exactly (fixed-point iteration through the
+  /// two-point near-range terms), z follows from the laser's elevation and is not checked; an
+  /// off-beam point gets the raw values of the beam point with the same horizontal position.
+  /// Quantisation of the result: 0.01 deg in azimuth, one raw unit (2 mm) in distance.
+  /// Returns false for an invalid laser, a non-finite point, a point inside the horizontal
+  /// offset circle or beyond the raw range (raw distance 1..65535).
   bool invert(int laser, double x, double y, double z, std::uint16_t* raw_azimuth,
               std::uint16_t* raw_distance) const;
 

@@ -27,7 +27,10 @@ class PcapReader {
   ~PcapReader();
 
   enum class Result { kPacket, kEnd, kTruncated };
-  /// Reads the next Velodyne data packet. kTruncated: the file ends inside a record.
+  /// Reads the next Velodyne data packet (a UDP payload of exactly 1206 bytes to the port;
+  /// anything else, including IP fragments and records shorter than their headers claim, is
+  /// skipped and counted). kEnd: clean end of file. kTruncated: the file ends inside a record or
+  /// a record header is corrupt; nothing more can be read (rewind() to start over).
   Result next(PcapPacket* packet);
   void rewind();
   std::size_t skipped() const { return skipped_; }

@@ -1,0 +1,52 @@
+/// \file object_geometry.h
+/// Geometry of a detected object (centroid, axis-aligned box, yaw-oriented box), computed by one
+/// piece of code for every detector so the hierarchical grid and the kd-tree baseline report
+/// boxes that differ only because their point groups differ. ROS-free.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "urban_detection/core/object_detector.h"
+#include "urban_detection/core/point_types.h"
+
+namespace urban_detection {
+namespace core {
+
+/// Computes the box fields of DetectedObjects. Holds scratch buffers so that, in steady state,
+/// computing the geometry of a frame's objects allocates nothing.
+///
+/// Yaw-oriented box: the minimum-area rectangle enclosing the 2-D convex hull of the object's
+/// points projected on the xy plane (a minimum-area enclosing rectangle has one side collinear
+/// with a hull edge, so every hull edge direction is tried). Its z range is the points' z range.
+/// The length (obb_size.x) is the longer side and obb_yaw_rad in (-pi/2, pi/2] is its direction;
+/// a single point or collinear points give a degenerate box of zero width.
+class ObjectGeometry {
+ public:
+  /// Fills centroid, min_pt, max_pt, obb_center, obb_size and obb_yaw_rad of `object` from the
+  /// points `cloud_positions` of `cloud` (positions into `cloud`, not the `index` field). The
+  /// caller guarantees the positions are valid and the points finite. An empty position list
+  /// sets every field to zero.
+  void compute(const LabeledCloud& cloud, const std::vector<std::uint32_t>& cloud_positions,
+               DetectedObject* object);
+
+ private:
+  std::vector<Eigen::Vector2f> poly_;  // polygon of the eight extreme points
+  std::vector<Eigen::Vector2f> pts_;   // candidate hull points
+  std::vector<Eigen::Vector2f> hull_;  // convex hull, counter-clockwise
+};
+
+/// Convex hull of 2-D points (Andrew's monotone chain), counter-clockwise, no collinear points;
+/// `points` is reordered. Exposed for tests.
+void convexHull2d(std::vector<Eigen::Vector2f>* points, std::vector<Eigen::Vector2f>* hull);
+
+/// Minimum-area enclosing rectangle of a convex polygon given counter-clockwise. Returns centre
+/// [m], size (x = longer side, y = shorter side) [m] and yaw of the longer side in (-pi/2, pi/2]
+/// [rad]. Exposed for tests.
+void minAreaRectangle(const std::vector<Eigen::Vector2f>& hull, Eigen::Vector2f* center,
+                      Eigen::Vector2f* size, float* yaw_rad);
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,198 @@
+// Shared object geometry (hull, minimum-area box), the distance weight and its polynomial fit
+// (paper Sec. 4), and the cell fitness value.
+#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "detection_test_utils.h"
+#include "urban_detection/core/cell_fitness.h"
+#include "urban_detection/core/distance_weight.h"
+#include "urban_detection/core/object_geometry.h"
+
+namespace urban_detection {
+namespace {
+
+TEST(ObjectGeometry, HullOfASquareWithInteriorPoints) {
+  std::vector<Eigen::Vector2f> pts = {{0, 0}, {2, 0}, {2, 2}, {0, 2}, {1, 1}, {0.5f, 1.5f},
+                                      {1, 0}, {2, 2}};  // an edge point and a duplicate
+  std::vector<Eigen::Vector2f> hull;
+  core::convexHull2d(&pts, &hull);
+  ASSERT_EQ(hull.size(), 4u);
+  double area = 0.0;  // shoelace: positive for counter-clockwise
+  for (std::size_t i = 0; i < hull.size(); ++i) {
+    const auto& a = hull[i];
+    const auto& b = hull[(i + 1) % hull.size()];
+    area += 0.5 * (a.x() * b.y() - b.x() * a.y());
+  }
+  EXPECT_NEAR(area, 4.0, 1e-6);
+}
+
+TEST(ObjectGeometry, RotatedCarOutlineGivesItsBox) {
+  // Points on the outline and inside a 4.5 x 1.8 m rectangle centred at (10, -3), yaw 0.6 rad,
+  // z in [-1.5, 0]; the minimum-area box must be that rectangle.
+  const float yaw = 0.6f, cx = 10.0f, cy = -3.0f, l = 4.5f, w = 1.8f;
+  LabeledCloud cloud;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+  for (int i = 0; i < 400; ++i) {
+    float a = u(rng) * l, b = u(rng) * w;
+    if (i < 4) {  // the four corners, so the box is exact
+      a = (i & 1 ? 0.5f : -0.5f) * l;
+      b = (i & 2 ? 0.5f : -0.5f) * w;
+    }
+    const float x = cx + a * std::cos(yaw) - b * std::sin(yaw);
+    const float y = cy + a * std::sin(yaw) + b * std::cos(yaw);
+    test::addPoint(&cloud, x, y, -1.5f + 1.5f * (i % 7) / 6.0f, 1);
+  }
+  std::vector<std::uint32_t> pos(cloud.size());
+  for (std::size_t i = 0; i < pos.size(); ++i) pos[i] = static_cast<std::uint32_t>(i);
+  core::ObjectGeometry g;
+  core::DetectedObject o;
+  g.compute(cloud, pos, &o);
+  EXPECT_NEAR(o.obb_yaw_rad, yaw, 1e-3);
+  EXPECT_NEAR(o.obb_size.x(), l, 1e-3);
+  EXPECT_NEAR(o.obb_size.y(), w, 1e-3);
+  EXPECT_NEAR(o.obb_size.z(), 1.5f, 1e-5);
+  EXPECT_NEAR(o.obb_center.x(), cx, 1e-3);
+  EXPECT_NEAR(o.obb_center.y(), cy, 1e-3);
+  EXPECT_NEAR(o.obb_center.z(), -0.75f, 1e-5);
+  // Axis-aligned box of the rotated rectangle, computed by hand.
+  const float hx = 0.5f * (l * std::cos(yaw) + w * std::sin(yaw));
+  const float hy = 0.5f * (l * std::sin(yaw) + w * std::cos(yaw));
+  EXPECT_NEAR(o.min_pt.x(), cx - hx, 1e-4);
+  EXPECT_NEAR(o.max_pt.y(), cy + hy, 1e-4);
+  // Centroid: mean of the points, by a second route.
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : cloud.points) mean += Eigen::Vector3d(p.x, p.y, p.z);
+  mean /= cloud.size();
+  EXPECT_TRUE(o.centroid.cast<double>().isApprox(mean, 1e-5));
+}
+
+TEST(ObjectGeometry, YawIsNormalisedAndDegenerateCasesAreSafe) {
+  // A box along y has yaw +pi/2 (the range is (-pi/2, pi/2]).
+  std::vector<Eigen::Vector2f> hull = {{0, 0}, {1, 0}, {1, 3}, {0, 3}};
+  Eigen::Vector2f c, s;
+  float yaw;
+  core::minAreaRectangle(hull, &c, &s, &yaw);
+  EXPECT_NEAR(yaw, M_PI / 2, 1e-6);
+  EXPECT_NEAR(s.x(), 3.0f, 1e-6);
+  EXPECT_NEAR(s.y(), 1.0f, 1e-6);
+  // Collinear points: zero width, length along the line.
+  LabeledCloud line;
+  for (int i = 0; i < 5; ++i) test::addPoint(&line, i * 1.0f, i * 1.0f, 0.0f, 1);
+  core::ObjectGeometry g;
+  core::DetectedObject o;
+  g.compute(line, {0, 1, 2, 3, 4}, &o);
+  EXPECT_NEAR(o.obb_size.x(), 4.0f * std::sqrt(2.0f), 1e-4);
+  EXPECT_NEAR(o.obb_size.y(), 0.0f, 1e-6);
+  EXPECT_NEAR(o.obb_yaw_rad, M_PI / 4, 1e-5);
+  g.compute(line, {}, &o);
+  EXPECT_EQ(o.centroid, Eigen::Vector3f::Zero());
+}
+
+TEST(DistanceWeight, FitRecoversAKnownSixthDegreePolynomial) {
+  // Synthetic "densities" on the ring centres 1.5..79.5 m from a known polynomial.
+  const std::vector<double> truth = {0.9, -0.05, 1.2e-3, -1.5e-5, 1.0e-7, -3.5e-10, 5.0e-13};
+  std::vector<double> x, y;
+  for (double d = 1.5; d < 80.0; d += 1.0) {
+    x.push_back(d);
+    double v = 0.0, p = 1.0;
+    for (const double c : truth) {
+      v += c * p;
+      p *= d;
+    }
+    y.push_back(v);
+  }
+  const std::vector<double> c = core::fitPolynomial(x, y, 6);
+  ASSERT_EQ(c.size(), 7u);
+  for (std::size_t k = 0; k < 7; ++k) {
+    EXPECT_NEAR(c[k], truth[k], 1e-6 * std::fabs(truth[k]) + 1e-14) << "coefficient " << k;
+  }
+  EXPECT_TRUE(core::fitPolynomial(x, y, 90).empty());  // more unknowns than samples
+}
+
+TEST(DistanceWeight, RingDensityOfAKnownRadialDistribution) {
+  // n_i points in ring i = area_i * 1000 / (1 + 0.1 d_i^2): the density must come out as
+  // 1000 / (1 + 0.1 d^2) per sweep, normalised to 1 in the first ring.
+  core::RingDensity rings(1.0, 80.0, 1.0);
+  std::vector<double> expect;
+  for (std::size_t i = 0; i < rings.rings(); ++i) {
+    const double r0 = 1.0 + i, r1 = r0 + 1.0, d = rings.ringCenter(i);
+    const double per_m2 = 1000.0 / (1.0 + 0.1 * d * d);
+    const long n = std::lround(M_PI * (r1 * r1 - r0 * r0) * per_m2);
+    for (long k = 0; k < n; ++k) rings.addDistance(r0 + (k + 0.5) / n);
+    expect.push_back(n / (M_PI * (r1 * r1 - r0 * r0)));
+  }
+  const auto dens = rings.density();
+  const auto norm = rings.normalisedDensity();
+  for (std::size_t i = 0; i < rings.rings(); ++i) {
+    EXPECT_NEAR(dens[i], expect[i], 1e-9);
+    EXPECT_NEAR(norm[i], expect[i] / expect[0], 1e-9);
+  }
+  // And a whole cloud: NaN and out-of-range points are not counted.
+  CloudXYZIRT cloud;
+  PointXYZIRT p{};
+  p.x = 3.0f;
+  cloud.push_back(p);
+  p.x = std::nanf("");
+  cloud.push_back(p);
+  p.x = 90.0f;
+  cloud.push_back(p);
+  core::RingDensity r2;
+  EXPECT_EQ(r2.add(cloud), 1u);
+}
+
+TEST(DistanceWeight, WeightIsOneNearClampedFarAndInverseOfTheFittedDensity) {
+  core::DistanceWeightParams p;
+  p.log_fit = false;
+  p.coefficients = {1.0, -0.01};  // f(d) = 1 - 0.01 d
+  p.full_density_distance_m = 0.0;
+  p.max_distance_m = 80.0;
+  p.max_weight = 4.0;
+  const core::DistanceWeight w(p);
+  EXPECT_DOUBLE_EQ(w.exact(0.0), 1.0);
+  EXPECT_NEAR(w.exact(50.0), 1.0 / 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ(w.exact(79.0), 4.0);          // 1 / 0.21 clamped
+  EXPECT_NEAR(w(50.0f), 2.0f, 2.0f * 0.0006f);   // table: half a 5 cm step of distance
+  p.log_fit = true;
+  p.coefficients = {0.0, -0.05};  // f(d) = exp(-0.05 d), normalised at d0 = 10 m
+  p.full_density_distance_m = 10.0;
+  p.max_weight = 100.0;
+  const core::DistanceWeight wl(p);
+  EXPECT_DOUBLE_EQ(wl.exact(5.0), 1.0);
+  EXPECT_NEAR(wl.exact(30.0), std::exp(0.05 * 20.0), 1e-9);
+  p.enabled = false;
+  EXPECT_DOUBLE_EQ(core::DistanceWeight(p).exact(60.0), 1.0);
+  // The shipped fit: 1 up to d0, growing, clamped at max_weight far away.
+  const core::DistanceWeight def;
+  EXPECT_DOUBLE_EQ(def.exact(3.0), 1.0);
+  EXPECT_GT(def.exact(15.0), def.exact(10.0));
+  EXPECT_DOUBLE_EQ(def.exact(70.0), def.params().max_weight);
+}
+
+TEST(CellFitness, CountsAndFormulaByHand) {
+  LabeledCloud cloud;
+  // 25 points in the 1 m cell [0,1)^2 (dense, t_min 20) and 3 points in [5,6)x[0,1) (sparse).
+  for (int i = 0; i < 25; ++i) test::addPoint(&cloud, 0.5f, 0.5f, 0.0f, 1);
+  for (int i = 0; i < 3; ++i) test::addPoint(&cloud, 5.5f, 0.5f, 0.0f, 2);
+  test::addPoint(&cloud, std::nanf(""), 0.5f, 0.0f, 3);
+  core::CellCounts c;
+  core::countCells(cloud, 1.0, 40.0, 20, &c);
+  EXPECT_EQ(c.dense, 1u);
+  EXPECT_EQ(c.sparse, 1u);
+  EXPECT_EQ(c.empty, 16u);  // two separate 3x3 rims
+  EXPECT_DOUBLE_EQ(c.fitness(), 1.0 / 18.0);
+  // Adjacent cells share their rim: [0,1) and [1,2) dense -> 10 empty around a 2x1 block.
+  for (int i = 0; i < 25; ++i) test::addPoint(&cloud, 1.5f, 0.5f, 0.0f, 1);
+  core::CellCounts c2;
+  core::countCells(cloud, 1.0, 40.0, 20, &c2);
+  EXPECT_EQ(c2.dense, 2u);
+  EXPECT_EQ(c2.empty, 10u + 8u);
+  EXPECT_DOUBLE_EQ(core::CellCounts().fitness(), 0.0);
+}
+
+}  // namespace
+}  // namespace urban_detection
