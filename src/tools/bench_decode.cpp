@@ -41,19 +41,39 @@ double percentile(std::vector<double> v, double q) {
   return v[i];
 }
 
+std::string kittiScanPath() {
+  const char* env = std::getenv("UD_SHARED_DATA");
+  return std::string(env != nullptr ? env : "../shared/data") + "/kitti_object/velodyne/000000.bin";
+}
+
+// state.range(0): 0 = synthetic street (every return valid), 1 = range pattern of a real KITTI
+// scan (with its no-return slots).
 void BM_DecodeRevolution600Rpm(benchmark::State& state) {
   const uc::Calibration cal = ut::findCalibration(g_calibration_path);
-  ut::SceneParams scene;
-  scene.rpm = 600.0;
-  const std::vector<uc::RawPacket> packets =
-      ut::scanScene(uc::PacketEncoder(cal), scene, kPacketsPerRevolution);
+  const uc::PacketEncoder encoder(cal);
+  std::vector<uc::RawPacket> packets;
+  std::string label = cal.source;
+  if (state.range(0) == 0) {
+    ut::SceneParams scene;
+    scene.rpm = 600.0;
+    packets = ut::scanScene(encoder, scene, kPacketsPerRevolution);
+    label += ", synthetic street";
+  } else {
+    const std::vector<float> xyz = ut::readKittiBin(kittiScanPath());
+    if (xyz.empty()) {
+      state.SkipWithError(("KITTI scan not found: " + kittiScanPath()).c_str());
+      return;
+    }
+    packets = ut::packetsFromScan(encoder, xyz, 600.0, kPacketsPerRevolution);
+    label += ", range pattern of " + kittiScanPath();
+  }
   uc::PacketDecoder decoder(cal, uc::DecoderParams{});
   urban_detection::CloudXYZIRT cloud;
   cloud.reserve(kPacketsPerRevolution * 384);
   std::vector<double> times_s, cpu_s;
   times_s.reserve(1 << 16);
   cpu_s.reserve(1 << 16);
-  std::size_t points = 0;
+  std::size_t points = 0, no_return = 0;
 
   for (auto _ : state) {
     const double c0 = threadCpuSeconds();
@@ -70,6 +90,7 @@ void BM_DecodeRevolution600Rpm(benchmark::State& state) {
     times_s.push_back(std::chrono::duration<double>(t1 - t0).count());
     cpu_s.push_back(threadCpuSeconds() - c0);
     points = stats.points;
+    no_return = stats.no_return;
   }
   const double median = percentile(times_s, 0.5), p95 = percentile(times_s, 0.95);
   state.counters["points"] = static_cast<double>(points);
@@ -78,14 +99,23 @@ void BM_DecodeRevolution600Rpm(benchmark::State& state) {
   // Thread CPU time excludes the time the VM or other processes took the core away.
   state.counters["cpu_median_ms"] = percentile(cpu_s, 0.5) * 1e3;
   state.counters["cpu_p95_ms"] = percentile(cpu_s, 0.95) * 1e3;
+  // Returns = every distance slot of the revolution (348 x 384 = 133,632), valid or not.
+  state.counters["Mreturns_per_s_median"] =
+      median > 0 ? kPacketsPerRevolution * 384.0 / median / 1e6 : 0.0;
   state.counters["Mpoints_per_s_median"] = median > 0 ? points / median / 1e6 : 0.0;
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(points));
-  state.SetLabel(cal.source);
+  state.counters["no_return"] = static_cast<double>(no_return);
+  state.SetLabel(label);
 }
 
 }  // namespace
 
-BENCHMARK(BM_DecodeRevolution600Rpm)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_DecodeRevolution600Rpm)
+    ->ArgName("kitti_pattern")
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2.0);
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);

@@ -88,6 +88,67 @@ inline std::vector<core::RawPacket> scanScene(const core::PacketEncoder& encoder
   return out;
 }
 
+/// Reads a KITTI velodyne .bin scan (float32 x, y, z, reflectance per point) into xyz triples;
+/// empty if the file cannot be read.
+inline std::vector<float> readKittiBin(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<float> xyzr;
+  if (!in) return {};
+  in.seekg(0, std::ios::end);
+  const std::streamoff bytes = in.tellg();
+  in.seekg(0);
+  xyzr.resize(static_cast<std::size_t>(bytes) / sizeof(float) / 4 * 4);
+  in.read(reinterpret_cast<char*>(xyzr.data()),
+          static_cast<std::streamsize>(xyzr.size() * sizeof(float)));
+  if (!in) return {};
+  std::vector<float> xyz;
+  xyz.reserve(xyzr.size() / 4 * 3);
+  for (std::size_t i = 0; i + 3 < xyzr.size(); i += 4) {
+    xyz.insert(xyz.end(), {xyzr[i], xyzr[i + 1], xyzr[i + 2]});
+  }
+  return xyz;
+}
+
+/// Packets of one revolution whose range pattern is taken from a real scan: each point goes to
+/// the laser of nearest elevation (within 0.3 deg) and to the firing of its azimuth; slots that
+/// receive no point stay "no return", as sky and dark surfaces do in a real recording.
+inline std::vector<core::RawPacket> packetsFromScan(const core::PacketEncoder& encoder,
+                                                    const std::vector<float>& xyz, double rpm,
+                                                    int packets) {
+  const core::Calibration& cal = encoder.calibration();
+  const int firings_per_rev = packets * 6;
+  const double deg_per_firing = rpm / 60.0 * 360.0 * core::kFiringPeriodS;
+  std::vector<core::Firing> firings(firings_per_rev);
+  for (int f = 0; f < firings_per_rev; ++f) {
+    const double deg = std::fmod(deg_per_firing * f, 360.0);
+    firings[f].azimuth =
+        static_cast<std::uint16_t>(static_cast<int>(std::lround(deg * 100.0)) % 36000);
+  }
+  const double max_gap_rad = 0.3 * 3.14159265358979323846 / 180.0;
+  for (std::size_t i = 0; i + 2 < xyz.size(); i += 3) {
+    const double x = xyz[i], y = xyz[i + 1], z = xyz[i + 2];
+    const double elevation = std::atan2(z, std::hypot(x, y));
+    int laser = -1;
+    double best = max_gap_rad;
+    for (int l = 0; l < core::kNumLasers; ++l) {
+      const double gap = std::fabs(cal.lasers[l].vert_correction_rad - elevation);
+      if (gap < best) best = gap, laser = l;
+    }
+    std::uint16_t raw_az = 0, raw_d = 0;
+    if (laser < 0 || !encoder.invert(laser, x, y, z, &raw_az, &raw_d)) continue;
+    const int f = static_cast<int>(std::lround(raw_az / 100.0 / deg_per_firing)) % firings_per_rev;
+    std::uint16_t& slot = firings[f].distance[laser];
+    if (slot == 0 || raw_d < slot) slot = raw_d;  // keep the nearest echo
+    firings[f].intensity[laser] = 100;
+  }
+  std::vector<core::RawPacket> out;
+  out.reserve(packets);
+  for (int p = 0; p < packets; ++p) {
+    out.push_back(encoder.encode(&firings[6 * p], static_cast<std::uint32_t>(p * 288)));
+  }
+  return out;
+}
+
 /// The calibration named on the command line, else the SZTAKI one from $UD_SHARED_DATA or
 /// ../shared/data, else the nominal geometry.
 inline core::Calibration findCalibration(const std::string& path) {
