@@ -37,7 +37,7 @@ struct HoughWallRefinerParams {
 /// Statistics of the last refine() call.
 struct HoughWallStats {
   int lines_found = 0;     // lines returned by cv::HoughLinesP
-  int lines_accepted = 0;  // lines passing min_tall_fraction
+  int lines_accepted = 0;  // lines with at least one accepted wall run
   int cells_relabeled = 0; // short cells turned tall
 };
 
