@@ -88,11 +88,20 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   std::uint32_t counts[5] = {0, 0, 0, 0, 0};
   const std::int32_t* pc = grid_.pointCells().data();
   SegmentClass* out = labels->data();
+  const float* pz = grid_.pointHeights().data();
+  std::int32_t run_cell = SimpleGrid::kNoCell;  // consecutive points share cells: cache it
+  float run_split = 0.0f;
+  SegmentClass run_class = SegmentClass::kUnknown;
   for (std::size_t i = 0; i < n; ++i) {
     const std::int32_t c = pc[i];
     SegmentClass label = SegmentClass::kUnknown;
     if (c != SimpleGrid::kNoCell) {
-      label = grid_.pointHeight(i) < split_z_[c] ? SegmentClass::kGround : cell_class_[c];
+      if (c != run_cell) {
+        run_cell = c;
+        run_split = split_z_[c];
+        run_class = cell_class_[c];
+      }
+      label = pz[i] < run_split ? SegmentClass::kGround : run_class;
     }
     out[i] = label;
     ++counts[static_cast<int>(label)];
