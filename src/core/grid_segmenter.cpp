@@ -121,6 +121,7 @@ void GridSegmenter::growGround() {
   const float flat = static_cast<float>(params_.ground_max_range_m);
   const float step = static_cast<float>(params_.ground_max_step_m);
   const float seed_h = static_cast<float>(params_.seed_max_abs_height_m);
+  const float tol = static_cast<float>(params_.ground_tolerance_m);
   const float seed_r2 = static_cast<float>(params_.seed_radius_m * params_.seed_radius_m);
   const int rows = grid_.rows(), cols = grid_.cols();
 
@@ -166,7 +167,10 @@ void GridSegmenter::growGround() {
       const float e = is_flat ? cell.zMean() : cell.z_min;
       if (std::fabs(e - g) >= step) continue;
       ground_state_[nc] = kReached;
-      ground_z_[nc] = e;
+      // The lowest point of a mixed cell is its ground unless it lies clearly above the terrain
+      // it was reached from: then the base was not sampled (a wall hit above its foot at range)
+      // and that point belongs to the object.
+      ground_z_[nc] = !is_flat && e - g > tol ? g : e;
       touched_.push_back(nc);
       ++reached;
       if (is_flat) queue_.push_back(nc);
