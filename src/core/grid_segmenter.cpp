@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace urban_detection {
 namespace core {
@@ -31,8 +32,8 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
   wall_support_.assign(n, 0);
   ground_z_.assign(n, 0.0f);
   ground_state_.assign(n, kNoGround);
-  fill_sum_.assign(n, 0.0f);
-  fill_cnt_.assign(n, 0);
+  fill_z_.assign(n, 0.0f);
+  split_z_.assign(n, 0.0f);
   hops_.assign(n, 0);
 }
 
@@ -71,31 +72,36 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
                                  &cell_class_, &wall_support_);
   }
 
-  // Per point: mixed cells are split by the height above the local ground.
-  const std::size_t n = cloud.size();
-  labels->resize(n);
+  // Per point: mixed cells are split by the height above the local ground. The split height
+  // is computed once per cell so the per-point loop is a lookup and a compare.
   const float tol = static_cast<float>(params_.ground_tolerance_m);
   const bool sparse_ground = params_.ground_in_sparse_cells;
+  for (const std::int32_t c : grid_.occupiedCells()) {
+    const SegmentClass cls = cell_class_[c];
+    const bool split = (cls == SegmentClass::kShort || cls == SegmentClass::kTall ||
+                        (cls == SegmentClass::kClutter && sparse_ground)) &&
+                       ground_state_[c] != kNoGround;
+    split_z_[c] = split ? ground_z_[c] + tol : std::numeric_limits<float>::lowest();
+  }
+  const std::size_t n = cloud.size();
+  labels->resize(n);
+  std::uint32_t counts[5] = {0, 0, 0, 0, 0};
+  const std::int32_t* pc = grid_.pointCells().data();
+  SegmentClass* out = labels->data();
   for (std::size_t i = 0; i < n; ++i) {
-    const std::int32_t c = grid_.pointCell(i);
+    const std::int32_t c = pc[i];
     SegmentClass label = SegmentClass::kUnknown;
     if (c != SimpleGrid::kNoCell) {
-      label = cell_class_[c];
-      if ((label == SegmentClass::kShort || label == SegmentClass::kTall ||
-           (label == SegmentClass::kClutter && sparse_ground)) &&
-          ground_state_[c] != kNoGround && grid_.pointHeight(i) - ground_z_[c] < tol) {
-        label = SegmentClass::kGround;
-      }
+      label = grid_.pointHeight(i) < split_z_[c] ? SegmentClass::kGround : cell_class_[c];
     }
-    (*labels)[i] = label;
-    switch (label) {
-      case SegmentClass::kClutter: ++stats_.points_clutter; break;
-      case SegmentClass::kGround: ++stats_.points_ground; break;
-      case SegmentClass::kTall: ++stats_.points_tall; break;
-      case SegmentClass::kShort: ++stats_.points_short; break;
-      default: ++stats_.points_unknown; break;
-    }
+    out[i] = label;
+    ++counts[static_cast<int>(label)];
   }
+  stats_.points_unknown = counts[static_cast<int>(SegmentClass::kUnknown)];
+  stats_.points_clutter = counts[static_cast<int>(SegmentClass::kClutter)];
+  stats_.points_ground = counts[static_cast<int>(SegmentClass::kGround)];
+  stats_.points_tall = counts[static_cast<int>(SegmentClass::kTall)];
+  stats_.points_short = counts[static_cast<int>(SegmentClass::kShort)];
 }
 
 // Region growing of the terrain from ground cells around the sensor. A flat cell joins when
@@ -160,33 +166,50 @@ void GridSegmenter::growGround() {
   stats_.cells_ground_reached = reached;
 }
 
-// Cells the growing did not reach (under a car roof, behind an occluder) take the mean ground
-// elevation of their already known neighbours, ring by ring.
+// Occupied cells the growing did not reach (under a car roof, a bush, behind an occluder) take
+// the mean ground elevation of the nearest ring of cells with a terrain estimate, up to
+// terrain_fill_iterations cells away. Searching around the few unreached cells is much cheaper
+// than dilating the whole terrain map.
 void GridSegmenter::fillTerrain() {
   const int rows = grid_.rows(), cols = grid_.cols();
-  frontier_.assign(touched_.begin(), touched_.end());
-  for (int it = 0; it < params_.terrain_fill_iterations && !frontier_.empty(); ++it) {
-    next_frontier_.clear();
-    for (const std::int32_t c : frontier_) {
-      const int r = grid_.rowOf(c), k = grid_.colOf(c);
-      for (int d = 0; d < 8; ++d) {
-        const int nr = r + kDr[d], nk = k + kDc[d];
-        if (nr < 0 || nr >= rows || nk < 0 || nk >= cols) continue;
-        const std::int32_t nc = nr * cols + nk;
-        if (ground_state_[nc] != kNoGround) continue;
-        if (fill_cnt_[nc] == 0) next_frontier_.push_back(nc);
-        fill_sum_[nc] += ground_z_[c];
-        ++fill_cnt_[nc];
+  const int max_ring = params_.terrain_fill_iterations;
+  fill_cells_.clear();
+  for (const std::int32_t c : grid_.occupiedCells()) {
+    if (ground_state_[c] != kNoGround ||
+        (cell_class_[c] == SegmentClass::kClutter && !params_.ground_in_sparse_cells)) {
+      continue;
+    }
+    const int r = grid_.rowOf(c), k = grid_.colOf(c);
+    for (int ring = 1; ring <= max_ring; ++ring) {
+      float sum = 0.0f;
+      int cnt = 0;
+      const int r0 = std::max(0, r - ring), r1 = std::min(rows - 1, r + ring);
+      const int k0 = std::max(0, k - ring), k1 = std::min(cols - 1, k + ring);
+      for (int rr = r0; rr <= r1; ++rr) {
+        const bool edge_row = rr == r - ring || rr == r + ring;
+        const int step = edge_row ? 1 : std::max(1, 2 * ring);
+        for (int kk = edge_row ? k0 : k - ring; kk <= k1; kk += step) {
+          if (kk < k0) continue;
+          const std::int32_t nc = rr * cols + kk;
+          const std::uint8_t st = ground_state_[nc];
+          if (st == kReached || st == kBridged) {
+            sum += ground_z_[nc];
+            ++cnt;
+          }
+        }
+      }
+      if (cnt > 0) {
+        fill_cells_.push_back(c);
+        fill_z_[c] = sum / static_cast<float>(cnt);
+        break;
       }
     }
-    for (const std::int32_t nc : next_frontier_) {
-      ground_z_[nc] = fill_sum_[nc] / static_cast<float>(fill_cnt_[nc]);
-      ground_state_[nc] = kFilled;
-      fill_sum_[nc] = 0.0f;
-      fill_cnt_[nc] = 0;
-      touched_.push_back(nc);
-    }
-    frontier_.swap(next_frontier_);
+  }
+  // Applied afterwards so that filled cells do not feed each other within one frame.
+  for (const std::int32_t c : fill_cells_) {
+    ground_z_[c] = fill_z_[c];
+    ground_state_[c] = kFilled;
+    touched_.push_back(c);
   }
 }
 

@@ -22,7 +22,7 @@ class FieldTable {
   }
   bool apply(const YAML::Node& node, const std::string& where, std::string* error) const {
     if (!node.IsMap()) {
-      *error = where + ": expected a map of parameters";
+      *error = where + "expected a map of parameters";
       return false;
     }
     for (const auto& kv : node) {
@@ -65,12 +65,8 @@ bool loadRoot(const std::string& path, const std::string& section, YAML::Node* r
   return true;
 }
 
-}  // namespace
-
-bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& section,
-                                 GridSegmenterParams* p, std::string* error) {
-  YAML::Node root;
-  if (!loadRoot(path, section, &root, error)) return false;
+bool applySegmentation(const YAML::Node& root, const std::string& where,
+                       GridSegmenterParams* p, std::string* error) {
   HoughWallRefinerParams& h = p->hough;
   FieldTable hough;
   hough.bind("enabled", &h.enabled);
@@ -100,11 +96,116 @@ bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& sec
   t.bind("tall_min_height_m", &p->tall_min_height_m);
   t.bind("tall_min_range_m", &p->tall_min_range_m);
   t.bind("fov_top_elevation_deg", &p->fov_top_elevation_deg);
-  const std::string where = path + ": ";
   t.bindMap("hough", [&hough, where](const YAML::Node& n, std::string* err) {
     return hough.apply(n, where + "hough/", err);
   });
   return t.apply(root, where, error);
+}
+
+bool applyHierarchical(const YAML::Node& node, const std::string& where,
+                       HierarchicalGridDetectorParams* p, std::string* error) {
+  DistanceWeightParams& w = p->weight;
+  FieldTable weight;
+  weight.bind("enabled", &w.enabled);
+  weight.bind("log_fit", &w.log_fit);
+  weight.bind("coefficients", &w.coefficients);
+  weight.bind("full_density_distance_m", &w.full_density_distance_m);
+  weight.bind("max_distance_m", &w.max_distance_m);
+  weight.bind("max_weight", &w.max_weight);
+  FieldTable t;
+  t.bind("coarse_cell_m", &p->coarse_cell_m);
+  t.bind("xi", &p->xi);
+  t.bind("grid_half_extent_m", &p->grid_half_extent_m);
+  t.bind("max_abs_z_m", &p->max_abs_z_m);
+  t.bind("psi_max_m", &p->psi_max_m);
+  t.bind("dense_min_weighted_points", &p->dense_min_weighted_points);
+  t.bind("min_split_height_span_m", &p->min_split_height_span_m);
+  t.bind("max_split_range_m", &p->max_split_range_m);
+  t.bind("min_gap_subcells", &p->min_gap_subcells);
+  t.bind("dense_refinement", &p->dense_refinement);
+  t.bind("min_points", &p->min_points);
+  t.bind("max_extent_m", &p->max_extent_m);
+  t.bindMap("weight", [&weight, where](const YAML::Node& n, std::string* err) {
+    return weight.apply(n, where + "weight/", err);
+  });
+  return t.apply(node, where, error);
+}
+
+bool applyKdTree(const YAML::Node& node, const std::string& where, KdTreeDetectorParams* p,
+                 std::string* error) {
+  FieldTable t;
+  t.bind("cluster_tolerance_m", &p->cluster_tolerance_m);
+  t.bind("min_cluster_size", &p->min_cluster_size);
+  t.bind("max_cluster_size", &p->max_cluster_size);
+  t.bind("max_extent_m", &p->max_extent_m);
+  t.bind("max_abs_coordinate_m", &p->max_abs_coordinate_m);
+  return t.apply(node, where, error);
+}
+
+// A detection.yaml: `hierarchical_grid:` and `kdtree:` maps (other top-level keys are left to
+// the ROS layer, e.g. marker settings, and ignored here).
+bool applyDetection(const YAML::Node& root, const std::string& where,
+                    HierarchicalGridDetectorParams* hier, KdTreeDetectorParams* kd,
+                    std::string* error) {
+  if (!root.IsMap()) {
+    *error = where + "expected a map of parameters";
+    return false;
+  }
+  if (hier && root["hierarchical_grid"] &&
+      !applyHierarchical(root["hierarchical_grid"], where + "hierarchical_grid/", hier, error)) {
+    return false;
+  }
+  if (kd && root["kdtree"] && !applyKdTree(root["kdtree"], where + "kdtree/", kd, error)) {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& section,
+                                 GridSegmenterParams* p, std::string* error) {
+  YAML::Node root;
+  if (!loadRoot(path, section, &root, error)) return false;
+  return applySegmentation(root, path + ": ", p, error);
+}
+
+bool loadHierarchicalGridParamsYaml(const std::string& path,
+                                    HierarchicalGridDetectorParams* params, std::string* error) {
+  YAML::Node root;
+  if (!loadRoot(path, "", &root, error)) return false;
+  return applyDetection(root, path + ": ", params, nullptr, error);
+}
+
+bool loadKdTreeParamsYaml(const std::string& path, KdTreeDetectorParams* params,
+                          std::string* error) {
+  YAML::Node root;
+  if (!loadRoot(path, "", &root, error)) return false;
+  return applyDetection(root, path + ": ", nullptr, params, error);
+}
+
+bool loadPipelineParamsYaml(const std::string& path, GridSegmenterParams* segmentation,
+                            HierarchicalGridDetectorParams* hierarchical,
+                            KdTreeDetectorParams* kdtree, std::string* error) {
+  YAML::Node root;
+  if (!loadRoot(path, "", &root, error)) return false;
+  const std::string where = path + ": ";
+  if (!root.IsMap()) {
+    *error = where + "expected a map of parameters";
+    return false;
+  }
+  if (root["segmentation"] || root["detection"]) {
+    if (segmentation && root["segmentation"] &&
+        !applySegmentation(root["segmentation"], where + "segmentation/", segmentation, error)) {
+      return false;
+    }
+    return !root["detection"] ||
+           applyDetection(root["detection"], where + "detection/", hierarchical, kdtree, error);
+  }
+  if (root["hierarchical_grid"] || root["kdtree"]) {
+    return applyDetection(root, where, hierarchical, kdtree, error);
+  }
+  return !segmentation || applySegmentation(root, where, segmentation, error);
 }
 
 }  // namespace core

@@ -42,21 +42,27 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
   const std::size_t n = cloud.size();
   point_cell_.resize(n);
   point_z_.resize(n);
-  const float range = static_cast<float>(params_.max_range_m);
+  // Hot loop (once per point per revolution): everything inline, one bounds test that also
+  // rejects NaN (comparisons with NaN are false) and inf/1e30 (outside the grid).
+  const float org = origin_m_, inv = inv_cell_, side_f = static_cast<float>(side_);
+  const int side = side_;
+  GridCell* cells = cells_.data();
+  std::int32_t* pc = point_cell_.data();
+  float* pz = point_z_.data();
   for (std::size_t i = 0; i < n; ++i) {
     const PointXYZIRT& p = cloud[i];
+    const float fc = (p.x - org) * inv;
+    const float fr = (p.y - org) * inv;
     const float z = p.z + z_offset_m;
-    // The range test also rejects NaN/inf (comparisons with NaN are false).
-    if (!(std::fabs(p.x) < range && std::fabs(p.y) < range && std::fabs(z) <= max_abs_height_m)) {
-      point_cell_[i] = kNoCell;
-      point_z_[i] = 0.0f;
+    pz[i] = z;
+    if (!(fc >= 0.0f && fc < side_f && fr >= 0.0f && fr < side_f &&
+          std::fabs(z) <= max_abs_height_m)) {
+      pc[i] = kNoCell;
       continue;
     }
-    const std::int32_t c = cellAt(p.x, p.y);
-    point_cell_[i] = c;
-    point_z_[i] = z;
-    if (c == kNoCell) continue;
-    GridCell& cell = cells_[c];
+    const std::int32_t c = static_cast<std::int32_t>(fr) * side + static_cast<std::int32_t>(fc);
+    pc[i] = c;
+    GridCell& cell = cells[c];
     if (cell.count == 0) occupied_.push_back(c);
     ++cell.count;
     cell.z_min = std::min(cell.z_min, z);

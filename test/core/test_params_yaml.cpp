@@ -65,6 +65,48 @@ TEST(ParamsYaml, ShippedSegmentationConfigLoads) {
   EXPECT_TRUE(loadGridSegmenterParamsYaml(f, "", &p, &err)) << err;
 }
 
+TEST(ParamsYaml, DetectionFileAndAutoDetection) {
+  const std::string det = writeTemp(
+      "f.yaml",
+      "hierarchical_grid:\n  coarse_cell_m: 0.5\n  weight:\n    max_weight: 7.0\n"
+      "kdtree:\n  cluster_tolerance_m: 0.3\nmarkers:\n  lifetime_s: 0.2\n");
+  GridSegmenterParams seg;
+  HierarchicalGridDetectorParams hier;
+  KdTreeDetectorParams kd;
+  std::string err;
+  ASSERT_TRUE(loadPipelineParamsYaml(det, &seg, &hier, &kd, &err)) << err;
+  EXPECT_DOUBLE_EQ(hier.coarse_cell_m, 0.5);
+  EXPECT_DOUBLE_EQ(hier.weight.max_weight, 7.0);
+  EXPECT_DOUBLE_EQ(kd.cluster_tolerance_m, 0.3);
+  EXPECT_DOUBLE_EQ(seg.cell_size_m, GridSegmenterParams().cell_size_m);  // untouched
+  // A segmentation file goes to the segmenter only.
+  const std::string s = writeTemp("g.yaml", "cell_size_m: 0.4\n");
+  ASSERT_TRUE(loadPipelineParamsYaml(s, &seg, &hier, &kd, &err)) << err;
+  EXPECT_DOUBLE_EQ(seg.cell_size_m, 0.4);
+  EXPECT_DOUBLE_EQ(hier.coarse_cell_m, 0.5);
+  // A combined file.
+  const std::string c = writeTemp(
+      "h.yaml", "segmentation:\n  cell_size_m: 0.6\ndetection:\n  kdtree:\n"
+                "    min_cluster_size: 9\n");
+  ASSERT_TRUE(loadPipelineParamsYaml(c, &seg, &hier, &kd, &err)) << err;
+  EXPECT_DOUBLE_EQ(seg.cell_size_m, 0.6);
+  EXPECT_EQ(kd.min_cluster_size, 9);
+  // Typos inside a detector map are errors.
+  const std::string bad = writeTemp("i.yaml", "kdtree:\n  cluster_tolerance: 0.3\n");
+  EXPECT_FALSE(loadPipelineParamsYaml(bad, &seg, &hier, &kd, &err));
+  EXPECT_NE(err.find("kdtree/cluster_tolerance: unknown parameter"), std::string::npos) << err;
+  for (const auto& f : {det, s, c, bad}) fs::remove(f);
+}
+
+TEST(ParamsYaml, ShippedDetectionConfigLoads) {
+  const std::string f = std::string(UD_SOURCE_DIR) + "/config/detection.yaml";
+  if (!fs::exists(f)) GTEST_SKIP() << f << " not present";
+  HierarchicalGridDetectorParams hier;
+  KdTreeDetectorParams kd;
+  std::string err;
+  EXPECT_TRUE(loadPipelineParamsYaml(f, nullptr, &hier, &kd, &err)) << err;
+}
+
 }  // namespace
 }  // namespace core
 }  // namespace urban_detection

@@ -13,8 +13,8 @@
 ///     car roofs and walls do not. Cells with both ground and object returns (a car over road)
 ///     join via their lowest point; the growing crosses empty and sparse cells for up to
 ///     ground_max_gap_m (the rings of a Velodyne are metres apart at range). Cells the growing
-///     did not reach get the mean ground
-///     elevation of reached cells nearby (terrain_fill_iterations dilation steps).
+///     did not reach get the mean ground elevation of the nearest ring of reached cells
+///     (terrain_fill_iterations cells at most).
 ///  4. Cell classes against the local ground g: tall when z_max - g > tall_min_height_m or
 ///     z_max - z_min > tall_min_range_m; ground when all points lie within ground_tolerance_m
 ///     of g; short otherwise.
@@ -56,7 +56,7 @@ struct GridSegmenterParams {
                                       //     over at most this distance (gaps between far rings)
   double seed_radius_m = 12.0;        // [m] ground growing starts from candidates this close
   double seed_max_abs_height_m = 0.4; // [m] ... whose elevation is within this of z = 0
-  int terrain_fill_iterations = 6;    // [cells] dilation steps filling the terrain of cells the
+  int terrain_fill_iterations = 6;    // [cells] search radius for the terrain of cells the
                                       //     growing did not reach
   double terrain_max_offset_m = 0.35; // [m] a flat cell the growing did not reach is ground when
                                       //     its mean is this close to the filled terrain
@@ -119,9 +119,9 @@ class GridSegmenter {
   std::vector<std::uint8_t> hops_;       // empty cells crossed to reach a bridged cell
   std::vector<std::int32_t> queue_;
   std::vector<std::int32_t> touched_;    // cells whose ground state was set this frame
-  std::vector<std::int32_t> frontier_, next_frontier_;
-  std::vector<float> fill_sum_;
-  std::vector<std::uint8_t> fill_cnt_;
+  std::vector<std::int32_t> fill_cells_;  // cells given a filled terrain this frame
+  std::vector<float> fill_z_;             // [m] their terrain, applied after the search
+  std::vector<float> split_z_;            // [m] per cell: points below are ground
 };
 
 /// Builds the foreground cloud of the detectors: only the finite kShort points, label =

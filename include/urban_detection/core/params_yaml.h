@@ -7,6 +7,8 @@
 #include <string>
 
 #include "urban_detection/core/grid_segmenter.h"
+#include "urban_detection/core/hierarchical_grid_detector.h"
+#include "urban_detection/core/kdtree_detector.h"
 
 namespace urban_detection {
 namespace core {
@@ -18,6 +20,22 @@ namespace core {
 /// Returns false with `error` set; `params` may then be partly updated.
 bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& section,
                                  GridSegmenterParams* params, std::string* error);
+
+/// Overrides the fields of `params` from the `hierarchical_grid:` map of a detection.yaml
+/// style file (the distance weight under `weight:`). A file without that map changes nothing.
+bool loadHierarchicalGridParamsYaml(const std::string& path,
+                                    HierarchicalGridDetectorParams* params, std::string* error);
+
+/// Overrides the fields of `params` from the `kdtree:` map of a detection.yaml style file.
+bool loadKdTreeParamsYaml(const std::string& path, KdTreeDetectorParams* params,
+                          std::string* error);
+
+/// Loads any of the pipeline's config files, recognised by their top-level keys: a combined
+/// file (`segmentation:` and/or `detection:` maps), a detection.yaml (`hierarchical_grid:`
+/// and/or `kdtree:` maps) or otherwise a segmentation.yaml. Null pointers skip that part.
+bool loadPipelineParamsYaml(const std::string& path, GridSegmenterParams* segmentation,
+                            HierarchicalGridDetectorParams* hierarchical,
+                            KdTreeDetectorParams* kdtree, std::string* error);
 
 }  // namespace core
 }  // namespace urban_detection

@@ -1,0 +1,445 @@
+// urban_detection_bench: per-stage timing of the core pipeline on recorded data, one process,
+// one thread (run it pinned to one core: taskset -c 0). Reports median and p95 ms per
+// revolution of each stage, the pipeline rate and the peak resident memory, and times the
+// hierarchical grid and the kd-tree detector on the same foregrounds in the same run.
+//
+//   urban_detection_bench [--pcd-dir DIR]... [--bin-dir DIR]... [--pcap FILE
+//                         [--calibration FILE]] [--config FILE]... [--repeat N]
+//                         [--max-frames N] [--label NAME] [--json FILE]
+//
+// Inputs are streamed from disk (file reading is not timed); packets are decoded as they
+// come, cut into revolutions as the driver does, and the decode time of a revolution's
+// packets is its "packet_decode" stage.
+#include <sched.h>
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "urban_detection/core/calibration.h"
+#include "urban_detection/core/eval_datasets.h"
+#include "urban_detection/core/grid_segmenter.h"
+#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/hierarchical_grid_detector.h"
+#include "urban_detection/core/hough_wall_refiner.h"
+#include "urban_detection/core/kdtree_detector.h"
+#include "urban_detection/core/kitti_io.h"
+#include "urban_detection/core/params_yaml.h"
+#include "urban_detection/ros/segmentation_params.h"
+#include "urban_detection/core/pcap_io.h"
+
+namespace core = urban_detection::core;
+using urban_detection::CloudXYZIRT;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  // Nearest-rank percentile.
+  const std::size_t rank =
+      static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  return v[std::min(v.size() - 1, rank == 0 ? 0 : rank - 1)];
+}
+
+double median(const std::vector<double>& v) {
+  if (v.empty()) return std::nan("");
+  std::vector<double> s(v);
+  std::sort(s.begin(), s.end());
+  const std::size_t n = s.size();
+  return n % 2 ? s[n / 2] : 0.5 * (s[n / 2 - 1] + s[n / 2]);
+}
+
+std::string num(double v) {
+  if (!std::isfinite(v)) return "null";
+  char b[32];
+  std::snprintf(b, sizeof(b), "%.6g", v);
+  return b;
+}
+
+std::string jsonEscape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    o += c;
+  }
+  return o;
+}
+
+// A source of revolutions: clouds from files, or packets decoded into clouds.
+class Source {
+ public:
+  virtual ~Source() = default;
+  /// Next revolution into `cloud`; `decode_ms` is the decode time (negative: no packets).
+  /// Returns false at the end.
+  virtual bool next(CloudXYZIRT* cloud, double* decode_ms) = 0;
+  virtual void rewind() = 0;
+  virtual std::string describe() const = 0;
+};
+
+class FileSource : public Source {
+ public:
+  FileSource(const std::string& dir, std::vector<std::string> files, bool pcd)
+      : dir_(dir), files_(std::move(files)), pcd_(pcd) {}
+  bool next(CloudXYZIRT* cloud, double* decode_ms) override {
+    while (pos_ < files_.size()) {
+      std::string err;
+      const std::string& f = files_[pos_++];
+      const bool ok = pcd_ ? core::readPcdXyzi(f, cloud, &err) : core::readKittiBin(f, cloud, &err);
+      if (ok) {
+        *decode_ms = -1.0;
+        return true;
+      }
+      std::fprintf(stderr, "warning: skipping %s: %s\n", f.c_str(), err.c_str());
+    }
+    return false;
+  }
+  void rewind() override { pos_ = 0; }
+  std::string describe() const override {
+    return dir_ + " (" + std::to_string(files_.size()) +
+           (pcd_ ? " PCD sweeps)" : " KITTI .bin scans)");
+  }
+
+ private:
+  std::string dir_;
+  std::vector<std::string> files_;
+  bool pcd_;
+  std::size_t pos_ = 0;
+};
+
+class PcapSource : public Source {
+ public:
+  PcapSource(const std::string& path, const core::Calibration& calib)
+      : path_(path), reader_(path), decoder_(calib, core::DecoderParams()) {}
+  bool next(CloudXYZIRT* cloud, double* decode_ms) override {
+    // Packets are read ahead by one: the packet that starts the next revolution is kept. The
+    // first, partial revolution of the stream is dropped, as the driver does.
+    cloud->clear();
+    double ms = 0.0;
+    bool started = have_pending_;
+    while (true) {
+      if (have_pending_) {
+        have_pending_ = false;
+      } else {
+        const auto r = reader_.next(&packet_);
+        if (r != core::PcapReader::Result::kPacket) {
+          if (started && !cloud->empty()) break;  // last, possibly partial revolution: drop
+          return false;
+        }
+        if (packet_.data.size() < 1206 ||
+            core::PacketDecoder::validate(packet_.data.data(), packet_.data.size()) !=
+                core::PacketStatus::kOk) {
+          continue;
+        }
+        if (cutter_.startsNewRevolution(core::blockAzimuth(packet_.data.data(), 0))) {
+          if (started) {
+            have_pending_ = true;
+            *decode_ms = ms;
+            return true;
+          }
+          started = true;
+          rev_start_s_ = packet_.stamp_s;
+        }
+        if (!started) continue;
+      }
+      if (cloud->empty()) rev_start_s_ = packet_.stamp_s;
+      const auto t0 = Clock::now();
+      decoder_.decode(packet_.data.data(), packet_.data.size(), packet_.stamp_s - rev_start_s_,
+                      cloud, &stats_);
+      ms += msSince(t0);
+    }
+    return false;
+  }
+  void rewind() override {
+    reader_.rewind();
+    cutter_.reset();
+    have_pending_ = false;
+  }
+  std::string describe() const override { return "packets of " + path_; }
+
+ private:
+  std::string path_;
+  core::PcapReader reader_;
+  core::PacketDecoder decoder_;
+  core::RevolutionCutter cutter_;
+  core::PcapPacket packet_;
+  core::DecodeStats stats_;
+  bool have_pending_ = false;
+  double rev_start_s_ = 0.0;
+};
+
+void usage() {
+  std::fprintf(stderr,
+      "usage: urban_detection_bench [--pcd-dir DIR]... [--bin-dir DIR]...\n"
+      "         [--pcap FILE [--calibration FILE]] [--config FILE]... [--repeat N]\n"
+      "         [--max-frames N] [--label NAME] [--json FILE]\n"
+      "Run it pinned to one core (taskset -c 0) from a Release build.\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+#ifndef NDEBUG
+  std::fprintf(stderr,
+               "error: urban_detection_bench was built without NDEBUG (a Debug build); its "
+               "timings would be meaningless. Rebuild with -DCMAKE_BUILD_TYPE=Release.\n");
+  (void)argc;
+  (void)argv;
+  return 3;
+#else
+  std::vector<std::string> pcd_dirs, bin_dirs, configs;
+  std::string pcap, calib_path, label = "bench", json_path;
+  long repeat = 3, max_frames = -1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&](const char* what) -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "error: %s needs a value\n", what);
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    auto integer = [&](const char* what) -> long {
+      const std::string v = value(what);
+      char* end = nullptr;
+      const long x = std::strtol(v.c_str(), &end, 10);
+      if (end == v.c_str() || *end != '\0' || x < 0) {
+        std::fprintf(stderr, "error: %s needs a non-negative integer, got '%s'\n", what,
+                     v.c_str());
+        std::exit(2);
+      }
+      return x;
+    };
+    if (a == "--pcd-dir") pcd_dirs.push_back(value("--pcd-dir"));
+    else if (a == "--bin-dir") bin_dirs.push_back(value("--bin-dir"));
+    else if (a == "--pcap") pcap = value("--pcap");
+    else if (a == "--calibration") calib_path = value("--calibration");
+    else if (a == "--config") configs.push_back(value("--config"));
+    else if (a == "--repeat") repeat = std::max(1L, integer("--repeat"));
+    else if (a == "--max-frames") max_frames = integer("--max-frames");
+    else if (a == "--label") label = value("--label");
+    else if (a == "--json") json_path = value("--json");
+    else if (a == "-h" || a == "--help") { usage(); return 0; }
+    else {
+      std::fprintf(stderr, "error: unknown argument '%s'\n", a.c_str());
+      usage();
+      return 2;
+    }
+  }
+
+  core::GridSegmenterParams seg_params;
+  core::HierarchicalGridDetectorParams hier_params;
+  core::KdTreeDetectorParams kd_params;
+  for (const std::string& c : configs) {
+    std::string err;
+    if (!core::loadPipelineParamsYaml(c, &seg_params, &hier_params, &kd_params, &err)) {
+      std::fprintf(stderr, "error: %s\n", err.c_str());
+      return 2;
+    }
+  }
+
+  std::vector<std::unique_ptr<Source>> sources;
+  for (const auto& d : pcd_dirs) {
+    auto files = core::listFiles(d, ".pcd");
+    if (files.empty()) std::fprintf(stderr, "warning: no .pcd files in %s\n", d.c_str());
+    else sources.emplace_back(new FileSource(d, files, true));
+  }
+  for (const auto& d : bin_dirs) {
+    auto files = core::listFiles(d, ".bin");
+    if (files.empty()) std::fprintf(stderr, "warning: no .bin files in %s\n", d.c_str());
+    else sources.emplace_back(new FileSource(d, files, false));
+  }
+  try {
+    if (!pcap.empty()) {
+      sources.emplace_back(new PcapSource(pcap, core::loadCalibration(calib_path)));
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+  if (sources.empty()) {
+    std::fprintf(stderr, "error: no input\n");
+    usage();
+    return 2;
+  }
+
+  std::string seg_error;
+  if (!urban_detection::ros_conv::validateGridSegmenterParams(seg_params, &seg_error)) {
+    std::fprintf(stderr, "error: invalid segmentation parameters: %s\n", seg_error.c_str());
+    return 2;
+  }
+  std::unique_ptr<core::GridSegmenter> segmenter, segmenter_no_hough;
+  std::unique_ptr<core::HierarchicalGridDetector> hier;
+  std::unique_ptr<core::KdTreeDetector> kdtree;
+  try {
+    segmenter.reset(new core::GridSegmenter(seg_params));
+    core::GridSegmenterParams no_hough = seg_params;
+    no_hough.hough.enabled = false;
+    segmenter_no_hough.reset(new core::GridSegmenter(no_hough));
+    hier.reset(new core::HierarchicalGridDetector(hier_params));
+    kdtree.reset(new core::KdTreeDetector(kd_params));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: invalid parameters: %s\n", e.what());
+    return 2;
+  }
+  core::HoughWallRefiner hough(seg_params.hough);
+
+  std::map<std::string, std::vector<double>> stage;
+  std::vector<double> pipeline;
+  double points_sum = 0, fg_sum = 0, hier_obj_sum = 0, kd_obj_sum = 0;
+  CloudXYZIRT cloud;
+  std::vector<core::SegmentClass> labels, labels_no_hough;
+  urban_detection::LabeledCloud foreground;
+  std::vector<core::DetectedObject> objects;
+  std::vector<core::SegmentClass> cells;
+  bool any_packets = false;
+  std::size_t frames = 0;
+  for (long r = 0; r < repeat; ++r) {
+    for (auto& src : sources) {
+      src->rewind();
+      long taken = 0;
+      double decode_ms;
+      while ((max_frames < 0 || taken < max_frames) && src->next(&cloud, &decode_ms)) {
+        ++taken;
+        double total = 0.0;
+        if (decode_ms >= 0.0) {
+          any_packets = true;
+          stage["packet_decode"].push_back(decode_ms);
+          total += decode_ms;
+        }
+        auto t = Clock::now();
+        segmenter->segment(cloud, &labels);
+        double ms = msSince(t);
+        stage["segmentation"].push_back(ms);
+        total += ms;
+
+        t = Clock::now();
+        core::extractForeground(cloud, labels, &foreground);
+        ms = msSince(t);
+        stage["foreground_extraction"].push_back(ms);
+        total += ms;
+
+        t = Clock::now();
+        hier->detect(foreground, &objects);
+        ms = msSince(t);
+        stage["hierarchical_detection"].push_back(ms);
+        total += ms;
+        hier_obj_sum += objects.size();
+        pipeline.push_back(total);
+
+        // Not part of the pipeline: the baseline on the same foreground, and the Hough
+        // refinement alone (it runs inside segment(); timed here on the same frame's cell
+        // classes before refinement).
+        t = Clock::now();
+        kdtree->detect(foreground, &objects);
+        stage["kdtree_detection"].push_back(msSince(t));
+        kd_obj_sum += objects.size();
+
+        segmenter_no_hough->segment(cloud, &labels_no_hough);
+        cells = segmenter_no_hough->cellClasses();
+        const auto& g = segmenter_no_hough->grid();
+        t = Clock::now();
+        hough.refine(g.rows(), g.cols(), seg_params.cell_size_m, &cells);
+        stage["hough_refinement"].push_back(msSince(t));
+
+        points_sum += cloud.size();
+        fg_sum += foreground.size();
+        ++frames;
+      }
+    }
+  }
+  if (frames == 0) {
+    std::fprintf(stderr, "error: no frame could be read\n");
+    return 1;
+  }
+
+  struct rusage ru {};
+  getrusage(RUSAGE_SELF, &ru);
+  const double peak_mb = ru.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  const int cpus = sched_getaffinity(0, sizeof(set), &set) == 0 ? CPU_COUNT(&set) : -1;
+  double pipeline_sum = 0;
+  for (double v : pipeline) pipeline_sum += v;
+  const double pipeline_median = median(pipeline);
+  const double pipeline_fps = 1000.0 * static_cast<double>(pipeline.size()) / pipeline_sum;
+  const double speedup = median(stage["kdtree_detection"]) /
+                         median(stage["hierarchical_detection"]);
+
+  const char* order[] = {"packet_decode", "segmentation", "hough_refinement",
+                         "foreground_extraction", "hierarchical_detection", "kdtree_detection"};
+  std::printf("%s: %zu revolutions (%ld pass%s over", label.c_str(), frames, repeat,
+              repeat > 1 ? "es" : "");
+  for (const auto& s : sources) std::printf(" [%s]", s->describe().c_str());
+  std::printf("), %.0f points, %.0f foreground points, %.1f hierarchical / %.1f kd-tree objects "
+              "per revolution; %d CPU(s) allowed\n",
+              points_sum / frames, fg_sum / frames, hier_obj_sum / frames, kd_obj_sum / frames,
+              cpus);
+  std::printf("  %-24s %10s %10s\n", "stage", "median_ms", "p95_ms");
+  for (const char* name : order) {
+    auto it = stage.find(name);
+    if (it == stage.end()) continue;
+    std::printf("  %-24s %10.3f %10.3f%s\n", name, median(it->second),
+                percentile(it->second, 0.95),
+                std::string(name) == "hough_refinement" ? "  (inside segmentation)"
+                : std::string(name) == "kdtree_detection" ? "  (baseline, not in pipeline)"
+                                                          : "");
+  }
+  std::printf("  %-24s %10.3f %10.3f  (%s-> hierarchical objects)\n", "pipeline",
+              pipeline_median, percentile(pipeline, 0.95),
+              any_packets ? "packets " : "cloud ");
+  std::printf("  pipeline_fps %.1f   hier_vs_kdtree_speedup %.1fx   peak_rss %.1f MB\n",
+              pipeline_fps, speedup, peak_mb);
+
+  if (!json_path.empty()) {
+    std::ofstream out(json_path);
+    out << "{\n  \"label\": \"" << jsonEscape(label) << "\",\n  \"inputs\": [";
+    for (std::size_t i = 0; i < sources.size(); ++i) {
+      out << (i ? ", " : "") << "\"" << jsonEscape(sources[i]->describe()) << "\"";
+    }
+    out << "],\n  \"revolutions\": " << frames << ",\n  \"repeat\": " << repeat
+        << ",\n  \"cpus_allowed\": " << cpus
+        << ",\n  \"mean_points\": " << num(points_sum / frames)
+        << ",\n  \"mean_foreground_points\": " << num(fg_sum / frames)
+        << ",\n  \"mean_objects_hierarchical\": " << num(hier_obj_sum / frames)
+        << ",\n  \"mean_objects_kdtree\": " << num(kd_obj_sum / frames)
+        << ",\n  \"pipeline_includes_packet_decode\": " << (any_packets ? "true" : "false")
+        << ",\n  \"stages\": {";
+    bool first = true;
+    for (const char* name : order) {
+      auto it = stage.find(name);
+      if (it == stage.end()) continue;
+      out << (first ? "\n" : ",\n") << "    \"" << name << "\": {\"median_ms\": "
+          << num(median(it->second)) << ", \"p95_ms\": " << num(percentile(it->second, 0.95))
+          << "}";
+      first = false;
+    }
+    out << "\n  },\n  \"pipeline_median_ms\": " << num(pipeline_median)
+        << ",\n  \"pipeline_p95_ms\": " << num(percentile(pipeline, 0.95))
+        << ",\n  \"pipeline_fps\": " << num(pipeline_fps)
+        << ",\n  \"hier_vs_kdtree_speedup\": " << num(speedup)
+        << ",\n  \"peak_rss_mb\": " << num(peak_mb) << "\n}\n";
+    if (!out) {
+      std::fprintf(stderr, "error: cannot write %s\n", json_path.c_str());
+      return 1;
+    }
+  }
+  return 0;
+#endif
+}

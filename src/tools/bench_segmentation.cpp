@@ -1,0 +1,117 @@
+// urban_detection_bench_segmentation: time of the grid segmentation (paper Sec. 3.1) per
+// revolution on real KITTI HDL-64E sweeps, with and without the Hough wall refinement.
+//
+//   taskset -c 0 urban_detection_bench_segmentation [--data=DIR] [benchmark flags]
+//   DIR defaults to $UD_SHARED_DATA/kitti_raw/drive_0048 (binary PCD x y z intensity).
+// Besides Google Benchmark's mean, the counters median_ms and p95_ms are over single frames.
+#include "urban_detection/core/point_types.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "urban_detection/core/grid_segmenter.h"
+#include "urban_detection/core/kitti_io.h"
+
+namespace {
+
+namespace core = urban_detection::core;
+std::vector<urban_detection::CloudXYZIRT> g_frames;
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t i = std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1) + 0.5));
+  return v[i];
+}
+
+void runSegmentation(benchmark::State& state, bool hough) {
+  if (g_frames.empty()) {
+    state.SkipWithError("no KITTI frames loaded (data absent?)");
+    return;
+  }
+  core::GridSegmenterParams p;
+  p.hough.enabled = hough;
+  core::GridSegmenter seg(p);
+  std::vector<core::SegmentClass> labels;
+  for (const auto& f : g_frames) seg.segment(f, &labels);  // warm the scratch buffers
+  std::vector<double> ms;
+  std::size_t k = 0, points = 0;
+  for (auto _ : state) {
+    const auto& frame = g_frames[k++ % g_frames.size()];
+    const auto t0 = std::chrono::steady_clock::now();
+    seg.segment(frame, &labels);
+    const auto t1 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(labels.data());
+    ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    points += frame.size();
+  }
+  state.counters["median_ms"] = percentile(ms, 0.5);
+  state.counters["p95_ms"] = percentile(ms, 0.95);
+  state.counters["points"] = static_cast<double>(points) / static_cast<double>(ms.size());
+  state.SetItemsProcessed(static_cast<std::int64_t>(points));
+}
+
+void BM_SegmentWithHough(benchmark::State& state) { runSegmentation(state, true); }
+void BM_SegmentWithoutHough(benchmark::State& state) { runSegmentation(state, false); }
+BENCHMARK(BM_SegmentWithHough)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_SegmentWithoutHough)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+
+void BM_ExtractForeground(benchmark::State& state) {
+  if (g_frames.empty()) {
+    state.SkipWithError("no KITTI frames loaded (data absent?)");
+    return;
+  }
+  core::GridSegmenter seg;
+  std::vector<core::SegmentClass> labels;
+  seg.segment(g_frames[0], &labels);
+  urban_detection::LabeledCloud fg;
+  for (auto _ : state) {
+    core::extractForeground(g_frames[0], labels, &fg);
+    benchmark::DoNotOptimize(fg.points.data());
+  }
+}
+BENCHMARK(BM_ExtractForeground)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const char* env = std::getenv("UD_SHARED_DATA");
+  std::string dir = std::string(env ? env : "../shared/data") + "/kitti_raw/drive_0048";
+  std::vector<char*> args;
+  for (int i = 0; i < argc; ++i) {
+    if (std::strncmp(argv[i], "--data=", 7) == 0) {
+      dir = argv[i] + 7;
+    } else {
+      args.push_back(argv[i]);
+    }
+  }
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    if (e.path().extension() == ".pcd") files.push_back(e.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  for (const std::string& f : files) {
+    urban_detection::CloudXYZIRT cloud;
+    std::string err;
+    if (core::readPcdXyzi(f, &cloud, &err)) {
+      g_frames.push_back(std::move(cloud));
+    } else {
+      std::fprintf(stderr, "skipping %s: %s\n", f.c_str(), err.c_str());
+    }
+  }
+  std::fprintf(stderr, "%zu KITTI sweeps from %s\n", g_frames.size(), dir.c_str());
+  int n = static_cast<int>(args.size());
+  benchmark::Initialize(&n, args.data());
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
