@@ -107,11 +107,12 @@ int main(int argc, char** argv) {
   }
   if (!(rate_hz > 0.0 && rate_hz <= 100.0) || !(start_s > 0.0) || repeat < 1 ||
       !std::isfinite(sensor_height_m) || frame_id.empty() || base_frame.empty() ||
-      odom_frame.empty()) {
+      odom_frame.empty() || topic.empty()) {
     std::fprintf(stderr, "invalid option value: --rate in (0, 100] Hz, --start > 0 s, --repeat "
                          ">= 1, finite --sensor-height, non-empty frame names\n");
     return 2;
   }
+  if (topic.front() != '/') topic = "/" + topic;  // as a recorder stores it
   const std::vector<std::string> files = ud::tools::listSweeps(positional[0]);
   if (files.empty()) {
     std::fprintf(stderr, "no .bin or .pcd sweep in %s\n", positional[0].c_str());
