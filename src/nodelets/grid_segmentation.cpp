@@ -18,6 +18,7 @@
 #include "urban_detection/core/grid_segmenter.h"
 #include "urban_detection/ros/pointcloud2_input.h"
 #include "urban_detection/ros/segmentation_params.h"
+#include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
 
@@ -34,6 +35,7 @@ class GridSegmentation : public nodelet::Nodelet {
     }
     segmenter_.reset(new core::GridSegmenter(params));
     startReconfigure(params);
+    diagnostics_.reset(new ros_conv::StageDiagnostics(nh, pnh, getName(), "segmentation"));
     // Lazy: subscribe upstream only while someone listens to an output.
     ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
       connectCb();
@@ -89,6 +91,7 @@ class GridSegmentation : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(connect_mutex_);
     const bool wanted =
         labeled_pub_.getNumSubscribers() > 0 || foreground_pub_.getNumSubscribers() > 0;
+    diagnostics_->setActive(wanted);
     if (wanted && !sub_) {
       sub_ = getNodeHandle().subscribe("velodyne_points", 2, &GridSegmentation::cloudCb, this);
     } else if (!wanted && sub_) {
@@ -97,11 +100,13 @@ class GridSegmentation : public nodelet::Nodelet {
   }
 
   void cloudCb(const sensor_msgs::PointCloud2ConstPtr& msg) {
+    const ros::WallTime start = ros::WallTime::now();
     ros_conv::PointCloud2InputInfo info;
     std::string error;
     if (!ros_conv::fromPointCloud2(*msg, &cloud_, &info, &error)) {
       NODELET_ERROR_THROTTLE(5.0, "GridSegmentation: dropping velodyne_points: %s",
                              error.c_str());
+      diagnostics_->rejected();
       return;
     }
     if (!info.has_ring || !info.has_time) {
@@ -125,6 +130,7 @@ class GridSegmentation : public nodelet::Nodelet {
       core::extractForeground(cloud_, labels_, foreground.get());
       foreground_pub_.publish(boost::shared_ptr<const LabeledCloud>(foreground));
     }
+    diagnostics_->frame((ros::WallTime::now() - start).toSec());
   }
 
   using ReconfigureServer = dynamic_reconfigure::Server<GridSegmentationConfig>;
@@ -132,6 +138,7 @@ class GridSegmentation : public nodelet::Nodelet {
   std::mutex segment_mutex_;                   // segmenter_ between frames and reconfigure
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<ReconfigureServer> reconfigure_;
+  std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   CloudXYZIRT cloud_;                     // scratch: converted input
   std::vector<core::SegmentClass> labels_;  // scratch: per-point classes
   std::mutex connect_mutex_;
