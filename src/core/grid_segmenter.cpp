@@ -88,11 +88,20 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   std::uint32_t counts[5] = {0, 0, 0, 0, 0};
   const std::int32_t* pc = grid_.pointCells().data();
   SegmentClass* out = labels->data();
+  const float* pz = grid_.pointHeights().data();
+  std::int32_t run_cell = SimpleGrid::kNoCell;  // consecutive points share cells: cache it
+  float run_split = 0.0f;
+  SegmentClass run_class = SegmentClass::kUnknown;
   for (std::size_t i = 0; i < n; ++i) {
     const std::int32_t c = pc[i];
     SegmentClass label = SegmentClass::kUnknown;
     if (c != SimpleGrid::kNoCell) {
-      label = grid_.pointHeight(i) < split_z_[c] ? SegmentClass::kGround : cell_class_[c];
+      if (c != run_cell) {
+        run_cell = c;
+        run_split = split_z_[c];
+        run_class = cell_class_[c];
+      }
+      label = pz[i] < run_split ? SegmentClass::kGround : run_class;
     }
     out[i] = label;
     ++counts[static_cast<int>(label)];
@@ -112,6 +121,7 @@ void GridSegmenter::growGround() {
   const float flat = static_cast<float>(params_.ground_max_range_m);
   const float step = static_cast<float>(params_.ground_max_step_m);
   const float seed_h = static_cast<float>(params_.seed_max_abs_height_m);
+  const float tol = static_cast<float>(params_.ground_tolerance_m);
   const float seed_r2 = static_cast<float>(params_.seed_radius_m * params_.seed_radius_m);
   const int rows = grid_.rows(), cols = grid_.cols();
 
@@ -157,7 +167,10 @@ void GridSegmenter::growGround() {
       const float e = is_flat ? cell.zMean() : cell.z_min;
       if (std::fabs(e - g) >= step) continue;
       ground_state_[nc] = kReached;
-      ground_z_[nc] = e;
+      // The lowest point of a mixed cell is its ground unless it lies clearly above the terrain
+      // it was reached from: then the base was not sampled (a wall hit above its foot at range)
+      // and that point belongs to the object.
+      ground_z_[nc] = !is_flat && e - g > tol ? g : e;
       touched_.push_back(nc);
       ++reached;
       if (is_flat) queue_.push_back(nc);

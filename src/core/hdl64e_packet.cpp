@@ -25,7 +25,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace urban_detection {
 namespace core {
@@ -38,6 +43,12 @@ constexpr int kReturnSize = 3;
 constexpr std::size_t kTimestampOffset = kBlocksPerPacket * kBlockSize;     // 1200
 constexpr double kFullScaleM = 65535 * 0.002;                               // 131.07 m
 constexpr double kTwoPtXNear = 2.4, kTwoPtYNear = 1.93, kTwoPtFar = 25.04;  // [m]
+
+// The vector stores of the decoder write PointXYZIRT as two 16-byte halves.
+static_assert(sizeof(PointXYZIRT) == 32 && alignof(PointXYZIRT) == 16, "PointXYZIRT layout");
+static_assert(offsetof(PointXYZIRT, intensity) == 16 && offsetof(PointXYZIRT, ring) == 20 &&
+                  offsetof(PointXYZIRT, time) == 24,
+              "PointXYZIRT layout");
 
 inline std::uint16_t readU16(const std::uint8_t* p) {
   return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
@@ -120,7 +131,7 @@ PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderParams
     t.focal_slope[l] = static_cast<float>(c.focal_slope);
     t.min_intensity[l] = static_cast<float>(c.min_intensity);
     t.max_intensity[l] = static_cast<float>(c.max_intensity);
-    t.ring[l] = static_cast<std::uint16_t>(calibration_.ring_of_laser[l]);
+    t.ring[l] = calibration_.ring_of_laser[l];
   }
 }
 
@@ -247,14 +258,36 @@ PacketStatus PacketDecoder::decodeImpl(const std::uint8_t* data, std::size_t siz
     // Branch-free compaction: every slot is written, only valid ones advance the cursor (the
     // buffer has room for all 384 returns of a packet). Real scans have many no-return slots
     // in irregular patterns, where branches would mispredict.
-    for (int j = 0; j < kLasersPerBlock; ++j) {
+    const std::int32_t* ring = t.ring.data() + bank;
+    int j = 0;
+#if defined(__SSE2__)
+    // Four points at a time: transpose the per-laser arrays into the two 16-byte halves of
+    // PointXYZIRT, (x, y, z, 1) and (intensity, ring, time, 0), and store each half at once.
+    const __m128 one = _mm_set1_ps(1.0f), time4 = _mm_set1_ps(time), zero = _mm_setzero_ps();
+    for (; !kRecord && j + 4 <= kLasersPerBlock; j += 4) {
+      __m128 r0 = _mm_load_ps(px + j), r1 = _mm_load_ps(py + j), r2 = _mm_load_ps(pz + j), r3 = one;
+      _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+      __m128 s0 = _mm_load_ps(pi + j),
+             s1 = _mm_castsi128_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(ring + j))),
+             s2 = time4, s3 = zero;
+      _MM_TRANSPOSE4_PS(s0, s1, s2, s3);
+      const __m128 xyz[4] = {r0, r1, r2, r3}, irt[4] = {s0, s1, s2, s3};
+      for (int k = 0; k < 4; ++k) {
+        float* dst = reinterpret_cast<float*>(out + n);
+        _mm_store_ps(dst, xyz[k]);
+        _mm_store_ps(dst + 4, irt[k]);
+        n += static_cast<std::size_t>(valid[j + k]);
+      }
+    }
+#endif
+    for (; j < kLasersPerBlock; ++j) {
       PointXYZIRT& p = out[n];
       p.x = px[j];
       p.y = py[j];
       p.z = pz[j];
       p.data[3] = 1.0f;
       p.intensity = pi[j];
-      p.ring = t.ring[bank + j];
+      p.ring = static_cast<std::uint16_t>(ring[j]);
       p.time = time;
       if (kRecord && valid[j]) {
         if (laser != nullptr) laser->push_back(static_cast<std::uint8_t>(bank + j));

@@ -2,6 +2,7 @@
 // segmentation/foreground (paper Sec. 3.1). Thin wrapper around core::GridSegmenter.
 #include "urban_detection/core/point_types.h"
 
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>

@@ -7,6 +7,7 @@
 #include "urban_detection/core/point_types.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -15,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "urban_detection/core/eval_datasets.h"
 #include "urban_detection/core/grid_segmenter.h"
 #include "urban_detection/core/kitti_io.h"
 
@@ -141,6 +143,7 @@ bool setParam(core::GridSegmenterParams* p, const std::string& kv) {
       {"hough.max_range_m", &p->hough.max_range_m},
       {"hough.min_line_length_m", &p->hough.min_line_length_m},
       {"hough.max_line_gap_m", &p->hough.max_line_gap_m},
+      {"hough.theta_resolution_deg", &p->hough.theta_resolution_deg},
       {"hough.min_tall_fraction", &p->hough.min_tall_fraction}};
   std::map<std::string, int*> di = {{"min_points_per_cell", &p->min_points_per_cell},
                                     {"terrain_fill_iterations", &p->terrain_fill_iterations},
@@ -153,6 +156,60 @@ bool setParam(core::GridSegmenterParams* p, const std::string& kv) {
   return false;
 }
 
+// KITTI object frames: share of the points of labelled objects (inside their 3-D boxes, above
+// the ground band, rules of eval_datasets.h) that end up in the foreground, per class.
+void evalKittiObject(const std::string& dir, const core::GridSegmenterParams& params) {
+  const std::vector<std::string> bins = core::listFiles(dir + "/velodyne", ".bin");
+  if (bins.empty()) {
+    std::printf("\nKITTI object: no frames in %s/velodyne (skipped)\n", dir.c_str());
+    return;
+  }
+  std::map<std::string, std::array<long, 3>> per_class;  // points, fg with Hough, fg without
+  core::GridSegmenterParams p_on = params, p_off = params;
+  p_on.hough.enabled = true;
+  p_off.hough.enabled = false;
+  core::GridSegmenter seg_on(p_on), seg_off(p_off);
+  int frames = 0;
+  for (const std::string& bin : bins) {
+    const std::string stem = fs::path(bin).stem().string();
+    urban_detection::CloudXYZIRT cloud;
+    std::vector<core::KittiLabel> labels;
+    core::KittiCalibration calib;
+    std::string err;
+    if (!core::readKittiBin(bin, &cloud, &err) ||
+        !core::readKittiLabels(dir + "/label_2/" + stem + ".txt", &labels, &err) ||
+        !core::readKittiCalibration(dir + "/calib/" + stem + ".txt", &calib, &err)) {
+      std::fprintf(stderr, "skipping KITTI object %s: %s\n", stem.c_str(), err.c_str());
+      continue;
+    }
+    core::KittiGroundTruthParams gp;
+    int w = gp.image_width_px, h = gp.image_height_px;
+    core::readPngSize(dir + "/image_2/" + stem + ".png", &w, &h);
+    core::EvalFrame gt;
+    core::buildKittiGroundTruth(cloud, labels, calib, gp, w, h, &gt);
+    std::vector<SegmentClass> on, off;
+    seg_on.segment(cloud, &on);
+    seg_off.segment(cloud, &off);
+    ++frames;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const std::int32_t o = gt.object_of_point[i];
+      if (o < 0 || gt.objects[o].ignored) continue;
+      if (!gt.role.empty() && gt.role[i] != core::PointRole::kScored) continue;
+      auto& c = per_class[gt.objects[o].label];
+      ++c[0];
+      c[1] += on[i] == SegmentClass::kShort;
+      c[2] += off[i] == SegmentClass::kShort;
+    }
+  }
+  std::printf("\nKITTI object %s, %d frames: object points (in boxes, above the ground band) in "
+              "the foreground\n| class | points | fg hough on | fg hough off |\n", dir.c_str(),
+              frames);
+  for (const auto& kv : per_class) {
+    std::printf("| %-14s | %6ld | %6.4f | %6.4f |\n", kv.first.c_str(), kv.second[0],
+                ratio(kv.second[1], kv.second[0]), ratio(kv.second[2], kv.second[0]));
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -160,6 +217,7 @@ int main(int argc, char** argv) {
   std::string dir = std::string(env ? env : "../shared/data") + "/semantic_kitti/sequences/00";
   core::GridSegmenterParams params;
   bool verbose = false;
+  std::string kitti_object_dir;  // evaluate KITTI object frames instead of SemanticKITTI
   double ascii_half_m = 0.0;  // print the cell classes of the last scan within this half side
   std::string dump_dir;  // per-point x y z class label text files, for analysis
   for (int i = 1; i < argc; ++i) {
@@ -173,14 +231,21 @@ int main(int argc, char** argv) {
       dump_dir = argv[++i];
     } else if (a == "--ascii" && i + 1 < argc) {
       ascii_half_m = std::atof(argv[++i]);
+    } else if (a == "--kitti-object") {
+      kitti_object_dir = std::string(env ? env : "../shared/data") + "/kitti_object";
+      if (i + 1 < argc && argv[i + 1][0] != '-') kitti_object_dir = argv[++i];
     } else if (a == "-v") {
       verbose = true;
     } else if (a == "-h" || a == "--help") {
-      std::printf("usage: %s [DIR] [-v] [--dump DIR] [--ascii HALF_SIDE_M] [--set name=value ...]\n", argv[0]);
+      std::printf("usage: %s [DIR] [-v] [--dump DIR] [--ascii HALF_SIDE_M] [--kitti-object [DIR]] [--set name=value ...]\n", argv[0]);
       return 0;
     } else {
       dir = a;
     }
+  }
+  if (!kitti_object_dir.empty()) {
+    evalKittiObject(kitti_object_dir, params);
+    return 0;
   }
   std::vector<std::string> scans;
   std::error_code ec;

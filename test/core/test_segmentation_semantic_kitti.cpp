@@ -77,16 +77,16 @@ TEST(SegmentationSemanticKitti, AccuracyWithAndWithoutHough) {
   const Rates on = measure(true, dir, &frames);
   ASSERT_EQ(frames, 3);
   const Rates off = measure(false, dir, &frames);
-  // Measured (seg_eval, defaults): P 0.950, R 0.995, F1 0.972; walls 0.93 with Hough and 0.74
-  // without; cars 0.944 with Hough, 0.949 without.
+  // Measured (seg_eval, defaults): P 0.960, R 0.991, F1 0.975; building+fence not in the
+  // foreground 0.980 with Hough and 0.774 without; cars in the foreground 0.960 either way.
   EXPECT_GE(on.ground_precision, 0.94);
-  EXPECT_GE(on.ground_recall, 0.98);
-  EXPECT_GE(on.ground_f1, 0.96);
-  EXPECT_GE(on.wall_not_foreground, 0.90);
-  EXPECT_GE(on.car_foreground, 0.92);
-  EXPECT_GE(off.car_foreground, 0.93);
+  EXPECT_GE(on.ground_recall, 0.985);
+  EXPECT_GE(on.ground_f1, 0.965);
+  EXPECT_GE(on.wall_not_foreground, 0.95);
+  EXPECT_GE(on.car_foreground, 0.945);
+  EXPECT_GE(off.car_foreground, 0.945);
   // The Hough refinement is what keeps near facades out of the foreground.
-  EXPECT_GE(on.wall_not_foreground - off.wall_not_foreground, 0.10);
+  EXPECT_GE(on.wall_not_foreground - off.wall_not_foreground, 0.15);
   // It does not touch the ground.
   EXPECT_DOUBLE_EQ(on.ground_f1, off.ground_f1);
 }

@@ -119,9 +119,15 @@ TEST(GridSegmentationNodelet, SegmentsKittiStylePointCloud2) {
     const bool in_car = cloud[i].x >= 8.f && cloud[i].x <= 12.6f && cloud[i].y >= -5.f &&
                         cloud[i].y <= -3.1f && h > 0.2f;
     const SegmentClass c = static_cast<SegmentClass>(q.label);
-    if (h < 0.01f) EXPECT_EQ(c, SegmentClass::kGround) << i;
-    if (in_car) EXPECT_EQ(c, SegmentClass::kShort) << i;
-    if (cloud[i].y > 14.9f && h > 0.2f) EXPECT_EQ(c, SegmentClass::kTall) << i;
+    if (h < 0.01f) {
+      EXPECT_EQ(c, SegmentClass::kGround) << i;
+    }
+    if (in_car) {
+      EXPECT_EQ(c, SegmentClass::kShort) << i;
+    }
+    if (cloud[i].y > 14.9f && h > 0.2f) {
+      EXPECT_EQ(c, SegmentClass::kTall) << i;
+    }
     shorts += c == SegmentClass::kShort;
   }
   ASSERT_GT(shorts, 500u);

@@ -49,7 +49,7 @@ struct GridSegmenterParams {
                                       //     ground_tolerance_m of the terrain filled in from
                                       //     neighbouring ground cells are ground (far road)
   double ground_max_range_m = 0.25;   // [m] z_max - z_min below this: ground candidate (paper)
-  double ground_tolerance_m = 0.10;   // [m] a point this close above the local ground is ground
+  double ground_tolerance_m = 0.08;   // [m] a point this close above the local ground is ground
   double ground_max_step_m = 0.20;    // [m] elevation step allowed between neighbouring ground
                                       //     cells (curbs, slopes)
   double ground_max_gap_m = 2.0;      // [m] the terrain growing crosses empty or sparse cells

@@ -101,7 +101,7 @@ class PacketDecoder {
     Row focal_offset;          // [-] 256 * (1 - focal_distance / 131.07 m)^2
     Row focal_slope;           // [-]
     Row min_intensity, max_intensity;
-    std::array<std::uint16_t, kNumLasers> ring;
+    std::array<std::int32_t, kNumLasers> ring;  // ring_of_laser (int32 for vector stores)
   };
 
  private:

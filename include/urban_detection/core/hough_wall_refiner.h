@@ -19,12 +19,12 @@ namespace core {
 /// cells with the grid's cell size.
 struct HoughWallRefinerParams {
   bool enabled = true;                 // run the refinement at all
-  double max_range_m = 30.0;           // [m] only cells within this square half side are
+  double max_range_m = 20.0;           // [m] only cells within this square half side are
                                        //     rasterised (the misreading happens near the sensor)
   int votes = 8;                       // [cells] accumulator threshold of cv::HoughLinesP
   double min_line_length_m = 6.0;      // [m] shortest accepted line
   double max_line_gap_m = 1.0;         // [m] largest gap bridged within one line
-  double theta_resolution_deg = 1.0;   // [deg] angular resolution of the accumulator
+  double theta_resolution_deg = 2.0;   // [deg] angular resolution of the accumulator
   double min_tall_fraction = 0.9;      // [0..1] a run of occupied cells along a line must lie
                                        //     on at least this fraction of wall-supporting cells
                                        //     (tall, or reaching the top of the field of view):
@@ -37,7 +37,7 @@ struct HoughWallRefinerParams {
 /// Statistics of the last refine() call.
 struct HoughWallStats {
   int lines_found = 0;     // lines returned by cv::HoughLinesP
-  int lines_accepted = 0;  // lines passing min_tall_fraction
+  int lines_accepted = 0;  // lines with at least one accepted wall run
   int cells_relabeled = 0; // short cells turned tall
 };
 

@@ -57,6 +57,7 @@ class SimpleGrid {
   const std::vector<std::int32_t>& pointCells() const { return point_cell_; }
   /// Height of point i above the ground below the sensor [m] (valid when pointCell != kNoCell).
   float pointHeight(std::size_t i) const { return point_z_[i]; }
+  const std::vector<float>& pointHeights() const { return point_z_; }
 
   const GridCell& cell(std::int32_t index) const { return cells_[index]; }
   const GridCell& cell(int row, int col) const { return cells_[row * side_ + col]; }
