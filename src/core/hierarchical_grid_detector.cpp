@@ -176,7 +176,7 @@ int HierarchicalGridDetector::gapBetween(std::int32_t node_a, std::int32_t node_
   return gap;
 }
 
-bool HierarchicalGridDetector::unsplittable(std::int32_t c) const {
+bool HierarchicalGridDetector::computeUnsplittable(std::int32_t c) const {
   if (coarse_zmax_[c] - coarse_zmin_[c] < params_.min_split_height_span_m) return true;  // thin
   const int cx = coarse_cell_[c] % nc_, cy = coarse_cell_[c] / nc_;
   const double x = (cx + 0.5) * params_.coarse_cell_m + origin_m_;
@@ -198,6 +198,9 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   stats_.input_points = n;
   resetGrid();
   dense_count_.clear();
+  dense_xy_.clear();
+  dense_zmin_.clear();
+  dense_zmax_.clear();
   dense_coarse_.clear();
   coarse_zmax_.clear();
   coarse_zmin_.clear();
@@ -230,6 +233,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       slot = static_cast<std::int32_t>(dense_cell_.size());
       dense_slot_[cell] = slot;
       dense_cell_.push_back(cell);
+      dense_xy_.push_back(CellXY{ix, iy});
       dense_count_.push_back(0);
       const std::int32_t ccell = (iy / xi) * nc_ + ix / xi;
       std::int32_t cslot = coarse_slot_[ccell];
@@ -241,15 +245,22 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
         coarse_zmin_.push_back(std::numeric_limits<float>::infinity());
       }
       dense_coarse_.push_back(cslot);
+      dense_zmin_.push_back(p.z);
+      dense_zmax_.push_back(p.z);
     }
     ++dense_count_[slot];
-    const std::int32_t cslot = dense_coarse_[slot];
-    coarse_zmax_[cslot] = std::max(coarse_zmax_[cslot], p.z);
-    coarse_zmin_[cslot] = std::min(coarse_zmin_[cslot], p.z);
+    dense_zmax_[slot] = std::max(dense_zmax_[slot], p.z);
+    dense_zmin_[slot] = std::min(dense_zmin_[slot], p.z);
     point_slot_[i] = slot;
   }
   const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
   const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
+  // Heights per sub-cell, gathered to the super-cells once (fewer dependent loads per point).
+  for (std::int32_t t = 0; t < nds; ++t) {
+    const std::int32_t c = dense_coarse_[t];
+    coarse_zmax_[c] = std::max(coarse_zmax_[c], dense_zmax_[t]);
+    coarse_zmin_[c] = std::min(coarse_zmin_[c], dense_zmin_[t]);
+  }
   stats_.dense_cells = nds;
   stats_.coarse_cells = ncs;
 
@@ -279,7 +290,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   const float thr = static_cast<float>(params_.dense_min_weighted_points);
   const float dcell = static_cast<float>(dense_cell_m_);
   for (std::int32_t s = 0; s < nds; ++s) {
-    const int ix = dense_cell_[s] % nd_, iy = dense_cell_[s] / nd_;
+    const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
     const float x = (ix + 0.5f) * dcell + origin, y = (iy + 0.5f) * dcell + origin;
     dense_rho_[s] = static_cast<float>(dense_count_[s]) * weight_(std::sqrt(x * x + y * y));
     if (dense_rho_[s] >= thr) {
@@ -288,6 +299,9 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       coarse_dense_mask_[dense_coarse_[s]] |= std::uint64_t{1} << ((iy % xi) * xi + ix % xi);
     }
   }
+
+  coarse_unsplittable_.resize(ncs);
+  for (std::int32_t c = 0; c < ncs; ++c) coarse_unsplittable_[c] = computeUnsplittable(c);
 
   // Super-cell parts: a super-cell whose interior line (column or row) of sub-cells is all
   // near-empty, with dense sub-cells on both sides, is split in two (Fig. 4c).
@@ -370,7 +384,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     const std::int32_t c = dense_coarse_[s];
     std::int32_t root;
     if (params_.dense_refinement) {
-      const int ix = dense_cell_[s] % nd_, iy = dense_cell_[s] / nd_;
+      const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
       const std::uint64_t bit = std::uint64_t{1} << ((iy % xi) * xi + ix % xi);
       root = find(&node_parent_, 2 * c + ((coarse_part_mask_[2 * c + 1] & bit) ? 1 : 0));
     } else {
@@ -384,7 +398,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       dense_object_[s] = componentOf(s);
       continue;
     }
-    const int ix = dense_cell_[s] % nd_, iy = dense_cell_[s] / nd_;
+    const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
     std::int32_t best = -1;
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
@@ -399,36 +413,35 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   }
   stats_.components = ncomp;
 
-  // --- Per component: size and xy box for the filters. ---------------------------------------
+  // --- Per component: size and extent (on the sub-cells it covers) for the filters. --------
   comp_count_.assign(ncomp, 0);
   comp_box_.resize(4 * static_cast<std::size_t>(ncomp));
   for (std::int32_t c = 0; c < ncomp; ++c) {
-    comp_box_[4 * c] = comp_box_[4 * c + 1] = std::numeric_limits<float>::max();
-    comp_box_[4 * c + 2] = comp_box_[4 * c + 3] = -std::numeric_limits<float>::max();
+    comp_box_[4 * c] = comp_box_[4 * c + 1] = std::numeric_limits<std::int32_t>::max();
+    comp_box_[4 * c + 2] = comp_box_[4 * c + 3] = -1;
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int32_t s = point_slot_[i];
-    if (s < 0) continue;
+  for (std::int32_t s = 0; s < nds; ++s) {
     const std::int32_t c = dense_object_[s];
     if (c < 0) {
-      ++stats_.noise_points;
+      stats_.noise_points += dense_count_[s];
       continue;
     }
-    ++comp_count_[c];
-    const LabeledPoint& p = foreground.points[i];
-    float* box = &comp_box_[4 * static_cast<std::size_t>(c)];
-    box[0] = std::min(box[0], p.x);
-    box[1] = std::min(box[1], p.y);
-    box[2] = std::max(box[2], p.x);
-    box[3] = std::max(box[3], p.y);
+    comp_count_[c] += dense_count_[s];
+    const std::int32_t ix = dense_xy_[s].x, iy = dense_xy_[s].y;
+    std::int32_t* box = &comp_box_[4 * static_cast<std::size_t>(c)];
+    box[0] = std::min(box[0], ix);
+    box[1] = std::min(box[1], iy);
+    box[2] = std::max(box[2], ix);
+    box[3] = std::max(box[3], iy);
   }
   comp_final_.assign(ncomp, -1);
   std::size_t nobj = 0;
+  const double max_extent_cells = params_.max_extent_m / dense_cell_m_;
   for (std::int32_t c = 0; c < ncomp; ++c) {
-    const float* box = &comp_box_[4 * static_cast<std::size_t>(c)];
+    const std::int32_t* box = &comp_box_[4 * static_cast<std::size_t>(c)];
     if (comp_count_[c] < static_cast<std::uint32_t>(params_.min_points)) {
       ++stats_.dropped_small;
-    } else if (box[2] - box[0] > params_.max_extent_m || box[3] - box[1] > params_.max_extent_m) {
+    } else if (box[2] - box[0] + 1 > max_extent_cells || box[3] - box[1] + 1 > max_extent_cells) {
       ++stats_.dropped_large;
     } else {
       comp_final_[c] = static_cast<std::int32_t>(nobj++);
@@ -436,30 +449,35 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   }
   stats_.objects = nobj;
 
-  // --- Output: resize (not clear) so the index vectors keep their capacity between frames. --
+  // --- Output. One pass scatters every point to its object (a counting sort into one flat
+  // position array); the objects vector is resized, not cleared, so the index vectors keep
+  // their capacity between frames. ----------------------------------------------------------
   objects->resize(nobj);
-  if (positions_.size() < nobj) positions_.resize(nobj);
-  for (std::size_t k = 0; k < nobj; ++k) {
-    positions_[k].clear();
-    (*objects)[k].indices.clear();
-  }
+  object_begin_.assign(nobj + 1, 0);
   for (std::int32_t c = 0; c < ncomp; ++c) {
-    if (comp_final_[c] >= 0) positions_[comp_final_[c]].reserve(comp_count_[c]);
+    if (comp_final_[c] >= 0) object_begin_[comp_final_[c] + 1] = comp_count_[c];
+  }
+  for (std::size_t k = 0; k < nobj; ++k) {
+    object_begin_[k + 1] += object_begin_[k];
+    (*objects)[k].indices.resize(object_begin_[k + 1] - object_begin_[k]);
+  }
+  positions_.resize(object_begin_[nobj]);
+  cursor_.assign(object_begin_.begin(), object_begin_.end() - 1);
+  for (std::int32_t s = 0; s < nds; ++s) {
+    dense_object_[s] = dense_object_[s] < 0 ? -1 : comp_final_[dense_object_[s]];
   }
   for (std::size_t i = 0; i < n; ++i) {
     const std::int32_t s = point_slot_[i];
-    if (s < 0 || dense_object_[s] < 0) continue;
-    const std::int32_t k = comp_final_[dense_object_[s]];
-    if (k >= 0) positions_[k].push_back(static_cast<std::uint32_t>(i));
+    if (s < 0) continue;
+    const std::int32_t k = dense_object_[s];
+    if (k < 0) continue;
+    positions_[cursor_[k]++] = static_cast<std::uint32_t>(i);
   }
   for (std::size_t k = 0; k < nobj; ++k) {
     DetectedObject& obj = (*objects)[k];
     obj.id = static_cast<std::uint32_t>(k + 1);
-    obj.indices.reserve(positions_[k].size());
-    for (const std::uint32_t pos : positions_[k]) {
-      obj.indices.push_back(foreground.points[pos].index);
-    }
-    geometry_.compute(foreground, positions_[k], &obj);
+    geometry_.compute(foreground, positions_.data() + object_begin_[k],
+                      object_begin_[k + 1] - object_begin_[k], &obj, obj.indices.data());
   }
 }
 

@@ -71,13 +71,12 @@ void KdTreeDetector::detect(const LabeledCloud& foreground, std::vector<Detected
     if (c.indices.empty()) continue;
     positions_.assign(c.indices.begin(), c.indices.end());
     DetectedObject obj;
-    geometry_.compute(foreground, positions_, &obj);
+    obj.indices.resize(positions_.size());
+    geometry_.compute(foreground, positions_.data(), positions_.size(), &obj, obj.indices.data());
     if (obj.max_pt.x() - obj.min_pt.x() > params_.max_extent_m ||
         obj.max_pt.y() - obj.min_pt.y() > params_.max_extent_m) {
       continue;
     }
-    obj.indices.reserve(positions_.size());
-    for (const std::uint32_t pos : positions_) obj.indices.push_back(foreground.points[pos].index);
     obj.id = static_cast<std::uint32_t>(objects->size() + 1);
     objects->push_back(std::move(obj));
   }

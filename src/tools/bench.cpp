@@ -12,6 +12,7 @@
 // packets is its "packet_decode" stage.
 #include <sched.h>
 #include <sys/resource.h>
+#include <time.h>
 
 #include <algorithm>
 #include <chrono>
@@ -47,6 +48,32 @@ namespace {
 double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
+
+double threadCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+// Wall and thread-CPU time of one stage. On a machine shared with other jobs the wall time
+// includes time the thread waited for the core; the CPU time does not.
+class StageTimer {
+ public:
+  StageTimer() : wall_(Clock::now()), cpu_(threadCpuMs()) {}
+  void stop(const std::string& name, std::map<std::string, std::vector<double>>* wall,
+            std::map<std::string, std::vector<double>>* cpu, double* wall_total = nullptr,
+            double* cpu_total = nullptr) const {
+    const double w = msSince(wall_), c = threadCpuMs() - cpu_;
+    (*wall)[name].push_back(w);
+    (*cpu)[name].push_back(c);
+    if (wall_total) *wall_total += w;
+    if (cpu_total) *cpu_total += c;
+  }
+
+ private:
+  Clock::time_point wall_;
+  double cpu_;
+};
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return std::nan("");
@@ -86,9 +113,9 @@ std::string jsonEscape(const std::string& s) {
 class Source {
  public:
   virtual ~Source() = default;
-  /// Next revolution into `cloud`; `decode_ms` is the decode time (negative: no packets).
-  /// Returns false at the end.
-  virtual bool next(CloudXYZIRT* cloud, double* decode_ms) = 0;
+  /// Next revolution into `cloud`; `decode_ms` / `decode_cpu_ms` are the wall / thread-CPU
+  /// decode time (negative: no packets). Returns false at the end.
+  virtual bool next(CloudXYZIRT* cloud, double* decode_ms, double* decode_cpu_ms) = 0;
   virtual void rewind() = 0;
   virtual std::string describe() const = 0;
 };
@@ -97,13 +124,14 @@ class FileSource : public Source {
  public:
   FileSource(const std::string& dir, std::vector<std::string> files, bool pcd)
       : dir_(dir), files_(std::move(files)), pcd_(pcd) {}
-  bool next(CloudXYZIRT* cloud, double* decode_ms) override {
+  bool next(CloudXYZIRT* cloud, double* decode_ms, double* decode_cpu_ms) override {
     while (pos_ < files_.size()) {
       std::string err;
       const std::string& f = files_[pos_++];
       const bool ok = pcd_ ? core::readPcdXyzi(f, cloud, &err) : core::readKittiBin(f, cloud, &err);
       if (ok) {
         *decode_ms = -1.0;
+        *decode_cpu_ms = -1.0;
         return true;
       }
       std::fprintf(stderr, "warning: skipping %s: %s\n", f.c_str(), err.c_str());
@@ -127,11 +155,11 @@ class PcapSource : public Source {
  public:
   PcapSource(const std::string& path, const core::Calibration& calib)
       : path_(path), reader_(path), decoder_(calib, core::DecoderParams()) {}
-  bool next(CloudXYZIRT* cloud, double* decode_ms) override {
+  bool next(CloudXYZIRT* cloud, double* decode_ms, double* decode_cpu_ms) override {
     // Packets are read ahead by one: the packet that starts the next revolution is kept. The
     // first, partial revolution of the stream is dropped, as the driver does.
     cloud->clear();
-    double ms = 0.0;
+    double ms = 0.0, cpu_ms = 0.0;
     bool started = have_pending_;
     while (true) {
       if (have_pending_) {
@@ -151,6 +179,7 @@ class PcapSource : public Source {
           if (started) {
             have_pending_ = true;
             *decode_ms = ms;
+            *decode_cpu_ms = cpu_ms;
             return true;
           }
           started = true;
@@ -160,9 +189,11 @@ class PcapSource : public Source {
       }
       if (cloud->empty()) rev_start_s_ = packet_.stamp_s;
       const auto t0 = Clock::now();
+      const double c0 = threadCpuMs();
       decoder_.decode(packet_.data.data(), packet_.data.size(), packet_.stamp_s - rev_start_s_,
                       cloud, &stats_);
       ms += msSince(t0);
+      cpu_ms += threadCpuMs() - c0;
     }
     return false;
   }
@@ -300,8 +331,8 @@ int main(int argc, char** argv) {
   }
   core::HoughWallRefiner hough(seg_params.hough);
 
-  std::map<std::string, std::vector<double>> stage;
-  std::vector<double> pipeline;
+  std::map<std::string, std::vector<double>> stage, cpu_stage;  // wall and thread-CPU ms
+  std::vector<double> pipeline, pipeline_cpu;
   double points_sum = 0, fg_sum = 0, hier_obj_sum = 0, kd_obj_sum = 0;
   CloudXYZIRT cloud;
   std::vector<core::SegmentClass> labels, labels_no_hough;
@@ -314,49 +345,47 @@ int main(int argc, char** argv) {
     for (auto& src : sources) {
       src->rewind();
       long taken = 0;
-      double decode_ms;
-      while ((max_frames < 0 || taken < max_frames) && src->next(&cloud, &decode_ms)) {
+      double decode_ms, decode_cpu_ms;
+      while ((max_frames < 0 || taken < max_frames) &&
+             src->next(&cloud, &decode_ms, &decode_cpu_ms)) {
         ++taken;
-        double total = 0.0;
+        double total = 0.0, total_cpu = 0.0;
         if (decode_ms >= 0.0) {
           any_packets = true;
           stage["packet_decode"].push_back(decode_ms);
+          cpu_stage["packet_decode"].push_back(decode_cpu_ms);
           total += decode_ms;
+          total_cpu += decode_cpu_ms;
         }
-        auto t = Clock::now();
+        StageTimer seg_t;
         segmenter->segment(cloud, &labels);
-        double ms = msSince(t);
-        stage["segmentation"].push_back(ms);
-        total += ms;
+        seg_t.stop("segmentation", &stage, &cpu_stage, &total, &total_cpu);
 
-        t = Clock::now();
+        StageTimer fg_t;
         core::extractForeground(cloud, labels, &foreground);
-        ms = msSince(t);
-        stage["foreground_extraction"].push_back(ms);
-        total += ms;
+        fg_t.stop("foreground_extraction", &stage, &cpu_stage, &total, &total_cpu);
 
-        t = Clock::now();
+        StageTimer hier_t;
         hier->detect(foreground, &objects);
-        ms = msSince(t);
-        stage["hierarchical_detection"].push_back(ms);
-        total += ms;
+        hier_t.stop("hierarchical_detection", &stage, &cpu_stage, &total, &total_cpu);
         hier_obj_sum += objects.size();
         pipeline.push_back(total);
+        pipeline_cpu.push_back(total_cpu);
 
         // Not part of the pipeline: the baseline on the same foreground, and the Hough
         // refinement alone (it runs inside segment(); timed here on the same frame's cell
         // classes before refinement).
-        t = Clock::now();
+        StageTimer kd_t;
         kdtree->detect(foreground, &objects);
-        stage["kdtree_detection"].push_back(msSince(t));
+        kd_t.stop("kdtree_detection", &stage, &cpu_stage);
         kd_obj_sum += objects.size();
 
         segmenter_no_hough->segment(cloud, &labels_no_hough);
         cells = segmenter_no_hough->cellClasses();
         const auto& g = segmenter_no_hough->grid();
-        t = Clock::now();
+        StageTimer hough_t;
         hough.refine(g.rows(), g.cols(), seg_params.cell_size_m, &cells);
-        stage["hough_refinement"].push_back(msSince(t));
+        hough_t.stop("hough_refinement", &stage, &cpu_stage);
 
         points_sum += cloud.size();
         fg_sum += foreground.size();
@@ -379,6 +408,10 @@ int main(int argc, char** argv) {
   for (double v : pipeline) pipeline_sum += v;
   const double pipeline_median = median(pipeline);
   const double pipeline_fps = 1000.0 * static_cast<double>(pipeline.size()) / pipeline_sum;
+  double pipeline_cpu_sum = 0;
+  for (double v : pipeline_cpu) pipeline_cpu_sum += v;
+  const double pipeline_cpu_fps =
+      1000.0 * static_cast<double>(pipeline_cpu.size()) / pipeline_cpu_sum;
   const double speedup = median(stage["kdtree_detection"]) /
                          median(stage["hierarchical_detection"]);
 
@@ -391,21 +424,21 @@ int main(int argc, char** argv) {
               "per revolution; %d CPU(s) allowed\n",
               points_sum / frames, fg_sum / frames, hier_obj_sum / frames, kd_obj_sum / frames,
               cpus);
-  std::printf("  %-24s %10s %10s\n", "stage", "median_ms", "p95_ms");
+  std::printf("  %-24s %10s %10s %14s\n", "stage", "median_ms", "p95_ms", "cpu_median_ms");
   for (const char* name : order) {
     auto it = stage.find(name);
     if (it == stage.end()) continue;
-    std::printf("  %-24s %10.3f %10.3f%s\n", name, median(it->second),
-                percentile(it->second, 0.95),
+    std::printf("  %-24s %10.3f %10.3f %14.3f%s\n", name, median(it->second),
+                percentile(it->second, 0.95), median(cpu_stage[name]),
                 std::string(name) == "hough_refinement" ? "  (inside segmentation)"
                 : std::string(name) == "kdtree_detection" ? "  (baseline, not in pipeline)"
                                                           : "");
   }
-  std::printf("  %-24s %10.3f %10.3f  (%s-> hierarchical objects)\n", "pipeline",
-              pipeline_median, percentile(pipeline, 0.95),
+  std::printf("  %-24s %10.3f %10.3f %14.3f  (%s-> hierarchical objects)\n", "pipeline",
+              pipeline_median, percentile(pipeline, 0.95), median(pipeline_cpu),
               any_packets ? "packets " : "cloud ");
-  std::printf("  pipeline_fps %.1f   hier_vs_kdtree_speedup %.1fx   peak_rss %.1f MB\n",
-              pipeline_fps, speedup, peak_mb);
+  std::printf("  pipeline_fps %.1f (cpu-time fps %.1f)   hier_vs_kdtree_speedup %.1fx   "
+              "peak_rss %.1f MB\n", pipeline_fps, pipeline_cpu_fps, speedup, peak_mb);
 
   if (!json_path.empty()) {
     std::ofstream out(json_path);
@@ -427,12 +460,15 @@ int main(int argc, char** argv) {
       if (it == stage.end()) continue;
       out << (first ? "\n" : ",\n") << "    \"" << name << "\": {\"median_ms\": "
           << num(median(it->second)) << ", \"p95_ms\": " << num(percentile(it->second, 0.95))
-          << "}";
+          << ", \"cpu_median_ms\": " << num(median(cpu_stage[name]))
+          << ", \"cpu_p95_ms\": " << num(percentile(cpu_stage[name], 0.95)) << "}";
       first = false;
     }
     out << "\n  },\n  \"pipeline_median_ms\": " << num(pipeline_median)
         << ",\n  \"pipeline_p95_ms\": " << num(percentile(pipeline, 0.95))
+        << ",\n  \"pipeline_cpu_median_ms\": " << num(median(pipeline_cpu))
         << ",\n  \"pipeline_fps\": " << num(pipeline_fps)
+        << ",\n  \"pipeline_cpu_fps\": " << num(pipeline_cpu_fps)
         << ",\n  \"hier_vs_kdtree_speedup\": " << num(speedup)
         << ",\n  \"peak_rss_mb\": " << num(peak_mb) << "\n}\n";
     if (!out) {

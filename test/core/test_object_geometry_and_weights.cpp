@@ -3,6 +3,7 @@
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -91,6 +92,69 @@ TEST(ObjectGeometry, YawIsNormalisedAndDegenerateCasesAreSafe) {
   EXPECT_NEAR(o.obb_yaw_rad, M_PI / 4, 1e-5);
   g.compute(line, {}, &o);
   EXPECT_EQ(o.centroid, Eigen::Vector3f::Zero());
+}
+
+// Brute force: every hull edge direction, all vertices projected (the O(n^2) definition).
+double bruteMinArea(const std::vector<Eigen::Vector2f>& hull) {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < hull.size(); ++i) {
+    const Eigen::Vector2f e = hull[(i + 1) % hull.size()] - hull[i];
+    if (e.norm() == 0.0f) continue;
+    const Eigen::Vector2f u = e.normalized(), v(-u.y(), u.x());
+    float a0 = 1e9f, a1 = -1e9f, b0 = 1e9f, b1 = -1e9f;
+    for (const auto& q : hull) {
+      a0 = std::min(a0, q.dot(u));
+      a1 = std::max(a1, q.dot(u));
+      b0 = std::min(b0, q.dot(v));
+      b1 = std::max(b1, q.dot(v));
+    }
+    best = std::min(best, static_cast<double>(a1 - a0) * (b1 - b0));
+  }
+  return best;
+}
+
+TEST(ObjectGeometry, CalipersAndColumnHullMatchBruteForceOnRandomClouds) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int trial = 0; trial < 200; ++trial) {
+    // Random anisotropic, rotated blobs of 5..400 points up to ~6 m long.
+    const int n = 5 + trial * 2;
+    const float sx = 0.2f + 3.0f * std::fabs(u(rng)), sy = 0.1f + 1.0f * std::fabs(u(rng));
+    const float r = 3.14159f * u(rng);
+    LabeledCloud cloud;
+    std::vector<Eigen::Vector2f> all;
+    for (int i = 0; i < n; ++i) {
+      const float a = sx * u(rng), b = sy * u(rng);
+      const float x = 20.0f + a * std::cos(r) - b * std::sin(r);
+      const float y = -5.0f + a * std::sin(r) + b * std::cos(r);
+      test::addPoint(&cloud, x, y, u(rng), 1);
+      all.emplace_back(x, y);
+    }
+    std::vector<Eigen::Vector2f> exact_hull;
+    core::convexHull2d(&all, &exact_hull);
+    Eigen::Vector2f c, s;
+    float yaw;
+    core::minAreaRectangle(exact_hull, &c, &s, &yaw);
+    EXPECT_NEAR(static_cast<double>(s.x()) * s.y(), bruteMinArea(exact_hull), 1e-4)
+        << "trial " << trial;
+    // The detectors' geometry (column hull, 5 cm tolerance) gives nearly the same box.
+    std::vector<std::uint32_t> pos(n);
+    for (int i = 0; i < n; ++i) pos[i] = i;
+    core::ObjectGeometry g;
+    core::DetectedObject o;
+    g.compute(cloud, pos, &o);
+    EXPECT_NEAR(o.obb_size.x(), s.x(), 2 * core::ObjectGeometry::kHullTolerance) << trial;
+    EXPECT_NEAR(o.obb_size.y(), s.y(), 2 * core::ObjectGeometry::kHullTolerance) << trial;
+    EXPECT_LE(o.obb_size.x() * o.obb_size.y(), s.x() * s.y() + 1e-4) << trial;
+  }
+  // All points coincident: a zero box at the point.
+  LabeledCloud same;
+  for (int i = 0; i < 6; ++i) test::addPoint(&same, 3.0f, 4.0f, 1.0f, 1);
+  core::ObjectGeometry g;
+  core::DetectedObject o;
+  g.compute(same, {0, 1, 2, 3, 4, 5}, &o);
+  EXPECT_EQ(o.obb_size, Eigen::Vector3f::Zero());
+  EXPECT_TRUE(o.obb_center.isApprox(Eigen::Vector3f(3.0f, 4.0f, 1.0f)));
 }
 
 TEST(DistanceWeight, FitRecoversAKnownSixthDegreePolynomial) {

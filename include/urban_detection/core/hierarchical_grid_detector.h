@@ -65,8 +65,8 @@
 ///  4. The points of a near-empty sub-cell join the object of the densest dense 8-neighbour
 ///     sub-cell that it may connect to (same or linked super-cell); near-empty sub-cells with no
 ///     such neighbour are noise and their points are in no object.
-///  5. Objects with fewer than `min_points` points or whose axis-aligned xy box has a side
-///     longer than `max_extent_m` are dropped. Ids are 1..N in the order of the objects' first
+///  5. Objects with fewer than `min_points` points or whose sub-cells span more than
+///     `max_extent_m` along x or y are dropped. Ids are 1..N in the order of the objects' first
 ///     point in the input cloud.
 ///
 /// Non-finite points, points outside the grid and points with |z| > max_abs_z_m are ignored
@@ -142,7 +142,8 @@ class HierarchicalGridDetector : public ObjectDetector {
  private:
   int find(std::vector<std::int32_t>* parent, std::int32_t i) const;
   bool linked(std::int32_t coarse_a, std::int32_t coarse_b) const;
-  bool unsplittable(std::int32_t coarse) const;  // thin or beyond max_split_range_m
+  bool computeUnsplittable(std::int32_t coarse) const;  // thin or beyond max_split_range_m
+  bool unsplittable(std::int32_t coarse) const { return coarse_unsplittable_[coarse] != 0; }
   int gapBetween(std::int32_t node_a, std::int32_t node_b, int dx, int dy) const;
   bool spansTouch(std::uint64_t part_a, std::uint64_t part_b, int dx, int dy) const;
   void resetGrid();
@@ -171,16 +172,22 @@ class HierarchicalGridDetector : public ObjectDetector {
   std::vector<std::int32_t> dense_slot_;   // nd_ * nd_
   std::vector<std::int32_t> coarse_slot_;  // nc_ * nc_
   // Per touched sub-cell (slot).
+  struct CellXY {
+    std::int32_t x, y;
+  };
   std::vector<std::int32_t> dense_cell_;    // flat grid index
+  std::vector<CellXY> dense_xy_;            // grid column and row
   std::vector<std::uint32_t> dense_count_;  // points
   std::vector<std::int32_t> dense_coarse_;  // slot of its super-cell
   std::vector<std::uint8_t> dense_occupied_;
   std::vector<float> dense_rho_;            // weighted density
+  std::vector<float> dense_zmin_, dense_zmax_;  // [m] height range of its points
   std::vector<std::int32_t> dense_object_;  // object index or -1
   // Per touched super-cell (slot).
   std::vector<std::int32_t> coarse_cell_;
   std::vector<float> coarse_zmax_;
   std::vector<float> coarse_zmin_;
+  std::vector<std::uint8_t> coarse_unsplittable_;
   std::vector<std::int32_t> coarse_parent_;        // union-find of the coarse level
   std::vector<std::uint64_t> coarse_dense_mask_;   // dense sub-cells (bit ly * xi + lx)
   std::vector<std::uint64_t> coarse_part_mask_;    // 2 per super-cell: sub-cells of part 0, 1
@@ -191,9 +198,11 @@ class HierarchicalGridDetector : public ObjectDetector {
   // Per component.
   std::vector<std::int32_t> root_object_;  // per dense slot root -> component index
   std::vector<std::uint32_t> comp_count_;
-  std::vector<float> comp_box_;            // min x, min y, max x, max y per component
+  std::vector<std::int32_t> comp_box_;     // sub-cell min x, min y, max x, max y per component
   std::vector<std::int32_t> comp_final_;   // component -> output object index or -1
-  std::vector<std::vector<std::uint32_t>> positions_;  // per output object: cloud positions
+  std::vector<std::uint32_t> positions_;     // cloud positions, grouped by output object
+  std::vector<std::uint32_t> object_begin_;  // object k: positions_[begin[k], begin[k + 1])
+  std::vector<std::uint32_t> cursor_;
 };
 
 }  // namespace core

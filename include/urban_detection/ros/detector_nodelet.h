@@ -1,0 +1,44 @@
+/// \file detector_nodelet.h
+/// The code shared by the detector nodelets (HierarchicalGridDetector, KdTreeDetector):
+/// segmentation/foreground -> objects (DetectedObjectArray) and objects/points (LabeledCloud,
+/// label = object id). Lazy (subscribes upstream only while an output has subscribers) and
+/// zero copy (fresh boost::shared_ptr per frame, never touched after publishing). A derived
+/// nodelet only builds its core::ObjectDetector from its parameters.
+#pragma once
+
+#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <boost/shared_ptr.hpp>
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+
+#include "urban_detection/core/object_detector.h"
+
+namespace urban_detection {
+
+class DetectorNodelet : public nodelet::Nodelet {
+ protected:
+  /// Loads the parameters from `pnh` and builds the detector; throws (ParamError,
+  /// std::invalid_argument) with a message naming the bad parameter.
+  virtual std::unique_ptr<core::ObjectDetector> createDetector(const ros::NodeHandle& pnh) = 0;
+
+ private:
+  void onInit() final;
+  void connectCb();
+  void foregroundCb(const boost::shared_ptr<const LabeledCloud>& foreground);  // zero copy
+
+  std::unique_ptr<core::ObjectDetector> detector_;
+  std::vector<core::DetectedObject> objects_;  // reused between frames
+  std::unordered_map<std::uint32_t, std::uint32_t> id_of_index_;
+  std::mutex connect_mutex_;
+  ros::Publisher objects_pub_, points_pub_;
+  ros::Subscriber sub_;
+};
+
+}  // namespace urban_detection

@@ -1,0 +1,59 @@
+#include "urban_detection/ros/detection_params.h"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace urban_detection {
+namespace ros_conv {
+namespace {
+
+void throwIfInvalid(const ros::NodeHandle& nh, const std::string& error) {
+  if (!error.empty()) throw ParamError("in " + nh.getNamespace() + ": " + error);
+}
+
+}  // namespace
+
+void loadHierarchicalGridParams(const ros::NodeHandle& nh,
+                                core::HierarchicalGridDetectorParams* p) {
+  loadParam(nh, "coarse_cell_m", &p->coarse_cell_m, 0.05, 10.0, "m");
+  loadParam(nh, "xi", &p->xi, 1, 8);
+  loadParam(nh, "grid_half_extent_m", &p->grid_half_extent_m, 1.0, 500.0, "m");
+  loadParam(nh, "max_abs_z_m", &p->max_abs_z_m, 0.1, 1000.0, "m");
+  loadParam(nh, "psi_max_m", &p->psi_max_m, 0.0, 100.0, "m");
+  loadParam(nh, "min_split_height_span_m", &p->min_split_height_span_m, 0.0, 10.0, "m");
+  loadParam(nh, "max_split_range_m", &p->max_split_range_m, 0.0, 1000.0, "m");
+  loadParam(nh, "min_gap_subcells", &p->min_gap_subcells, 1, 16);
+  loadParam(nh, "dense_min_weighted_points", &p->dense_min_weighted_points, 0.0, 1e6);
+  loadParam(nh, "dense_refinement", &p->dense_refinement);
+  loadParam(nh, "min_points", &p->min_points, 1, 1000000);
+  loadParam(nh, "max_extent_m", &p->max_extent_m, 0.1, 1000.0, "m");
+  const ros::NodeHandle w(nh, "weight");
+  loadParam(w, "enabled", &p->weight.enabled);
+  loadParam(w, "log_fit", &p->weight.log_fit);
+  if (w.hasParam("coefficients")) {
+    std::vector<double> c;
+    if (!w.getParam("coefficients", c) || c.empty() || c.size() > 16) {
+      throw ParamError("parameter '" + w.resolveName("coefficients") +
+                       "' must be a list of 1..16 numbers");
+    }
+    for (const double v : c) checkRange(w.resolveName("coefficients"), v, -1e12, 1e12);
+    p->weight.coefficients = c;
+  }
+  loadParam(w, "full_density_distance_m", &p->weight.full_density_distance_m, 0.0, 1000.0, "m");
+  loadParam(w, "max_distance_m", &p->weight.max_distance_m, 0.1, 1000.0, "m");
+  loadParam(w, "max_weight", &p->weight.max_weight, 1.0, 1e6);
+  throwIfInvalid(nh, core::validate(*p));
+}
+
+void loadKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorParams* p) {
+  loadParam(nh, "cluster_tolerance_m", &p->cluster_tolerance_m, 0.01, 10.0, "m");
+  loadParam(nh, "min_cluster_size", &p->min_cluster_size, 1, 100000000);
+  loadParam(nh, "max_cluster_size", &p->max_cluster_size, 1, 100000000);
+  loadParam(nh, "max_extent_m", &p->max_extent_m, 0.1, 1000.0, "m");
+  loadParam(nh, "max_abs_coordinate_m", &p->max_abs_coordinate_m, 1.0, 1e5, "m");
+  throwIfInvalid(nh, core::validate(*p));
+}
+
+}  // namespace ros_conv
+}  // namespace urban_detection

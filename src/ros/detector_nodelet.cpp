@@ -1,0 +1,58 @@
+#include "urban_detection/ros/detector_nodelet.h"
+
+#include <boost/make_shared.hpp>
+#include <pcl_conversions/pcl_conversions.h>
+#include <pcl_ros/point_cloud.h>
+
+#include "urban_detection/DetectedObjectArray.h"
+#include "urban_detection/ros/object_conversions.h"
+
+namespace urban_detection {
+
+void DetectorNodelet::onInit() {
+  ros::NodeHandle& nh = getNodeHandle();
+  try {
+    detector_ = createDetector(getPrivateNodeHandle());
+  } catch (const std::exception& e) {
+    NODELET_FATAL("%s: %s; the nodelet stays idle", getName().c_str(), e.what());
+    return;
+  }
+  ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
+    connectCb();
+  };
+  std::lock_guard<std::mutex> lock(connect_mutex_);
+  objects_pub_ = nh.advertise<DetectedObjectArray>("objects", 2, connect, connect);
+  points_pub_ = nh.advertise<LabeledCloud>("objects/points", 2, connect, connect);
+  NODELET_INFO("%s: %s detector ready", getName().c_str(), detector_->name().c_str());
+}
+
+void DetectorNodelet::connectCb() {
+  std::lock_guard<std::mutex> lock(connect_mutex_);
+  const bool wanted = objects_pub_.getNumSubscribers() > 0 || points_pub_.getNumSubscribers() > 0;
+  if (wanted && !sub_) {
+    sub_ = getNodeHandle().subscribe("segmentation/foreground", 2,
+                                     &DetectorNodelet::foregroundCb, this);
+  } else if (!wanted && sub_) {
+    sub_.shutdown();
+  }
+}
+
+void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& foreground) {
+  detector_->detect(*foreground, &objects_);
+  std_msgs::Header header;
+  pcl_conversions::fromPCL(foreground->header, header);
+  if (objects_pub_.getNumSubscribers() > 0) {
+    auto msg = boost::make_shared<DetectedObjectArray>();
+    ros_conv::toMsg(objects_, detector_->name(), header, msg.get());
+    objects_pub_.publish(boost::shared_ptr<const DetectedObjectArray>(msg));
+  }
+  if (points_pub_.getNumSubscribers() > 0) {
+    auto points = boost::make_shared<LabeledCloud>();
+    ros_conv::buildObjectPoints(*foreground, objects_, points.get(), &id_of_index_);
+    points_pub_.publish(boost::shared_ptr<const LabeledCloud>(points));
+  }
+  NODELET_DEBUG_THROTTLE(5.0, "%s: %zu foreground points -> %zu objects", getName().c_str(),
+                         foreground->size(), objects_.size());
+}
+
+}  // namespace urban_detection

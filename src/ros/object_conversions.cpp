@@ -1,0 +1,72 @@
+#include "urban_detection/ros/object_conversions.h"
+
+#include <cmath>
+
+namespace urban_detection {
+namespace ros_conv {
+
+void toMsg(const core::DetectedObject& o, DetectedObject* m) {
+  m->id = o.id;
+  m->point_count = static_cast<std::uint32_t>(o.indices.size());
+  m->centroid.x = o.centroid.x();
+  m->centroid.y = o.centroid.y();
+  m->centroid.z = o.centroid.z();
+  const Eigen::Vector3f c = 0.5f * (o.min_pt + o.max_pt), d = o.max_pt - o.min_pt;
+  m->aabb_pose.position.x = c.x();
+  m->aabb_pose.position.y = c.y();
+  m->aabb_pose.position.z = c.z();
+  m->aabb_pose.orientation.x = m->aabb_pose.orientation.y = m->aabb_pose.orientation.z = 0.0;
+  m->aabb_pose.orientation.w = 1.0;
+  m->aabb_dimensions.x = d.x();
+  m->aabb_dimensions.y = d.y();
+  m->aabb_dimensions.z = d.z();
+  m->obb_pose.position.x = o.obb_center.x();
+  m->obb_pose.position.y = o.obb_center.y();
+  m->obb_pose.position.z = o.obb_center.z();
+  // Rotation about z by yaw: q = (0, 0, sin(yaw/2), cos(yaw/2)).
+  m->obb_pose.orientation.x = m->obb_pose.orientation.y = 0.0;
+  m->obb_pose.orientation.z = std::sin(0.5 * o.obb_yaw_rad);
+  m->obb_pose.orientation.w = std::cos(0.5 * o.obb_yaw_rad);
+  m->obb_dimensions.x = o.obb_size.x();
+  m->obb_dimensions.y = o.obb_size.y();
+  m->obb_dimensions.z = o.obb_size.z();
+  m->indices.assign(o.indices.begin(), o.indices.end());
+  m->class_label = kUnknownClass;
+  m->class_confidence = 0.0f;
+}
+
+void toMsg(const std::vector<core::DetectedObject>& objects, const std::string& detector,
+           const std_msgs::Header& header, DetectedObjectArray* msg) {
+  msg->header = header;
+  msg->detector = detector;
+  msg->objects.resize(objects.size());
+  for (std::size_t i = 0; i < objects.size(); ++i) toMsg(objects[i], &msg->objects[i]);
+}
+
+void buildObjectPoints(const LabeledCloud& foreground,
+                       const std::vector<core::DetectedObject>& objects, LabeledCloud* out,
+                       std::unordered_map<std::uint32_t, std::uint32_t>* id_of_index) {
+  out->header = foreground.header;
+  out->points.clear();
+  id_of_index->clear();
+  std::size_t n = 0;
+  for (const core::DetectedObject& o : objects) n += o.indices.size();
+  id_of_index->reserve(n);
+  for (const core::DetectedObject& o : objects) {
+    for (const std::uint32_t i : o.indices) (*id_of_index)[i] = o.id;
+  }
+  out->points.reserve(n);
+  for (const LabeledPoint& p : foreground.points) {
+    const auto it = id_of_index->find(p.index);
+    if (it == id_of_index->end()) continue;
+    LabeledPoint q = p;
+    q.label = it->second;
+    out->points.push_back(q);
+  }
+  out->width = static_cast<std::uint32_t>(out->points.size());
+  out->height = 1;
+  out->is_dense = foreground.is_dense;
+}
+
+}  // namespace ros_conv
+}  // namespace urban_detection

@@ -1,0 +1,71 @@
+#include "urban_detection/ros/object_markers.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace urban_detection {
+namespace ros_conv {
+
+std_msgs::ColorRGBA colourForId(std::uint32_t id, double alpha) {
+  const double h = std::fmod(id * 0.6180339887498949, 1.0) * 6.0;  // hue sector [0, 6)
+  const double s = 0.85, v = 0.95;
+  const double c = v * s, x = c * (1.0 - std::fabs(std::fmod(h, 2.0) - 1.0)), m = v - c;
+  double r = 0, g = 0, b = 0;
+  switch (static_cast<int>(h)) {
+    case 0: r = c; g = x; break;
+    case 1: r = x; g = c; break;
+    case 2: g = c; b = x; break;
+    case 3: g = x; b = c; break;
+    case 4: r = x; b = c; break;
+    default: r = c; b = x; break;
+  }
+  std_msgs::ColorRGBA col;
+  col.r = static_cast<float>(r + m);
+  col.g = static_cast<float>(g + m);
+  col.b = static_cast<float>(b + m);
+  col.a = static_cast<float>(alpha);
+  return col;
+}
+
+void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerParams& params,
+                        visualization_msgs::MarkerArray* markers) {
+  markers->markers.clear();
+  markers->markers.reserve(1 + objects.objects.size() * (params.show_ids ? 2 : 1));
+  visualization_msgs::Marker clear;
+  clear.header = objects.header;
+  clear.action = visualization_msgs::Marker::DELETEALL;
+  markers->markers.push_back(clear);
+  for (const DetectedObject& o : objects.objects) {
+    visualization_msgs::Marker box;
+    box.header = objects.header;
+    box.ns = "objects";
+    box.id = static_cast<int>(o.id);
+    box.type = visualization_msgs::Marker::CUBE;
+    box.action = visualization_msgs::Marker::ADD;
+    box.pose = o.obb_pose;
+    box.scale.x = std::max(o.obb_dimensions.x, params.min_box_size_m);
+    box.scale.y = std::max(o.obb_dimensions.y, params.min_box_size_m);
+    box.scale.z = std::max(o.obb_dimensions.z, params.min_box_size_m);
+    box.color = colourForId(o.id, params.box_alpha);
+    markers->markers.push_back(box);
+    if (!params.show_ids) continue;
+    visualization_msgs::Marker text;
+    text.header = objects.header;
+    text.ns = "object_ids";
+    text.id = static_cast<int>(o.id);
+    text.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+    text.action = visualization_msgs::Marker::ADD;
+    text.pose.position = o.obb_pose.position;
+    text.pose.position.z += 0.5 * box.scale.z + 0.6 * params.text_size_m;
+    text.pose.orientation.w = 1.0;
+    text.scale.z = params.text_size_m;
+    text.color.r = text.color.g = text.color.b = text.color.a = 1.0f;
+    text.text = std::to_string(o.id);
+    if (!o.class_label.empty() && o.class_label != "unknown") text.text += " " + o.class_label;
+    markers->markers.push_back(text);
+  }
+}
+
+}  // namespace ros_conv
+}  // namespace urban_detection
