@@ -31,13 +31,14 @@ import rosbag
 import roslib.packages
 import rospy
 import rostest
-from urban_detection.msg import DetectedObjectArray, GroundTruth
+from urban_detection.msg import DetectedObjectArray
 
 PKG = 'urban_detection'
 MIN_RATE_HZ = 9.0
 # Ground-truth classes the detectors must find: short street objects (GroundTruth constants).
-OBJECT_CLASSES = {GroundTruth.CAR, GroundTruth.VAN, GroundTruth.PEDESTRIAN, GroundTruth.CYCLIST,
-                  GroundTruth.BIN, GroundTruth.BENCH}
+# (urban_detection/GroundTruth constants CAR 7, VAN 8, PEDESTRIAN 9, CYCLIST 10, BIN 11, BENCH 12;
+# the bag's own message definition is used to read it.)
+OBJECT_CLASSES = {7, 8, 9, 10, 11, 12}
 MIN_GT_POINTS = 20    # a ground-truth object with fewer points is not expected to be found
 
 
