@@ -37,10 +37,13 @@ UdpReceiver::UdpReceiver(const UdpReceiverParams& params) {
   // No SO_REUSEADDR: on Linux it lets several UDP sockets bind one port, and only one of them
   // would get each packet. A second receiver on the port must fail loudly instead. (UDP has no
   // TIME_WAIT, so a restarted node rebinds at once without it.)
-  // A revolution is ~350 packets (~420 kB) at 600 rpm; a large buffer absorbs scheduling
-  // hiccups of the reading thread. The kernel caps the request at net.core.rmem_max.
+  // A revolution is ~350 packets (~420 kB of payload, about twice that in kernel accounting) at
+  // 600 rpm; a large buffer absorbs scheduling hiccups of the reading thread. SO_RCVBUF is
+  // capped at net.core.rmem_max; SO_RCVBUFFORCE is not, but needs CAP_NET_ADMIN (root).
   int rcvbuf = params.rcvbuf_bytes;
-  setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof(rcvbuf));
+  if (setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &rcvbuf, sizeof(rcvbuf)) != 0) {
+    setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof(rcvbuf));
+  }
   socklen_t len = sizeof(rcvbuf_bytes_);
   getsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf_bytes_, &len);
 

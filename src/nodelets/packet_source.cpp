@@ -55,6 +55,11 @@ class PacketSource : public nodelet::Nodelet {
                                                   [this](const ros::WallTimerEvent&) {
                                                     updater_->update();
                                                   });
+    if (receiver_ && receiver_->rcvbufBytes() / 2 < params_.rcvbuf_bytes) {
+      NODELET_WARN("UDP receive buffer limited to %d bytes instead of rcvbuf_bytes = %d: raise "
+                   "net.core.rmem_max (sysctl) or run with CAP_NET_ADMIN, or bursts may be lost",
+                   receiver_->rcvbufBytes() / 2, params_.rcvbuf_bytes);
+    }
     if (receiver_) {
       NODELET_INFO("PacketSource: UDP port %d%s%s, receive buffer %d bytes", receiver_->port(),
                    params_.device_ip.empty() ? "" : " from ", params_.device_ip.c_str(),
@@ -184,6 +189,8 @@ class PacketSource : public nodelet::Nodelet {
     const std::uint64_t bad = bad_size_ + other_sender_;
     if (bad > reported_bad_) {
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "dropping bad or foreign packets");
+    } else if (pcap_ && running_ && pub_.getNumSubscribers() == 0) {
+      stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "replay paused: no subscriber");
     } else if (packets_ == reported_packets_ && running_) {
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no packets");
     } else {

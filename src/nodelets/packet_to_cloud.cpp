@@ -67,6 +67,15 @@ class PacketToCloud : public nodelet::Nodelet {
 
   void scanCb(const VelodyneScan::ConstPtr& scan) {
     ++scans_;
+    // PacketSource numbers its revolutions: a gap means the input queue dropped some (the
+    // newest revolution wins when decoding falls behind). Other drivers may leave seq at 0.
+    const std::uint32_t seq = scan->header.seq;
+    if (last_seq_ != 0 && seq > last_seq_ + 1) {
+      skipped_ += seq - last_seq_ - 1;
+      NODELET_WARN_THROTTLE(5, "falling behind: %lu revolutions skipped so far",
+                            static_cast<unsigned long>(skipped_));
+    }
+    last_seq_ = seq;
     if (scan->packets.empty()) {
       ++empty_scans_;
       NODELET_WARN_THROTTLE(10, "dropping empty VelodyneScan (%lu so far)",
@@ -133,9 +142,9 @@ class PacketToCloud : public nodelet::Nodelet {
   }
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
-    const std::uint64_t bad = bad_packets_ + tf_failures_ + empty_scans_;
+    const std::uint64_t bad = bad_packets_ + tf_failures_ + empty_scans_ + skipped_;
     if (bad > reported_bad_) {
-      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "dropping packets");
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "dropping packets or revolutions");
     } else {
       stat.summary(diagnostic_msgs::DiagnosticStatus::OK, subscribed_ ? "decoding" : "idle (lazy)");
     }
@@ -145,6 +154,7 @@ class PacketToCloud : public nodelet::Nodelet {
     stat.add("bad_packets", bad_packets_.load());
     stat.add("tf_failures", tf_failures_.load());
     stat.add("empty_scans", empty_scans_.load());
+    stat.add("skipped_revolutions", skipped_.load());
   }
 
   PacketToCloudParams params_;
@@ -158,7 +168,8 @@ class PacketToCloud : public nodelet::Nodelet {
   ros::Subscriber sub_;
   std::atomic<bool> subscribed_{false};
   std::atomic<std::uint64_t> scans_{0}, points_{0}, bad_packets_{0}, tf_failures_{0},
-      empty_scans_{0};
+      empty_scans_{0}, skipped_{0};
+  std::uint32_t last_seq_ = 0;      // scanCb only (roscpp serialises a subscription's callbacks)
   std::uint64_t reported_bad_ = 0;  // diagnostics thread only
 };
 

@@ -21,6 +21,7 @@ VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::T
   if (cutter_.startsNewRevolution(core::blockAzimuth(packet.data(), 0))) {
     if (current_ && current_is_whole_) {
       expected_packets_ = current_->packets.size();
+      current_->header.seq = ++revolutions_;
       finished.swap(current_);
     } else if (current_) {
       ++partial_dropped_;

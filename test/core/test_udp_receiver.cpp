@@ -5,7 +5,9 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <fstream>
 #include <stdexcept>
 #include <vector>
 
@@ -71,6 +73,21 @@ TEST(UdpReceiver, DeliversWholePacketsAndRejectsOtherSizes) {
   EXPECT_EQ(size, 1300u);  // true length reported although only 1207 bytes were read
   EXPECT_EQ(receiver.receive(&packet, 1000, &size), Result::kWrongSize);
   EXPECT_EQ(size, kPacketSize - 1);
+}
+
+// Linux grants twice the requested size; without CAP_NET_ADMIN the request is capped at
+// net.core.rmem_max first, with it (SO_RCVBUFFORCE) it is not.
+TEST(UdpReceiver, ReceiveBufferIsSizedForBursts) {
+  std::ifstream file("/proc/sys/net/core/rmem_max");
+  long rmem_max = 0;
+  if (!(file >> rmem_max)) GTEST_SKIP() << "no /proc/sys/net/core/rmem_max";
+  const int request = 8 * 1024 * 1024;
+  UdpReceiver receiver(UdpReceiverParams{0, "", request});
+  // Unprivileged: exactly the capped size; with CAP_NET_ADMIN: the full request.
+  const long capped = 2 * std::min<long>(request, rmem_max);
+  EXPECT_TRUE(receiver.rcvbufBytes() == capped || receiver.rcvbufBytes() == 2L * request)
+      << receiver.rcvbufBytes() << " bytes, rmem_max " << rmem_max;
+  EXPECT_GE(receiver.rcvbufBytes(), capped);
 }
 
 TEST(UdpReceiver, TimesOutWithinTheBound) {

@@ -46,6 +46,7 @@ TEST(ScanAssembler, PublishesOnlyWholeRevolutionsCutAtTheCutAngle) {
     ASSERT_EQ(scans[s]->packets.size(), 60u);
     EXPECT_EQ(scans[s]->header.frame_id, "lidar");
     EXPECT_EQ(scans[s]->header.stamp, scans[s]->packets.front().stamp);
+    EXPECT_EQ(scans[s]->header.seq, s + 1);
     EXPECT_EQ(core::blockAzimuth(scans[s]->packets.front().data.data(), 0), 9050);
     const std::size_t first = 10 + 60 * s;
     EXPECT_NEAR(scans[s]->packets.front().stamp.toSec(), 10.0 + 0.001 * first, 1e-9);

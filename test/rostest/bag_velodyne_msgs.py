@@ -3,15 +3,12 @@
 velodyne_msgs/VelodyneScan (same MD5 as urban_detection/VelodyneScan) is played with
 `rosbag play` into PacketToCloud, which must decode every revolution.
 
-The packets are built byte by byte here (not with the C++ encoder), so the test also checks the
-packet layout independently: 12 blocks of [block id, azimuth in 1/100 deg, 32 x (distance in
-2 mm, intensity)], upper (0xEEFF, lasers 0-31) and lower (0xDDFF, lasers 32-63) blocks alternating,
-then a 4-byte timestamp and 2 status bytes.
+The packets are built byte by byte (hdl64e_packets.py, not the C++ encoder), so the test also
+checks the packet layout independently.
 """
 import io
 import math
 import os
-import struct
 import subprocess
 import tempfile
 import threading
@@ -26,25 +23,10 @@ from sensor_msgs import point_cloud2
 from sensor_msgs.msg import PointCloud2
 from urban_detection.msg import VelodynePacket, VelodyneScan
 
+from hdl64e_packets import POINTS_PER_PACKET, make_packet
+
 PACKETS_PER_SCAN = 20
 SCANS = 5
-DISTANCE_RAW = 5000          # 10 m at 2 mm per unit
-SILENT_UPPER_LASER = 7       # distance 0 (no return) in every upper block
-POINTS_PER_PACKET = 6 * (32 - 1) + 6 * 32
-
-
-def make_packet(first_azimuth_deg, timestamp_us):
-    out = bytearray()
-    for block in range(12):
-        upper = block % 2 == 0
-        azimuth = int(round((first_azimuth_deg + block // 2) * 100)) % 36000
-        out += struct.pack('<HH', 0xEEFF if upper else 0xDDFF, azimuth)
-        for laser in range(32):
-            distance = 0 if (upper and laser == SILENT_UPPER_LASER) else DISTANCE_RAW
-            out += struct.pack('<HB', distance, 100)
-    out += struct.pack('<IBB', timestamp_us, 0, 0)
-    assert len(out) == 1206
-    return bytes(out)
 
 
 def make_scan(index):

@@ -266,6 +266,7 @@ TEST(PacketToCloud, SubscribesUpstreamOnlyWhileSomeoneListens) {
 }
 
 // Bad packets inside a scan are dropped whole and counted; the good ones are all decoded.
+// Revolutions skipped upstream (gaps in header.seq) are counted too.
 TEST(PacketToCloud, DropsBadPacketsWholeAndCountsThem) {
   ros::NodeHandle nh("/badscan");
   DiagnosticsWatcher diagnostics;
@@ -277,23 +278,33 @@ TEST(PacketToCloud, DropsBadPacketsWholeAndCountsThem) {
       nh.subscribe("velodyne_points", 5, &Collector<CloudXYZIRT>::callback, &clouds);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
 
+  // Revolutions numbered 1 and 4 by their source: 2 and 3 were skipped upstream.
+  auto first = makeScan(makePackets(2, 0.5), ros::Time(199.0), 0.000288);
+  first->header.seq = 1;
+  pub.publish(first);
+  // One at a time: the input queue is 2 deep and drops the oldest revolution when full.
+  ASSERT_TRUE(waitFor([&] { return clouds.size() == 1; }, 10.0));
   auto packets = makePackets(10, 0.5);
   packets[2][100] = 0x12;  // block 1 id 0xEEFF -> 0x12FF: unknown block id
   packets[5][1] = 0x00;    // block 0 id -> 0x00FF
   packets[7][2] = 0xFF;    // block 0 azimuth 0xFF.. >= 36000
   packets[7][3] = 0xFF;
-  pub.publish(makeScan(packets, ros::Time(200.0), 0.000288));
+  auto scan = makeScan(packets, ros::Time(200.0), 0.000288);
+  scan->header.seq = 4;
+  pub.publish(scan);
+  ASSERT_TRUE(waitFor([&] { return clouds.size() == 2; }, 10.0));
   auto empty = boost::make_shared<VelodyneScan>();
   empty->header.frame_id = "velodyne";
   pub.publish(empty);
-  ASSERT_TRUE(waitFor([&] { return clouds.size() == 1; }, 10.0));
-  EXPECT_EQ(clouds.at(0)->size(), 7 * kReturnsPerPacket);
+  EXPECT_EQ(clouds.at(0)->size(), 2 * kReturnsPerPacket);
+  EXPECT_EQ(clouds.at(1)->size(), 7 * kReturnsPerPacket);
   EXPECT_TRUE(waitFor([&] {
     return diagnostics.value("badscan/packet_to_cloud", "bad_packets") == 3 &&
-           diagnostics.value("badscan/packet_to_cloud", "empty_scans") == 1;
+           diagnostics.value("badscan/packet_to_cloud", "empty_scans") == 1 &&
+           diagnostics.value("badscan/packet_to_cloud", "skipped_revolutions") == 2;
   }, 10.0));
   ros::Duration(0.3).sleep();
-  EXPECT_EQ(clouds.size(), 1u);  // the empty scan produced no cloud
+  EXPECT_EQ(clouds.size(), 2u);  // the empty scan produced no cloud
 }
 
 // Bad parameters and a bad calibration file: one clear error, the nodelet stays inactive, the

@@ -19,7 +19,7 @@ namespace core {
 struct UdpReceiverParams {
   int port = 2368;                     // [1..65535] local UDP port (0 = any free port)
   std::string device_ip;               // accept only this IPv4 sender; empty = any sender
-  int rcvbuf_bytes = 8 * 1024 * 1024;  // [bytes] requested SO_RCVBUF (kernel may cap it)
+  int rcvbuf_bytes = 8 * 1024 * 1024;  // [bytes] requested receive buffer (see rcvbufBytes())
 };
 
 /// A bound, non-blocking UDP socket delivering whole 1206-byte packets.
@@ -45,7 +45,9 @@ class UdpReceiver {
 
   /// Port actually bound (useful with port 0).
   int port() const { return port_; }
-  /// Receive buffer size granted by the kernel [bytes] (Linux reports twice the usable size).
+  /// Receive buffer size granted by the kernel [bytes], as Linux reports it: twice the
+  /// requested size (the kernel reserves half for bookkeeping), or less when capped by
+  /// net.core.rmem_max for an unprivileged process.
   int rcvbufBytes() const { return rcvbuf_bytes_; }
   const std::string& lastError() const { return last_error_; }
 

@@ -38,7 +38,8 @@ class ScanAssembler {
 
   /// Adds a packet received at `stamp`. Returns the finished revolution when this packet
   /// starts a new one (the packet then opens the next scan), otherwise null. The scan's
-  /// header.stamp is the stamp of its first packet.
+  /// header.stamp is the stamp of its first packet; header.seq counts the returned revolutions
+  /// from 1, so a consumer can count revolutions it never received.
   VelodyneScan::Ptr add(const core::RawPacket& packet, const ros::Time& stamp);
 
   /// Drops the revolution in progress and restarts cut detection (a gap in the stream).
@@ -55,6 +56,7 @@ class ScanAssembler {
   VelodyneScan::Ptr current_;
   bool current_is_whole_ = false;       // current_ was opened by an observed cut
   std::size_t expected_packets_ = 700;  // capacity hint: size of the previous revolution
+  std::uint32_t revolutions_ = 0;       // returned so far (header.seq)
   std::size_t partial_dropped_ = 0;
   std::size_t forced_cuts_ = 0;
 };
