@@ -11,6 +11,8 @@
 /// RevolutionCutter, exactly as PacketSource/PacketToCloud cut it.
 #pragma once
 
+#include <cmath>
+
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -98,7 +100,11 @@ class LidarSimulator {
   Eigen::Isometry3d sensorPose(double t_s) const { return basePose(t_s) * baseToSensor(); }
 
   /// Drive time [s] <-> epoch stamp [s].
-  double stampOf(double drive_time_s) const { return sensor_.start_stamp_s + drive_time_s; }
+  /// Whole microseconds, as a real driver stamps packets (and as PCL headers keep stamps), so
+  /// scan, cloud and ground-truth stamps compare equal along the pipeline.
+  double stampOf(double drive_time_s) const {
+    return std::round((sensor_.start_stamp_s + drive_time_s) * 1e6) / 1e6;
+  }
 
   const Scene& scene() const { return scene_; }
   const SimSensorParams& sensorParams() const { return sensor_; }
