@@ -39,6 +39,8 @@
 #include "urban_detection/ros/segmentation_params.h"
 #include "urban_detection/core/pcap_io.h"
 
+#include "tool_common.h"
+
 namespace core = urban_detection::core;
 using urban_detection::CloudXYZIRT;
 using Clock = std::chrono::steady_clock;
@@ -239,24 +241,8 @@ int main(int argc, char** argv) {
   long repeat = 3, max_frames = -1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&](const char* what) -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "error: %s needs a value\n", what);
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    auto integer = [&](const char* what) -> long {
-      const std::string v = value(what);
-      char* end = nullptr;
-      const long x = std::strtol(v.c_str(), &end, 10);
-      if (end == v.c_str() || *end != '\0' || x < 0) {
-        std::fprintf(stderr, "error: %s needs a non-negative integer, got '%s'\n", what,
-                     v.c_str());
-        std::exit(2);
-      }
-      return x;
-    };
+    auto value = [&](const char* what) { return urban_detection::tools::optionValue(argc, argv, &i, what); };
+    auto integer = [&](const char* what) { return urban_detection::tools::optionCount(argc, argv, &i, what); };
     if (a == "--pcd-dir") pcd_dirs.push_back(value("--pcd-dir"));
     else if (a == "--bin-dir") bin_dirs.push_back(value("--bin-dir"));
     else if (a == "--pcap") pcap = value("--pcap");

@@ -28,6 +28,8 @@
 #include "urban_detection/core/params_yaml.h"
 #include "urban_detection/ros/segmentation_params.h"
 
+#include "tool_common.h"
+
 namespace core = urban_detection::core;
 namespace fs = std::filesystem;
 
@@ -347,24 +349,8 @@ int main(int argc, char** argv) {
   bool details = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&](const char* what) -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "error: %s needs a value\n", what);
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    auto integer = [&](const char* what) -> long {
-      const std::string v = value(what);
-      char* end = nullptr;
-      const long x = std::strtol(v.c_str(), &end, 10);
-      if (end == v.c_str() || *end != '\0' || x < 0) {
-        std::fprintf(stderr, "error: %s needs a non-negative integer, got '%s'\n", what,
-                     v.c_str());
-        std::exit(2);
-      }
-      return x;
-    };
+    auto value = [&](const char* what) { return urban_detection::tools::optionValue(argc, argv, &i, what); };
+    auto integer = [&](const char* what) { return urban_detection::tools::optionCount(argc, argv, &i, what); };
     if (a == "--kitti-object") kitti_dir = value("--kitti-object");
     else if (a == "--semantic-kitti") skitti_dir = value("--semantic-kitti");
     else if (a == "--detector") detector_arg = value("--detector");

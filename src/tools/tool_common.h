@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -17,6 +18,28 @@
 
 namespace urban_detection {
 namespace tools {
+
+/// The value after option argv[*i] (advancing *i); exits with status 2 naming the option when
+/// it is missing.
+inline std::string optionValue(int argc, char** argv, int* i, const char* option) {
+  if (*i + 1 >= argc) {
+    std::fprintf(stderr, "error: %s needs a value\n", option);
+    std::exit(2);
+  }
+  return argv[++*i];
+}
+
+/// A non-negative integer option value; exits with status 2 naming the option otherwise.
+inline long optionCount(int argc, char** argv, int* i, const char* option) {
+  const std::string v = optionValue(argc, argv, i, option);
+  char* end = nullptr;
+  const long x = std::strtol(v.c_str(), &end, 10);
+  if (end == v.c_str() || *end != '\0' || x < 0) {
+    std::fprintf(stderr, "error: %s needs a non-negative integer, got '%s'\n", option, v.c_str());
+    std::exit(2);
+  }
+  return x;
+}
 
 /// Sorted .bin and .pcd files directly in `dir` (a single file is returned as is).
 inline std::vector<std::string> listSweeps(const std::string& dir) {
