@@ -1,0 +1,248 @@
+// A plain, unoptimised re-statement of GridSegmenter::segment (grid_segmenter.h, paper
+// Sec. 3.1), used as the oracle that the optimised segmenter must match label for label.
+// Everything is allocated per call, indexed by (row, col), and done one point or one cell at a
+// time, in the order that defines the algorithm's floating-point results:
+//  - a cell's z_sum is accumulated per maximal run of consecutive points falling in the same
+//    cell (run sum first, then added to the cell), which is the summation order the segmenter
+//    specifies;
+//  - the terrain growing is a breadth-first search seeded in the order cells first receive a
+//    point (the ground height a cell gets depends on the neighbour it is reached from).
+// The Hough refinement is the library's HoughWallRefiner on the reference's cell classes.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "urban_detection/core/grid_segmenter.h"
+
+namespace urban_detection {
+namespace reference {
+
+using core::SegmentClass;
+
+struct RefCell {
+  std::uint32_t count = 0;
+  float z_min = std::numeric_limits<float>::max();
+  float z_max = std::numeric_limits<float>::lowest();
+  float z_sum = 0.0f;
+  float mean() const { return z_sum / static_cast<float>(count); }
+  float range() const { return z_max - z_min; }
+};
+
+struct RefOutput {
+  std::vector<SegmentClass> labels;
+  core::SegmentationStats stats;
+};
+
+inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterParams& p) {
+  enum State { kNone, kReached, kFilled, kBridged };
+  RefOutput out;
+  // Grid geometry (SimpleGrid's guards).
+  const double cell_m = std::max(p.cell_size_m, 0.01);
+  const double range_m = std::clamp(p.max_range_m, cell_m, 1000.0);
+  const int side = std::max(1, static_cast<int>(std::ceil(2.0 * range_m / cell_m)));
+  const float inv = static_cast<float>(1.0 / cell_m);
+  const float origin = static_cast<float>(-0.5 * side * cell_m);
+  const float cell_f = static_cast<float>(cell_m);
+  auto centre = [&](int r, int c, float* x, float* y) {
+    *x = origin + (static_cast<float>(c) + 0.5f) * cell_f;
+    *y = origin + (static_cast<float>(r) + 0.5f) * cell_f;
+  };
+  const std::size_t cells = static_cast<std::size_t>(side) * side;
+  std::vector<RefCell> grid(cells);
+  std::vector<int> point_cell(cloud.size(), -1);
+  std::vector<float> point_z(cloud.size(), 0.0f);
+  std::vector<int> first_touch;  // cells in the order they first receive a point
+  const float offset = static_cast<float>(p.sensor_height_m);
+  const float max_abs = static_cast<float>(p.max_abs_height_m);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const float fc = (cloud[i].x - origin) * inv, fr = (cloud[i].y - origin) * inv;
+    const float z = cloud[i].z + offset;
+    point_z[i] = z;
+    const bool inside = fc >= 0.0f && fc < static_cast<float>(side) && fr >= 0.0f &&
+                        fr < static_cast<float>(side) && std::fabs(z) <= max_abs;
+    if (!inside) continue;
+    point_cell[i] = static_cast<int>(fr) * side + static_cast<int>(fc);
+  }
+  // Per-cell statistics, run by run.
+  for (std::size_t i = 0; i < cloud.size();) {
+    const int c = point_cell[i];
+    if (c < 0) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    std::uint32_t n = 0;
+    float lo = point_z[i], hi = point_z[i], sum = 0.0f;
+    while (j < cloud.size() && point_cell[j] == c) {
+      lo = std::min(lo, point_z[j]);
+      hi = std::max(hi, point_z[j]);
+      sum = n == 0 ? point_z[j] : sum + point_z[j];
+      ++n;
+      ++j;
+    }
+    RefCell& g = grid[c];
+    if (g.count == 0) first_touch.push_back(c);
+    g.count += n;
+    g.z_min = std::min(g.z_min, lo);
+    g.z_max = std::max(g.z_max, hi);
+    g.z_sum += sum;
+    i = j;
+  }
+  out.stats.cells_occupied = static_cast<std::uint32_t>(first_touch.size());
+
+  std::vector<SegmentClass> cls(cells, SegmentClass::kUnknown);
+  const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, p.min_points_per_cell));
+  for (int c : first_touch) {
+    if (grid[c].count < min_pts) cls[c] = SegmentClass::kClutter;
+  }
+
+  // Terrain growing.
+  const float flat = static_cast<float>(p.ground_max_range_m);
+  const float step = static_cast<float>(p.ground_max_step_m);
+  const float tol = static_cast<float>(p.ground_tolerance_m);
+  std::vector<int> state(cells, kNone), hops(cells, 0);
+  std::vector<float> ground(cells, 0.0f);
+  std::vector<int> queue;
+  const float seed_r2 = static_cast<float>(p.seed_radius_m * p.seed_radius_m);
+  for (int c : first_touch) {
+    const RefCell& g = grid[c];
+    if (cls[c] == SegmentClass::kClutter) continue;
+    if (!(g.range() < flat) || std::fabs(g.mean()) > static_cast<float>(p.seed_max_abs_height_m)) {
+      continue;
+    }
+    float x, y;
+    centre(c / side, c % side, &x, &y);
+    if (x * x + y * y > seed_r2) continue;
+    state[c] = kReached;
+    ground[c] = g.mean();
+    queue.push_back(c);
+  }
+  std::uint32_t reached = static_cast<std::uint32_t>(queue.size());
+  const int max_hops = std::min(250, static_cast<int>(p.ground_max_gap_m / cell_m));
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const int c = queue[head];
+    const int r = c / side, k = c % side;
+    const int hop = state[c] == kBridged ? hops[c] : 0;
+    for (int dr = -1; dr <= 1; ++dr) {
+      for (int dk = -1; dk <= 1; ++dk) {
+        if (dr == 0 && dk == 0) continue;
+        const int nr = r + dr, nk = k + dk;
+        if (nr < 0 || nr >= side || nk < 0 || nk >= side) continue;
+        const int nc = nr * side + nk;
+        if (state[nc] != kNone) continue;
+        if (grid[nc].count == 0 || cls[nc] == SegmentClass::kClutter) {
+          if (hop >= max_hops) continue;
+          state[nc] = kBridged;
+          ground[nc] = ground[c];
+          hops[nc] = hop + 1;
+          queue.push_back(nc);
+          continue;
+        }
+        const bool is_flat = grid[nc].range() < flat;
+        const float e = is_flat ? grid[nc].mean() : grid[nc].z_min;
+        if (!(std::fabs(e - ground[c]) < step)) continue;
+        state[nc] = kReached;
+        ground[nc] = !is_flat && e - ground[c] > tol ? ground[c] : e;
+        ++reached;
+        if (is_flat) queue.push_back(nc);
+      }
+    }
+  }
+  out.stats.cells_ground_reached = reached;
+
+  // Terrain fill: mean of the nearest square ring (Chebyshev distance) of reached or bridged
+  // cells, rows top to bottom, columns left to right; applied after the search.
+  std::vector<std::pair<int, float>> fills;
+  for (int c : first_touch) {
+    if (state[c] != kNone || (cls[c] == SegmentClass::kClutter && !p.ground_in_sparse_cells)) {
+      continue;
+    }
+    const int r = c / side, k = c % side;
+    for (int ring = 1; ring <= p.terrain_fill_iterations; ++ring) {
+      float sum = 0.0f;
+      int cnt = 0;
+      for (int rr = r - ring; rr <= r + ring; ++rr) {
+        for (int kk = k - ring; kk <= k + ring; ++kk) {
+          if (rr < 0 || rr >= side || kk < 0 || kk >= side) continue;
+          if (std::max(std::abs(rr - r), std::abs(kk - k)) != ring) continue;
+          const int s = state[rr * side + kk];
+          if (s == kReached || s == kBridged) {
+            sum += ground[rr * side + kk];
+            ++cnt;
+          }
+        }
+      }
+      if (cnt > 0) {
+        fills.emplace_back(c, sum / static_cast<float>(cnt));
+        break;
+      }
+    }
+  }
+  for (const auto& f : fills) {
+    ground[f.first] = f.second;
+    state[f.first] = kFilled;
+  }
+
+  // Cell classes.
+  std::vector<std::uint8_t> support(cells, 0);
+  const float tan_top = static_cast<float>(std::tan(p.fov_top_elevation_deg * M_PI / 180.0));
+  const float half_diag = static_cast<float>(p.cell_size_m * M_SQRT1_2);
+  for (int c : first_touch) {
+    if (cls[c] == SegmentClass::kClutter) continue;
+    const RefCell& g = grid[c];
+    const float gz = state[c] != kNone ? ground[c] : 0.0f;
+    if (g.z_max - gz > static_cast<float>(p.tall_min_height_m) ||
+        g.range() > static_cast<float>(p.tall_min_range_m)) {
+      cls[c] = SegmentClass::kTall;
+    } else if (g.z_max - gz < tol) {
+      cls[c] = SegmentClass::kGround;
+    } else if (state[c] != kReached && g.range() < flat &&
+               std::fabs(g.mean() - gz) < static_cast<float>(p.terrain_max_offset_m)) {
+      cls[c] = SegmentClass::kGround;
+      state[c] = kFilled;
+      ground[c] = g.mean();
+    } else {
+      cls[c] = SegmentClass::kShort;
+      float x, y;
+      centre(c / side, c % side, &x, &y);
+      const float d = std::max(0.0f, std::sqrt(x * x + y * y) - half_diag);
+      support[c] = g.z_max - static_cast<float>(p.sensor_height_m) >= d * tan_top ? 1 : 0;
+    }
+  }
+  if (p.hough.enabled) {
+    core::HoughWallRefiner hough(p.hough);
+    out.stats.hough = hough.refine(side, side, cell_m, &cls, &support);
+  }
+
+  // Points: in a short, tall or (with ground_in_sparse_cells) clutter cell that has a terrain
+  // estimate, points within ground_tolerance_m above it are ground; otherwise the cell class.
+  out.labels.assign(cloud.size(), SegmentClass::kUnknown);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const int c = point_cell[i];
+    if (c < 0) {
+      ++out.stats.points_unknown;
+      continue;
+    }
+    SegmentClass label = cls[c];
+    const bool split = (label == SegmentClass::kShort || label == SegmentClass::kTall ||
+                        (label == SegmentClass::kClutter && p.ground_in_sparse_cells)) &&
+                       state[c] != kNone;
+    if (split && point_z[i] < ground[c] + tol) label = SegmentClass::kGround;
+    out.labels[i] = label;
+    switch (label) {
+      case SegmentClass::kClutter: ++out.stats.points_clutter; break;
+      case SegmentClass::kGround: ++out.stats.points_ground; break;
+      case SegmentClass::kTall: ++out.stats.points_tall; break;
+      case SegmentClass::kShort: ++out.stats.points_short; break;
+      default: ++out.stats.points_unknown; break;
+    }
+  }
+  return out;
+}
+
+}  // namespace reference
+}  // namespace urban_detection
