@@ -33,8 +33,15 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
   ground_z_.assign(n, 0.0f);
   ground_state_.assign(n, kNoGround);
   fill_z_.assign(n, 0.0f);
-  split_z_.assign(n, 0.0f);
+  // Per-cell lookup tables of the per-point pass, shifted by one: entry 0 is the kNoCell
+  // sentinel (no split, kUnknown) and is never overwritten.
+  split_z_.assign(n + 1, std::numeric_limits<float>::lowest());
+  label_lut_.assign(n + 1, static_cast<std::uint8_t>(SegmentClass::kUnknown));
   hops_.assign(n, 0);
+  // Terrain bit map of fillTerrain: a zero word of padding on both sides of each row, so
+  // windows reaching past the grid's left and right edges read zeros.
+  bit_words_ = static_cast<std::size_t>((grid_.cols() + 63) / 64 + 2);
+  terrain_bits_.assign(bit_words_ * static_cast<std::size_t>(grid_.rows()), 0);
 }
 
 void GridSegmenter::setParams(const GridSegmenterParams& params) {
@@ -73,7 +80,10 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   }
 
   // Per point: mixed cells are split by the height above the local ground. The split height
-  // is computed once per cell so the per-point loop is a lookup and a compare.
+  // and class are tabulated once per cell, at index cell + 1 so that kNoCell (-1) reads the
+  // sentinel entry 0 (never ground, kUnknown): the per-point loop is then two table lookups
+  // and a compare without a branch (consecutive points often change cells, at range almost
+  // always, so a branch on the cell mispredicts).
   const float tol = static_cast<float>(params_.ground_tolerance_m);
   const bool sparse_ground = params_.ground_in_sparse_cells;
   for (const std::int32_t c : grid_.occupiedCells()) {
@@ -81,30 +91,31 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
     const bool split = (cls == SegmentClass::kShort || cls == SegmentClass::kTall ||
                         (cls == SegmentClass::kClutter && sparse_ground)) &&
                        ground_state_[c] != kNoGround;
-    split_z_[c] = split ? ground_z_[c] + tol : std::numeric_limits<float>::lowest();
+    split_z_[c + 1] = split ? ground_z_[c] + tol : std::numeric_limits<float>::lowest();
+    label_lut_[c + 1] = static_cast<std::uint8_t>(cls);
   }
   const std::size_t n = cloud.size();
   labels->resize(n);
-  std::uint32_t counts[5] = {0, 0, 0, 0, 0};
   const std::int32_t* pc = grid_.pointCells().data();
-  SegmentClass* out = labels->data();
   const float* pz = grid_.pointHeights().data();
-  std::int32_t run_cell = SimpleGrid::kNoCell;  // consecutive points share cells: cache it
-  float run_split = 0.0f;
-  SegmentClass run_class = SegmentClass::kUnknown;
+  const float* split_z = split_z_.data() + 1;
+  const std::uint8_t* lut = label_lut_.data() + 1;
+  static_assert(sizeof(SegmentClass) == 1, "labels are written as bytes");
+  std::uint8_t* out = reinterpret_cast<std::uint8_t*>(labels->data());
+  constexpr std::uint8_t kGroundByte = static_cast<std::uint8_t>(SegmentClass::kGround);
   for (std::size_t i = 0; i < n; ++i) {
     const std::int32_t c = pc[i];
-    SegmentClass label = SegmentClass::kUnknown;
-    if (c != SimpleGrid::kNoCell) {
-      if (c != run_cell) {
-        run_cell = c;
-        run_split = split_z_[c];
-        run_class = cell_class_[c];
-      }
-      label = pz[i] < run_split ? SegmentClass::kGround : run_class;
-    }
-    out[i] = label;
-    ++counts[static_cast<int>(label)];
+    // Select by mask: a ternary here compiles to an unpredictable branch.
+    const std::uint8_t below = static_cast<std::uint8_t>(-static_cast<int>(pz[i] < split_z[c]));
+    out[i] = static_cast<std::uint8_t>((kGroundByte & below) | (lut[c] & ~below));
+  }
+  // Class counts in a separate pass over the bytes (vectorised; counting inside the loop above
+  // would chain every point through a store-to-load dependency on the counter array).
+  std::uint32_t counts[5] = {0, 0, 0, 0, 0};
+  for (int k = 0; k < 5; ++k) {
+    std::uint32_t cnt = 0;
+    for (std::size_t i = 0; i < n; ++i) cnt += out[i] == k;
+    counts[k] = cnt;
   }
   stats_.points_unknown = counts[static_cast<int>(SegmentClass::kUnknown)];
   stats_.points_clutter = counts[static_cast<int>(SegmentClass::kClutter)];
@@ -141,15 +152,22 @@ void GridSegmenter::growGround() {
   std::uint32_t reached = static_cast<std::uint32_t>(queue_.size());
   const int max_hops =
       std::min(250, static_cast<int>(params_.ground_max_gap_m / grid_.params().cell_size_m));
+  // Neighbour offsets in the row-major grid, in the order of kDr / kDc (the visiting order
+  // decides which neighbour reaches a cell first, hence its ground height).
+  std::int32_t offsets[8];
+  for (int d = 0; d < 8; ++d) offsets[d] = kDr[d] * cols + kDc[d];
   for (std::size_t head = 0; head < queue_.size(); ++head) {
     const std::int32_t c = queue_[head];
     const int r = grid_.rowOf(c), k = grid_.colOf(c);
+    const bool interior = r > 0 && r < rows - 1 && k > 0 && k < cols - 1;
     const float g = ground_z_[c];
     const int hop = ground_state_[c] == kBridged ? hops_[c] : 0;
     for (int d = 0; d < 8; ++d) {
-      const int nr = r + kDr[d], nk = k + kDc[d];
-      if (nr < 0 || nr >= rows || nk < 0 || nk >= cols) continue;
-      const std::int32_t nc = nr * cols + nk;
+      if (!interior) {
+        const int nr = r + kDr[d], nk = k + kDc[d];
+        if (nr < 0 || nr >= rows || nk < 0 || nk >= cols) continue;
+      }
+      const std::int32_t nc = c + offsets[d];
       if (ground_state_[nc] != kNoGround) continue;
       const GridCell& cell = grid_.cell(nc);
       if (cell.count == 0 || cell_class_[nc] == SegmentClass::kClutter) {
@@ -182,40 +200,95 @@ void GridSegmenter::growGround() {
 // Occupied cells the growing did not reach (under a car roof, a bush, behind an occluder) take
 // the mean ground elevation of the nearest ring of cells with a terrain estimate, up to
 // terrain_fill_iterations cells away. Searching around the few unreached cells is much cheaper
-// than dilating the whole terrain map.
+// than dilating the whole terrain map. Most of these cells (facades, far vegetation) have no
+// terrain within the search radius at all, so the nearest non-empty ring is found first on a
+// bit map of the terrain cells (one 64-bit window per row), and only that ring is then summed,
+// in the same row-major order as a plain ring scan.
 void GridSegmenter::fillTerrain() {
   const int rows = grid_.rows(), cols = grid_.cols();
   const int max_ring = params_.terrain_fill_iterations;
   fill_cells_.clear();
+  // Sum of the terrain of ring `ring` around (r, k), row by row, left to right.
+  auto ringSum = [&](int r, int k, int ring, float* sum) {
+    int cnt = 0;
+    const int r0 = std::max(0, r - ring), r1 = std::min(rows - 1, r + ring);
+    const int k0 = std::max(0, k - ring), k1 = std::min(cols - 1, k + ring);
+    for (int rr = r0; rr <= r1; ++rr) {
+      const bool edge_row = rr == r - ring || rr == r + ring;
+      const int step = edge_row ? 1 : std::max(1, 2 * ring);
+      for (int kk = edge_row ? k0 : k - ring; kk <= k1; kk += step) {
+        if (kk < k0) continue;
+        const std::int32_t nc = rr * cols + kk;
+        const std::uint8_t st = ground_state_[nc];
+        if (st == kReached || st == kBridged) {
+          *sum += ground_z_[nc];
+          ++cnt;
+        }
+      }
+    }
+    return cnt;
+  };
+  const bool use_bits = max_ring >= 1 && max_ring <= kMaxBitRing;
+  const std::size_t terrain_cells = touched_.size();  // all kReached / kBridged so far
+  if (use_bits) {
+    for (std::size_t i = 0; i < terrain_cells; ++i) {
+      const std::int32_t c = touched_[i];
+      const int k = grid_.colOf(c) + 64;  // one zero word of padding left of each row
+      terrain_bits_[static_cast<std::size_t>(grid_.rowOf(c)) * bit_words_ + (k >> 6)] |=
+          std::uint64_t{1} << (k & 63);
+    }
+  }
+  const std::uint64_t window_mask = (std::uint64_t{1} << (2 * max_ring + 1)) - 1;
+  std::uint64_t m[2 * kMaxBitRing + 1];
   for (const std::int32_t c : grid_.occupiedCells()) {
     if (ground_state_[c] != kNoGround ||
         (cell_class_[c] == SegmentClass::kClutter && !params_.ground_in_sparse_cells)) {
       continue;
     }
     const int r = grid_.rowOf(c), k = grid_.colOf(c);
-    for (int ring = 1; ring <= max_ring; ++ring) {
-      float sum = 0.0f;
-      int cnt = 0;
-      const int r0 = std::max(0, r - ring), r1 = std::min(rows - 1, r + ring);
-      const int k0 = std::max(0, k - ring), k1 = std::min(cols - 1, k + ring);
-      for (int rr = r0; rr <= r1; ++rr) {
-        const bool edge_row = rr == r - ring || rr == r + ring;
-        const int step = edge_row ? 1 : std::max(1, 2 * ring);
-        for (int kk = edge_row ? k0 : k - ring; kk <= k1; kk += step) {
-          if (kk < k0) continue;
-          const std::int32_t nc = rr * cols + kk;
-          const std::uint8_t st = ground_state_[nc];
-          if (st == kReached || st == kBridged) {
-            sum += ground_z_[nc];
-            ++cnt;
-          }
+    int first_ring = 1, last_ring = max_ring;
+    if (use_bits) {
+      // m[j]: terrain bits of columns k - max_ring .. k + max_ring of row r - max_ring + j.
+      const int start = k - max_ring + 64;
+      const int word = start >> 6, shift = start & 63;
+      for (int j = 0; j <= 2 * max_ring; ++j) {
+        const int rr = r - max_ring + j;
+        if (rr < 0 || rr >= rows) {
+          m[j] = 0;
+          continue;
         }
+        const std::uint64_t* w = terrain_bits_.data() + static_cast<std::size_t>(rr) * bit_words_;
+        std::uint64_t v = w[word] >> shift;
+        if (shift != 0) v |= w[word + 1] << (64 - shift);
+        m[j] = v & window_mask;
       }
+      std::uint64_t inner = m[max_ring];  // rows strictly inside the current ring
+      int found = 0;
+      for (int ring = 1; ring <= max_ring && found == 0; ++ring) {
+        const std::uint64_t full = ((std::uint64_t{1} << (2 * ring + 1)) - 1) << (max_ring - ring);
+        const std::uint64_t sides =
+            (std::uint64_t{1} << (max_ring - ring)) | (std::uint64_t{1} << (max_ring + ring));
+        if (((m[max_ring - ring] | m[max_ring + ring]) & full) | (inner & sides)) found = ring;
+        inner |= m[max_ring - ring] | m[max_ring + ring];
+      }
+      if (found == 0) continue;
+      first_ring = last_ring = found;
+    }
+    for (int ring = first_ring; ring <= last_ring; ++ring) {
+      float sum = 0.0f;
+      const int cnt = ringSum(r, k, ring, &sum);
       if (cnt > 0) {
         fill_cells_.push_back(c);
         fill_z_[c] = sum / static_cast<float>(cnt);
         break;
       }
+    }
+  }
+  if (use_bits) {
+    for (std::size_t i = 0; i < terrain_cells; ++i) {
+      const std::int32_t c = touched_[i];
+      terrain_bits_[static_cast<std::size_t>(grid_.rowOf(c)) * bit_words_ +
+                    ((grid_.colOf(c) + 64) >> 6)] = 0;
     }
   }
   // Applied afterwards so that filled cells do not feed each other within one frame.
@@ -269,23 +342,32 @@ void GridSegmenter::classifyCells() {
 
 void extractForeground(const CloudXYZIRT& cloud, const std::vector<SegmentClass>& labels,
                        LabeledCloud* foreground) {
-  foreground->clear();
   foreground->header = cloud.header;
   foreground->sensor_origin_ = cloud.sensor_origin_;
   foreground->sensor_orientation_ = cloud.sensor_orientation_;
   const std::size_t n = std::min(cloud.size(), labels.size());
-  for (std::size_t i = 0; i < n; ++i) {
-    if (labels[i] != SegmentClass::kShort || !isFinitePoint(cloud[i])) continue;
-    LabeledPoint q;
-    q.x = cloud[i].x;
-    q.y = cloud[i].y;
-    q.z = cloud[i].z;
-    q.intensity = cloud[i].intensity;
+  // Size the output once (a count over the label bytes is cheap and vectorised), then write
+  // the points in place: PCL's push_back also rewrites width/height per point.
+  std::size_t shorts = 0;
+  for (std::size_t i = 0; i < n; ++i) shorts += labels[i] == SegmentClass::kShort;
+  foreground->points.resize(shorts);
+  LabeledPoint* out = foreground->points.data();
+  std::size_t m = 0;
+  for (std::size_t i = 0; i < n && m < shorts; ++i) {
+    if (labels[i] != SegmentClass::kShort) continue;
+    const PointXYZIRT& p = cloud[i];
+    if (!isFinitePoint(p)) continue;
+    LabeledPoint& q = out[m++];
+    q.x = p.x;
+    q.y = p.y;
+    q.z = p.z;
+    q.data[3] = 1.0f;
+    q.intensity = p.intensity;
     q.label = static_cast<std::uint32_t>(SegmentClass::kShort);
     q.index = static_cast<std::uint32_t>(i);
-    foreground->push_back(q);
   }
-  foreground->width = static_cast<std::uint32_t>(foreground->size());
+  foreground->points.resize(m);  // non-finite short points (not from segment()) dropped
+  foreground->width = static_cast<std::uint32_t>(m);
   foreground->height = 1;
   foreground->is_dense = true;
 }

@@ -3,8 +3,8 @@
 // Everything is allocated per call, indexed by (row, col), and done one point or one cell at a
 // time, in the order that defines the algorithm's floating-point results:
 //  - a cell's z_sum is accumulated per maximal run of consecutive points falling in the same
-//    cell (run sum first, then added to the cell), which is the summation order the segmenter
-//    specifies;
+//    cell, points without a cell (invalid) not interrupting a run (run sum first, then added to
+//    the cell), which is the summation order the segmenter specifies;
 //  - the terrain growing is a breadth-first search seeded in the order cells first receive a
 //    point (the ground height a cell gets depends on the neighbour it is reached from).
 // The Hough refinement is the library's HoughWallRefiner on the reference's cell classes.
@@ -77,11 +77,14 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
     std::size_t j = i;
     std::uint32_t n = 0;
     float lo = point_z[i], hi = point_z[i], sum = 0.0f;
-    while (j < cloud.size() && point_cell[j] == c) {
-      lo = std::min(lo, point_z[j]);
-      hi = std::max(hi, point_z[j]);
-      sum = n == 0 ? point_z[j] : sum + point_z[j];
-      ++n;
+    // A run: consecutive points in cell c; points without a cell do not interrupt it.
+    while (j < cloud.size() && (point_cell[j] == c || point_cell[j] < 0)) {
+      if (point_cell[j] == c) {
+        lo = std::min(lo, point_z[j]);
+        hi = std::max(hi, point_z[j]);
+        sum = n == 0 ? point_z[j] : sum + point_z[j];
+        ++n;
+      }
       ++j;
     }
     RefCell& g = grid[c];
