@@ -34,8 +34,9 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
   ground_state_.assign(n, kNoGround);
   fill_z_.assign(n, 0.0f);
   // Per-cell lookup tables of the per-point pass, shifted by one: entry 0 is the kNoCell
-  // sentinel (no split, kUnknown) and is never overwritten.
-  split_z_.assign(n + 1, std::numeric_limits<float>::lowest());
+  // sentinel (no split, kUnknown) and is never overwritten. "No split" is -inf, not lowest():
+  // a point without a cell may have z = -inf, which must not compare below it.
+  split_z_.assign(n + 1, -std::numeric_limits<float>::infinity());
   label_lut_.assign(n + 1, static_cast<std::uint8_t>(SegmentClass::kUnknown));
   hops_.assign(n, 0);
   // Terrain bit map of fillTerrain: a zero word of padding on both sides of each row, so
@@ -91,7 +92,7 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
     const bool split = (cls == SegmentClass::kShort || cls == SegmentClass::kTall ||
                         (cls == SegmentClass::kClutter && sparse_ground)) &&
                        ground_state_[c] != kNoGround;
-    split_z_[c + 1] = split ? ground_z_[c] + tol : std::numeric_limits<float>::lowest();
+    split_z_[c + 1] = split ? ground_z_[c] + tol : -std::numeric_limits<float>::infinity();
     label_lut_[c + 1] = static_cast<std::uint8_t>(cls);
   }
   const std::size_t n = cloud.size();

@@ -44,7 +44,7 @@ std::vector<CloudXYZIRT> sharedFrames(std::size_t per_drive) {
 }
 
 // A street: road, curb, facades on both sides, parked cars, plus invalid points sprinkled in
-// (NaN, inf, far away, absurdly high) at fixed positions.
+// (NaN, +-inf, far away, absurdly high) at fixed positions.
 CloudXYZIRT syntheticStreet(unsigned seed) {
   std::vector<test::Box> boxes = {
       {-30.f, 6.0f, 0.0f, 30.f, 7.0f, 12.0f, 1},   // facade left
@@ -61,10 +61,12 @@ CloudXYZIRT syntheticStreet(unsigned seed) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
   for (std::size_t i = 0; i < cloud.size(); i += 97) {
-    switch ((i / 97) % 4) {
+    switch ((i / 97) % 6) {
       case 0: cloud[i].x = nan; break;
       case 1: cloud[i].z = inf; break;
-      case 2: cloud[i].y = 500.0f; break;
+      case 2: cloud[i].z = -inf; break;
+      case 3: cloud[i].z = nan; break;
+      case 4: cloud[i].y = 500.0f; break;
       default: cloud[i].z = 80.0f; break;
     }
   }
