@@ -30,15 +30,31 @@ void ImageLabelTransfer::transfer(const LabeledCloud& object_points,
   stats_.points = static_cast<std::uint32_t>(object_points.size());
   votes->clear();
 
+  // Object id -> vote slot. Detector ids are 1..N, so a direct table is the common case (linear
+  // time); arbitrary large ids fall back to a sorted id list and binary search.
   ids_.clear();
-  for (const LabeledPoint& p : object_points) ids_.push_back(p.label);
-  std::sort(ids_.begin(), ids_.end());
-  ids_.erase(std::unique(ids_.begin(), ids_.end()), ids_.end());
+  std::uint32_t max_id = 0;
+  for (const LabeledPoint& p : object_points) max_id = std::max(max_id, p.label);
+  const bool table =
+      !object_points.empty() && static_cast<std::size_t>(max_id) <= 4 * object_points.size() + 1024;
+  if (table) {
+    slot_of_id_.assign(static_cast<std::size_t>(max_id) + 1, -1);
+    for (const LabeledPoint& p : object_points) slot_of_id_[p.label] = 0;
+    for (std::uint32_t id = 0; id <= max_id; ++id) {
+      if (slot_of_id_[id] < 0) continue;
+      slot_of_id_[id] = static_cast<std::int32_t>(ids_.size());
+      ids_.push_back(id);
+    }
+  } else {
+    for (const LabeledPoint& p : object_points) ids_.push_back(p.label);
+    std::sort(ids_.begin(), ids_.end());
+    ids_.erase(std::unique(ids_.begin(), ids_.end()), ids_.end());
+  }
   votes->resize(ids_.size());
   for (std::size_t i = 0; i < ids_.size(); ++i) (*votes)[i].object_id = ids_[i];
-  auto slotOf = [this](std::uint32_t id) {
-    return static_cast<std::int32_t>(std::lower_bound(ids_.begin(), ids_.end(), id) -
-                                     ids_.begin());
+  auto slotOf = [this, table](std::uint32_t id) {
+    if (table) return slot_of_id_[id];
+    return static_cast<std::int32_t>(std::lower_bound(ids_.begin(), ids_.end(), id) - ids_.begin());
   };
   for (const LabeledPoint& p : object_points) ++(*votes)[slotOf(p.label)].points;
   if (ids_.empty() || !camera.valid() || scores.empty() || !camera_from_lidar.matrix().allFinite())

@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <set>
-
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgproc.hpp>
+#include <set>
 
 namespace urban_detection {
 namespace core {
@@ -16,8 +15,8 @@ namespace {
 constexpr double kDegToRad = M_PI / 180.0;
 
 bool rangeError(const std::string& field, double min, double max, std::string* error) {
-  *error = "'" + field + "' must be within [" + std::to_string(min) + ", " +
-           std::to_string(max) + "]";
+  *error =
+      "'" + field + "' must be within [" + std::to_string(min) + ", " + std::to_string(max) + "]";
   return false;
 }
 
@@ -41,16 +40,19 @@ bool validateCapturePath(const CapturePathParams& p, std::string* error) {
       return false;
     }
   }
-  if (!(p.interval_m >= 0.01 && p.interval_m <= 1e5)) return rangeError("interval_m", 0.01, 1e5, error);
+  if (!(p.interval_m >= 0.01 && p.interval_m <= 1e5))
+    return rangeError("interval_m", 0.01, 1e5, error);
   if (p.rotations < 1 || p.rotations > 360) return rangeError("rotations", 1, 360, error);
-  if (!(p.pitch_deg >= -90.0 && p.pitch_deg <= 90.0)) return rangeError("pitch_deg", -90, 90, error);
+  if (!(p.pitch_deg >= -90.0 && p.pitch_deg <= 90.0))
+    return rangeError("pitch_deg", -90, 90, error);
   if (p.image_width_px < 8 || p.image_width_px > 8192)
     return rangeError("image_width_px", 8, 8192, error);
   if (p.image_height_px < 8 || p.image_height_px > 8192)
     return rangeError("image_height_px", 8, 8192, error);
   if (!(p.metres_per_pixel >= 1e-4 && p.metres_per_pixel <= 100.0))
     return rangeError("metres_per_pixel", 1e-4, 100, error);
-  if (!(p.max_depth_m > 0.0 && p.max_depth_m <= 1e5)) return rangeError("max_depth_m", 0, 1e5, error);
+  if (!(p.max_depth_m > 0.0 && p.max_depth_m <= 1e5))
+    return rangeError("max_depth_m", 0, 1e5, error);
   if (p.splat_radius_px < 0 || p.splat_radius_px > 16)
     return rangeError("splat_radius_px", 0, 16, error);
   if (p.colour != "rgb" && p.colour != "intensity" && p.colour != "height") {
@@ -78,10 +80,18 @@ bool readCapturePathJson(const std::string& path, CapturePathParams* params, std
       *error = "'" + path + "' must hold a JSON object";
       return false;
     }
-    static const std::set<std::string> known = {
-        "path", "interval_m", "rotations", "pitch_deg", "image_width_px", "image_height_px",
-        "metres_per_pixel", "max_depth_m", "splat_radius_px", "colour", "height_min_m",
-        "height_max_m"};
+    static const std::set<std::string> known = {"path",
+                                                "interval_m",
+                                                "rotations",
+                                                "pitch_deg",
+                                                "image_width_px",
+                                                "image_height_px",
+                                                "metres_per_pixel",
+                                                "max_depth_m",
+                                                "splat_radius_px",
+                                                "colour",
+                                                "height_min_m",
+                                                "height_max_m"};
     for (const std::string& key : root.keys()) {
       if (!known.count(key)) {
         *error = "unknown key '" + key + "' in '" + path + "'";
@@ -123,8 +133,7 @@ bool readCapturePathJson(const std::string& path, CapturePathParams* params, std
         !number("pitch_deg", &p.pitch_deg) || !integer("image_width_px", &p.image_width_px) ||
         !integer("image_height_px", &p.image_height_px) ||
         !number("metres_per_pixel", &p.metres_per_pixel) ||
-        !number("max_depth_m", &p.max_depth_m) ||
-        !integer("splat_radius_px", &p.splat_radius_px) ||
+        !number("max_depth_m", &p.max_depth_m) || !integer("splat_radius_px", &p.splat_radius_px) ||
         !number("height_min_m", &p.height_min_m) || !number("height_max_m", &p.height_max_m)) {
       return false;
     }
@@ -188,8 +197,8 @@ std::vector<OrthoCamera> capturePoses(const CapturePathParams& p) {
   auto addPoint = [&](const Eigen::Vector3d& pos, double heading_deg) {
     for (int r = 0; r < p.rotations; ++r) {
       const double yaw = std::fmod(heading_deg + 360.0 * r / p.rotations, 360.0);
-      poses.push_back(OrthoCamera::make(pos, yaw, p.pitch_deg, p.image_width_px,
-                                        p.image_height_px, p.metres_per_pixel, p.max_depth_m));
+      poses.push_back(OrthoCamera::make(pos, yaw, p.pitch_deg, p.image_width_px, p.image_height_px,
+                                        p.metres_per_pixel, p.max_depth_m));
     }
   };
   if (p.path.size() == 1) {
@@ -287,7 +296,8 @@ std::size_t OrthoRenderer::render(const CloudXYZIRT& cloud, const std::vector<cv
     auto* row = image->ptr<cv::Vec3b>(y);
     const std::int32_t* idx = index_.data() + static_cast<std::size_t>(y) * width_;
     for (int x = 0; x < width_; ++x) {
-      if (idx[x] >= 0 && static_cast<std::size_t>(idx[x]) < colours.size()) row[x] = colours[idx[x]];
+      if (idx[x] >= 0 && static_cast<std::size_t>(idx[x]) < colours.size())
+        row[x] = colours[idx[x]];
     }
   }
   return drawn;

@@ -1,5 +1,7 @@
 #include "urban_detection/core/spark_instances.h"
 
+#include <pcl/kdtree/kdtree_flann.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -8,8 +10,6 @@
 #include <map>
 #include <memory>
 #include <sstream>
-
-#include <pcl/kdtree/kdtree_flann.h>
 
 namespace urban_detection {
 namespace core {
@@ -33,8 +33,8 @@ std::size_t PointClassVotes::castBack(const OrthoRenderer& zbuffer,
       const std::int32_t hit = zbuffer.hit(x, y);
       if (hit < 0 || static_cast<std::size_t>(hit) >= n_points_) continue;
       float conf = 0.0f;
-      const int c = scores.classAt(std::min(scores.width() - 1, static_cast<int>(x * sx)), ys,
-                                   &conf);
+      const int c =
+          scores.classAt(std::min(scores.width() - 1, static_cast<int>(x * sx)), ys, &conf);
       if (c < 0) continue;
       if (!kept_classes.empty() &&
           (static_cast<std::size_t>(c) >= kept_classes.size() || !kept_classes[c]))
@@ -112,7 +112,8 @@ int dbscan(const CloudXYZIRT& cloud, const std::vector<std::uint32_t>& members, 
       if (label[j] != -2) continue;
       label[j] = k;
       tree.radiusSearch(j, radius, neighbours, dist);
-      if (neighbours.size() >= need) queue.insert(queue.end(), neighbours.begin(), neighbours.end());
+      if (neighbours.size() >= need)
+        queue.insert(queue.end(), neighbours.begin(), neighbours.end());
     }
     ++k;
   }
@@ -134,9 +135,10 @@ void buildInstances(const CloudXYZIRT& cloud, const std::vector<int>& point_clas
     for (std::size_t m = 0; m < members.size(); ++m) {
       if (cluster[m] >= 0) found[cluster[m]].indices.push_back(members[m]);
     }
-    std::stable_sort(found.begin(), found.end(), [](const SparkInstance& a, const SparkInstance& b) {
-      return a.indices.size() > b.indices.size();
-    });
+    std::stable_sort(found.begin(), found.end(),
+                     [](const SparkInstance& a, const SparkInstance& b) {
+                       return a.indices.size() > b.indices.size();
+                     });
     for (SparkInstance& inst : found) {
       if (inst.indices.size() < static_cast<std::size_t>(std::max(1, params.min_instance_points)))
         continue;
@@ -250,8 +252,9 @@ bool writeInstancesJson(const std::string& path, const std::string& cloud_path,
     const SparkInstance& inst = instances[k];
     const Eigen::Vector3d lo = inst.min_pt.cast<double>(), hi = inst.max_pt.cast<double>();
     out << (k ? "," : "") << "\n    {\"id\": " << inst.id << ", \"class\": \""
-        << jsonEscape(className(class_names, inst.class_id)) << "\", \"class_id\": "
-        << inst.class_id << ", \"point_count\": " << inst.indices.size() << ",\n     \"box\": {\"min\": ";
+        << jsonEscape(className(class_names, inst.class_id))
+        << "\", \"class_id\": " << inst.class_id << ", \"point_count\": " << inst.indices.size()
+        << ",\n     \"box\": {\"min\": ";
     writeVec(out, lo);
     out << ", \"max\": ";
     writeVec(out, hi);

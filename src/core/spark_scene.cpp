@@ -24,7 +24,9 @@ void add(CloudXYZIRT* cloud, std::vector<cv::Vec3b>* rgb, const Eigen::Vector3f&
 // Samples the five visible faces of a box (no bottom face).
 void addBox(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, double step,
             const cv::Vec3b& colour, CloudXYZIRT* cloud, std::vector<cv::Vec3b>* rgb) {
-  const auto n = [step](float len) { return std::max(1, static_cast<int>(std::lround(len / step))); };
+  const auto n = [step](float len) {
+    return std::max(1, static_cast<int>(std::lround(len / step)));
+  };
   const Eigen::Vector3f size = hi - lo;
   const int nx = n(size.x()), ny = n(size.y()), nz = n(size.z());
   for (int i = 0; i <= nx; ++i) {
@@ -78,9 +80,9 @@ void makeSparkScene(double step_m, CloudXYZIRT* cloud, std::vector<cv::Vec3b>* r
     objects->push_back(o);
   };
   // Two cars.
-  for (const auto& [lo, hi] : {std::pair<Eigen::Vector3f, Eigen::Vector3f>{{10.0f, 4.1f, 0.0f},
-                                                                           {14.0f, 5.9f, 1.5f}},
-                               {{23.0f, -6.0f, 0.0f}, {27.2f, -4.2f, 1.4f}}}) {
+  for (const auto& [lo, hi] :
+       {std::pair<Eigen::Vector3f, Eigen::Vector3f>{{10.0f, 4.1f, 0.0f}, {14.0f, 5.9f, 1.5f}},
+        {{23.0f, -6.0f, 0.0f}, {27.2f, -4.2f, 1.4f}}}) {
     SparkSceneObject o = begin(1);
     addBox(lo, hi, step, red, cloud, rgb);
     end(o);

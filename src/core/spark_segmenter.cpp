@@ -5,9 +5,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
-#include <sstream>
-
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 namespace urban_detection {
 namespace core {
@@ -133,14 +132,12 @@ bool SegmentationModel::load(const SegmentationModelParams& params, std::string*
   return true;
 }
 
-bool SegmentationModel::run(const cv::Mat& image, SegmentationScores* scores,
-                            std::string* error) {
+bool SegmentationModel::run(const cv::Mat& image, SegmentationScores* scores, std::string* error) {
   if (!loaded_) {
     *error = "no model loaded";
     return false;
   }
-  if (image.empty() || image.depth() != CV_8U ||
-      (image.channels() != 3 && image.channels() != 1)) {
+  if (image.empty() || image.depth() != CV_8U || (image.channels() != 3 && image.channels() != 1)) {
     *error = "image must be a non-empty 8-bit BGR or grey image";
     return false;
   }
@@ -157,21 +154,18 @@ bool SegmentationModel::run(const cv::Mat& image, SegmentationScores* scores,
   const int sizes[4] = {1, 3, h, w};
   blob_.create(4, sizes, CV_32F);
   // Planar NCHW with per-channel (x - mean) * scale; OpenCV 4.6's blobFromImage only takes one
-  // scale for all channels, which the usual ImageNet normalisation does not fit.
-  float* planes[3];
-  for (int c = 0; c < 3; ++c) planes[c] = blob_.ptr<float>() + static_cast<std::size_t>(c) * w * h;
-  const float mean[3] = {static_cast<float>(params_.mean[0]), static_cast<float>(params_.mean[1]),
-                         static_cast<float>(params_.mean[2])};
-  const float scale[3] = {static_cast<float>(params_.scale[0]),
-                          static_cast<float>(params_.scale[1]),
-                          static_cast<float>(params_.scale[2])};
-  for (int y = 0; y < h; ++y) {
-    const auto* row = colour_.ptr<cv::Vec3b>(y);
-    const std::size_t off = static_cast<std::size_t>(y) * w;
-    for (int x = 0; x < w; ++x) {
-      for (int c = 0; c < 3; ++c) planes[c][off + x] = (row[x][c] - mean[c]) * scale[c];
-    }
-  }
+  // scale for all channels, which the usual ImageNet normalisation does not fit. convertTo and
+  // split into planes that alias the blob keep it vectorised and copy-free.
+  const cv::Scalar scale(params_.scale[0], params_.scale[1], params_.scale[2]);
+  const cv::Scalar offset(-params_.mean[0] * params_.scale[0], -params_.mean[1] * params_.scale[1],
+                          -params_.mean[2] * params_.scale[2]);
+  colour_.convertTo(float_, CV_32FC3);
+  cv::multiply(float_, scale, float_);
+  cv::add(float_, offset, float_);
+  std::vector<cv::Mat> planes(3);
+  for (int c = 0; c < 3; ++c)
+    planes[c] = cv::Mat(h, w, CV_32F, blob_.ptr<float>() + static_cast<std::size_t>(c) * w * h);
+  cv::split(float_, planes);
   stats_.preprocess_ms = msSince(t0);
   const auto t1 = std::chrono::steady_clock::now();
   try {
@@ -196,8 +190,7 @@ bool SegmentationModel::run(const cv::Mat& image, SegmentationScores* scores,
   return true;
 }
 
-bool readClassNames(const std::string& path, std::vector<std::string>* names,
-                    std::string* error) {
+bool readClassNames(const std::string& path, std::vector<std::string>* names, std::string* error) {
   names->clear();
   std::ifstream in(path);
   if (!in) {
@@ -217,9 +210,8 @@ bool readClassNames(const std::string& path, std::vector<std::string>* names,
   return true;
 }
 
-bool resolveKeptClasses(const std::vector<std::string>& keep,
-                        const std::vector<std::string>& names, int bound,
-                        std::vector<bool>* kept, std::string* error) {
+bool resolveKeptClasses(const std::vector<std::string>& keep, const std::vector<std::string>& names,
+                        int bound, std::vector<bool>* kept, std::string* error) {
   kept->assign(static_cast<std::size_t>(std::max(bound, 0)), keep.empty());
   for (const std::string& k : keep) {
     const auto it = std::find(names.begin(), names.end(), k);

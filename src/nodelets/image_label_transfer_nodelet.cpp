@@ -3,23 +3,23 @@
 // image + camera_info (rectified camera), objects (DetectedObjectArray) and objects/points
 // (LabeledCloud, label = object id). Output: objects/classified (the objects with class_label
 // and class_confidence filled). Lazy. Without model/path the nodelet refuses to start.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
-#include <chrono>
-#include <memory>
-#include <mutex>
-
-#include <boost/make_shared.hpp>
 #include <message_filters/subscriber.h>
 #include <message_filters/sync_policies/approximate_time.h>
 #include <message_filters/synchronizer.h>
 #include <nodelet/nodelet.h>
 #include <pcl_ros/point_cloud.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
+
+#include <boost/make_shared.hpp>
+#include <chrono>
+#include <memory>
+#include <mutex>
+#include <pluginlib/class_list_macros.hpp>
 
 #include "urban_detection/ros/image_label_transfer_ros.h"
 #include "urban_detection/ros/param_loading.h"
@@ -28,8 +28,9 @@
 namespace urban_detection {
 
 class ImageLabelTransfer : public nodelet::Nodelet {
-  using Policy = message_filters::sync_policies::ApproximateTime<
-      sensor_msgs::Image, sensor_msgs::CameraInfo, DetectedObjectArray, LabeledCloud>;
+  using Policy =
+      message_filters::sync_policies::ApproximateTime<sensor_msgs::Image, sensor_msgs::CameraInfo,
+                                                      DetectedObjectArray, LabeledCloud>;
 
  private:
   void onInit() override {
@@ -42,14 +43,16 @@ class ImageLabelTransfer : public nodelet::Nodelet {
       return;
     }
     if (!model_.load(p.model, &error)) {
-      NODELET_FATAL("ImageLabelTransfer refuses to start: %s (parameter '%s'). Export a semantic "
-                    "segmentation network (e.g. DeepLabv3 on Cityscapes) to ONNX (opset <= 13) "
-                    "and set it; the nodelet stays idle",
-                    error.c_str(), getPrivateNodeHandle().resolveName("model/path").c_str());
+      NODELET_FATAL(
+          "ImageLabelTransfer refuses to start: %s (parameter '%s'). Export a semantic "
+          "segmentation network (e.g. DeepLabv3 on Cityscapes) to ONNX (opset <= 13) "
+          "and set it; the nodelet stays idle",
+          error.c_str(), getPrivateNodeHandle().resolveName("model/path").c_str());
       return;
     }
     if (!p.class_names_file.empty() && !core::readClassNames(p.class_names_file, &names_, &error)) {
-      NODELET_FATAL("ImageLabelTransfer: %s (parameter model/class_names_file); idle", error.c_str());
+      NODELET_FATAL("ImageLabelTransfer: %s (parameter model/class_names_file); idle",
+                    error.c_str());
       return;
     }
     // Without a names file, ids up to 65535 may be kept (the network's class count is only
@@ -75,7 +78,8 @@ class ImageLabelTransfer : public nodelet::Nodelet {
       connectCb();
     };
     std::lock_guard<std::mutex> lock(mutex_);
-    pub_ = getNodeHandle().advertise<DetectedObjectArray>("objects/classified", 2, connect, connect);
+    pub_ =
+        getNodeHandle().advertise<DetectedObjectArray>("objects/classified", 2, connect, connect);
   }
 
   void connectCb() {
@@ -114,10 +118,11 @@ class ImageLabelTransfer : public nodelet::Nodelet {
       const std::string& cloud_frame = objects->header.frame_id;
       const ros::Duration timeout(params_.tf_timeout_s);
       const auto tf = params_.fixed_frame.empty()
-          ? tf_buffer_->lookupTransform(image->header.frame_id, cloud_frame, image->header.stamp,
-                                        timeout)
-          : tf_buffer_->lookupTransform(image->header.frame_id, image->header.stamp, cloud_frame,
-                                        objects->header.stamp, params_.fixed_frame, timeout);
+                          ? tf_buffer_->lookupTransform(image->header.frame_id, cloud_frame,
+                                                        image->header.stamp, timeout)
+                          : tf_buffer_->lookupTransform(image->header.frame_id, image->header.stamp,
+                                                        cloud_frame, objects->header.stamp,
+                                                        params_.fixed_frame, timeout);
       cam_from_lidar = tf2::transformToEigen(tf);
     } catch (const tf2::TransformException& e) {
       return reject(std::string("no transform camera <- LiDAR: ") + e.what());
@@ -130,9 +135,9 @@ class ImageLabelTransfer : public nodelet::Nodelet {
     pub_.publish(boost::shared_ptr<const DetectedObjectArray>(out));
     const auto t1 = std::chrono::steady_clock::now();
     const double net_ms = model_.stats().preprocess_ms + model_.stats().inference_ms;
-    NODELET_DEBUG_THROTTLE(5.0, "ImageLabelTransfer: network %.1f ms, transfer %.2f ms, %zu objects",
-                           net_ms, std::chrono::duration<double, std::milli>(t1 - t_net).count(),
-                           out->objects.size());
+    NODELET_DEBUG_THROTTLE(
+        5.0, "ImageLabelTransfer: network %.1f ms, transfer %.2f ms, %zu objects", net_ms,
+        std::chrono::duration<double, std::milli>(t1 - t_net).count(), out->objects.size());
     diagnostics_->frame(std::chrono::duration<double>(t1 - t0).count());
   }
 

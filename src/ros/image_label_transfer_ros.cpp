@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "urban_detection/ros/object_conversions.h"
@@ -12,8 +11,7 @@
 namespace urban_detection {
 namespace ros_conv {
 
-bool imageToBgr(const sensor_msgs::Image& msg, cv::Mat* scratch, cv::Mat* bgr,
-                std::string* error) {
+bool imageToBgr(const sensor_msgs::Image& msg, cv::Mat* scratch, cv::Mat* bgr, std::string* error) {
   int channels = 0;
   int code = -1;  // cvtColor code, -1 = wrap as is
   if (msg.encoding == "bgr8") {
@@ -36,15 +34,14 @@ bool imageToBgr(const sensor_msgs::Image& msg, cv::Mat* scratch, cv::Mat* bgr,
   }
   const std::size_t row_bytes = static_cast<std::size_t>(msg.width) * channels;
   if (msg.width == 0 || msg.height == 0 || msg.width > 16384 || msg.height > 16384 ||
-      msg.step < row_bytes ||
-      msg.data.size() < static_cast<std::size_t>(msg.step) * msg.height) {
+      msg.step < row_bytes || msg.data.size() < static_cast<std::size_t>(msg.step) * msg.height) {
     *error = "image " + std::to_string(msg.width) + "x" + std::to_string(msg.height) + " step " +
              std::to_string(msg.step) + " does not match its " + std::to_string(msg.data.size()) +
              " data bytes";
     return false;
   }
-  const cv::Mat view(static_cast<int>(msg.height), static_cast<int>(msg.width),
-                     CV_8UC(channels), const_cast<std::uint8_t*>(msg.data.data()), msg.step);
+  const cv::Mat view(static_cast<int>(msg.height), static_cast<int>(msg.width), CV_8UC(channels),
+                     const_cast<std::uint8_t*>(msg.data.data()), msg.step);
   if (code < 0) {
     *bgr = view;
   } else {
@@ -72,8 +69,7 @@ bool cameraFromInfo(const sensor_msgs::CameraInfo& info, core::PinholeCamera* ca
   return true;
 }
 
-void applyVotes(const DetectedObjectArray& objects,
-                const std::vector<core::ObjectClassVote>& votes,
+void applyVotes(const DetectedObjectArray& objects, const std::vector<core::ObjectClassVote>& votes,
                 const std::vector<std::string>& names, DetectedObjectArray* out) {
   *out = objects;
   for (DetectedObject& o : out->objects) {
@@ -84,8 +80,8 @@ void applyVotes(const DetectedObjectArray& objects,
         [](const core::ObjectClassVote& v, std::uint32_t id) { return v.object_id < id; });
     if (it == votes.end() || it->object_id != o.id || it->class_id < 0) continue;
     const auto id = static_cast<std::size_t>(it->class_id);
-    o.class_label = id < names.size() && !names[id].empty() ? names[id]
-                                                             : "class_" + std::to_string(id);
+    o.class_label =
+        id < names.size() && !names[id].empty() ? names[id] : "class_" + std::to_string(id);
     o.class_confidence = it->confidence;
   }
 }

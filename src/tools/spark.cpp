@@ -16,22 +16,22 @@
 //       measures what projection, occlusion handling and voting lose with a perfect 2-D input.
 //       Also times the transfer on all objects the hierarchical grid detector finds in the
 //       revolution (the added cost per revolution beyond the network).
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+
+#include <pcl/io/pcd_io.h>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <sstream>
 #include <string>
 #include <unordered_map>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
-#include <pcl/io/pcd_io.h>
-#include <yaml-cpp/yaml.h>
 
 #include "tool_common.h"
 #include "urban_detection/core/eval_datasets.h"
@@ -84,7 +84,8 @@ void loadModelYaml(const std::string& path, core::SegmentationModelParams* m,
   const YAML::Node n = root["model"];
   if (!n || !n.IsMap()) fail(path + " has no `model:` map");
   try {
-    if (n["path"] && !n["path"].as<std::string>().empty()) m->model_path = n["path"].as<std::string>();
+    if (n["path"] && !n["path"].as<std::string>().empty())
+      m->model_path = n["path"].as<std::string>();
     if (n["input_width_px"]) m->input_width_px = n["input_width_px"].as<int>();
     if (n["input_height_px"]) m->input_height_px = n["input_height_px"].as<int>();
     if (n["input_rgb"]) m->input_rgb = n["input_rgb"].as<bool>();
@@ -120,31 +121,42 @@ bool modelOption(int argc, char** argv, int* i, ModelOptions* m) {
     if (v.size() != 3) fail(std::string(o) + " needs three comma-separated numbers");
     for (int c = 0; c < 3; ++c) (*dst)[c] = std::stod(v[c]);
   };
-  if (a == "--model") m->params.model_path = value("--model");
-  else if (a == "--model-config") loadModelYaml(value("--model-config"), &m->params, &m->keep, &m->names_file);
-  else if (a == "--classes") m->names_file = value("--classes");
-  else if (a == "--keep") m->keep = splitList(value("--keep"));
+  if (a == "--model")
+    m->params.model_path = value("--model");
+  else if (a == "--model-config")
+    loadModelYaml(value("--model-config"), &m->params, &m->keep, &m->names_file);
+  else if (a == "--classes")
+    m->names_file = value("--classes");
+  else if (a == "--keep")
+    m->keep = splitList(value("--keep"));
   else if (a == "--input-size") {
     int w = 0, h = 0;
     if (std::sscanf(value("--input-size").c_str(), "%dx%d", &w, &h) != 2) fail("--input-size WxH");
     m->params.input_width_px = w;
     m->params.input_height_px = h;
-  } else if (a == "--mean") triple("--mean", &m->params.mean);
-  else if (a == "--scale") triple("--scale", &m->params.scale);
-  else if (a == "--bgr") m->params.input_rgb = false;
-  else if (a == "--probabilities") m->params.output_softmax = false;
-  else return false;
+  } else if (a == "--mean")
+    triple("--mean", &m->params.mean);
+  else if (a == "--scale")
+    triple("--scale", &m->params.scale);
+  else if (a == "--bgr")
+    m->params.input_rgb = false;
+  else if (a == "--probabilities")
+    m->params.output_softmax = false;
+  else
+    return false;
   return true;
 }
 
 void loadModel(ModelOptions* m, core::SegmentationModel* model) {
   std::string error;
   if (!model->load(m->params, &error)) fail(error);
-  if (!m->names_file.empty() && !core::readClassNames(m->names_file, &m->names, &error)) fail(error);
+  if (!m->names_file.empty() && !core::readClassNames(m->names_file, &m->names, &error))
+    fail(error);
 }
 
 std::string className(const std::vector<std::string>& names, int id) {
-  if (id >= 0 && static_cast<std::size_t>(id) < names.size() && !names[id].empty()) return names[id];
+  if (id >= 0 && static_cast<std::size_t>(id) < names.size() && !names[id].empty())
+    return names[id];
   return id < 0 ? "unknown" : "class_" + std::to_string(id);
 }
 
@@ -181,7 +193,8 @@ bool readCloud(const std::string& path, ud::CloudXYZIRT* cloud, std::vector<cv::
   if (has_intensity) {
     pcl::PointCloud<pcl::PointXYZI> xyzi;
     pcl::fromPCLPointCloud2(blob, xyzi);
-    for (std::size_t i = 0; i < xyzi.size() && i < cloud->size(); ++i) (*cloud)[i].intensity = xyzi[i].intensity;
+    for (std::size_t i = 0; i < xyzi.size() && i < cloud->size(); ++i)
+      (*cloud)[i].intensity = xyzi[i].intensity;
   }
   if (has_rgb) {
     pcl::PointCloud<pcl::PointXYZRGB> c;
@@ -223,22 +236,38 @@ int runOffline(int argc, char** argv) {
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* o) { return ud::tools::optionValue(argc, argv, &i, o); };
-    auto count = [&](const char* o) { return static_cast<int>(ud::tools::optionCount(argc, argv, &i, o)); };
+    auto count = [&](const char* o) {
+      return static_cast<int>(ud::tools::optionCount(argc, argv, &i, o));
+    };
     if (modelOption(argc, argv, &i, &mo)) continue;
-    if (a == "--cloud") cloud_path = value("--cloud");
-    else if (a == "--path") path_json = value("--path");
-    else if (a == "--out") out_dir = value("--out");
-    else if (a == "--stride") sp.mask_stride_px = std::max(1, count("--stride"));
-    else if (a == "--min-votes") sp.min_point_votes = count("--min-votes");
-    else if (a == "--eps") sp.dbscan_eps_m = std::stod(value("--eps"));
-    else if (a == "--min-points") sp.dbscan_min_points = count("--min-points");
-    else if (a == "--min-instance-points") sp.min_instance_points = count("--min-instance-points");
-    else if (a == "--box-margin") sp.box_margin_m = std::stod(value("--box-margin"));
-    else if (a == "--cut") cut = splitList(value("--cut"));
-    else if (a == "--instance-pcd") instance_pcd = true;
-    else if (a == "--no-images") write_images = false;
-    else if (a == "--write-masks") write_masks = true;
-    else fail("unknown option " + a + " (see the file comment of src/tools/spark.cpp)");
+    if (a == "--cloud")
+      cloud_path = value("--cloud");
+    else if (a == "--path")
+      path_json = value("--path");
+    else if (a == "--out")
+      out_dir = value("--out");
+    else if (a == "--stride")
+      sp.mask_stride_px = std::max(1, count("--stride"));
+    else if (a == "--min-votes")
+      sp.min_point_votes = count("--min-votes");
+    else if (a == "--eps")
+      sp.dbscan_eps_m = std::stod(value("--eps"));
+    else if (a == "--min-points")
+      sp.dbscan_min_points = count("--min-points");
+    else if (a == "--min-instance-points")
+      sp.min_instance_points = count("--min-instance-points");
+    else if (a == "--box-margin")
+      sp.box_margin_m = std::stod(value("--box-margin"));
+    else if (a == "--cut")
+      cut = splitList(value("--cut"));
+    else if (a == "--instance-pcd")
+      instance_pcd = true;
+    else if (a == "--no-images")
+      write_images = false;
+    else if (a == "--write-masks")
+      write_masks = true;
+    else
+      fail("unknown option " + a + " (see the file comment of src/tools/spark.cpp)");
   }
   if (cloud_path.empty() || path_json.empty() || out_dir.empty())
     fail("run needs --cloud, --path, --model and --out");
@@ -252,8 +281,10 @@ int runOffline(int argc, char** argv) {
   std::vector<cv::Vec3b> rgb, colours;
   if (!readCloud(cloud_path, &cloud, &rgb, &error)) fail(error);
   if (cp.colour == "rgb" && rgb.empty())
-    std::fprintf(stderr, "warning: %s has no rgb field; points are drawn grey (set \"colour\": "
-                 "\"intensity\" or \"height\" in the path file)\n", cloud_path.c_str());
+    std::fprintf(stderr,
+                 "warning: %s has no rgb field; points are drawn grey (set \"colour\": "
+                 "\"intensity\" or \"height\" in the path file)\n",
+                 cloud_path.c_str());
   core::pointColours(cloud, rgb, cp, &colours);
   fs::create_directories(out_dir + "/images");
   if (write_masks) fs::create_directories(out_dir + "/masks");
@@ -277,16 +308,18 @@ int runOffline(int argc, char** argv) {
     if (write_images) {
       cv::imwrite(out_dir + "/images/" + name + ".png", image);
       if (!core::writeCaptureRecordJson(out_dir + "/images/" + name + ".json",
-                                        std::string(name) + ".png", static_cast<int>(k),
-                                        poses[k], &error))
+                                        std::string(name) + ".png", static_cast<int>(k), poses[k],
+                                        &error))
         fail(error);
     }
     const auto t2 = Clock::now();
     if (!model.run(image, &scores, &error)) fail(error);
     const auto t3 = Clock::now();
     if (!kept_resolved) {
-      const int bound = mo.names.empty() ? scores.classIdBound() : static_cast<int>(mo.names.size());
-      if (!core::resolveKeptClasses(mo.keep, mo.names, bound, &sp.kept_classes, &error)) fail(error);
+      const int bound =
+          mo.names.empty() ? scores.classIdBound() : static_cast<int>(mo.names.size());
+      if (!core::resolveKeptClasses(mo.keep, mo.names, bound, &sp.kept_classes, &error))
+        fail(error);
       if (mo.keep.empty()) sp.kept_classes.clear();
       kept_resolved = true;
     }
@@ -330,7 +363,8 @@ int runOffline(int argc, char** argv) {
     if (!core::resolveKeptClasses(cut, names, bound, &cut_ids, &error)) fail("--cut: " + error);
     std::vector<std::uint32_t> kept;
     core::cutOutClasses(cloud, instances, cut_ids, sp.box_margin_m, &kept);
-    if (!writeSubCloud(out_dir + "/cloud_cut.pcd", cloud, rgb, kept)) fail("cannot write cloud_cut.pcd");
+    if (!writeSubCloud(out_dir + "/cloud_cut.pcd", cloud, rgb, kept))
+      fail("cannot write cloud_cut.pcd");
     std::printf("cut: %zu of %zu points kept in %s/cloud_cut.pcd\n", kept.size(), cloud.size(),
                 out_dir.c_str());
   }
@@ -338,23 +372,23 @@ int runOffline(int argc, char** argv) {
   std::map<std::string, int> per_class;
   for (const auto& inst : instances) ++per_class[className(names, inst.class_id)];
   std::printf("cloud: %s, %zu points; %zu images %dx%d (%d rotations, %.3f m/px)\n",
-              cloud_path.c_str(), cloud.size(), poses.size(), cp.image_width_px,
-              cp.image_height_px, cp.rotations, cp.metres_per_pixel);
+              cloud_path.c_str(), cloud.size(), poses.size(), cp.image_width_px, cp.image_height_px,
+              cp.rotations, cp.metres_per_pixel);
   std::printf("instances: %zu", instances.size());
   for (const auto& [c, n] : per_class) std::printf("  %s=%d", c.c_str(), n);
   std::printf("\nclassified points: %zu (votes %zu, stride %d px)\n", classified, cast_votes,
               sp.mask_stride_px);
   const double n_img = static_cast<double>(std::max<std::size_t>(1, poses.size()));
-  std::printf("timing: render %.2f ms/image (%.1f images/s, %.2f M points/s splatted), "
-              "network %.2f ms/image, back-projection %.3f ms/image (%.2f M rays/s, %.2f M "
-              "classified points/s), clustering %.1f ms, image+record I/O %.2f ms/image\n",
-              render_ms / n_img, 1000.0 * n_img / std::max(render_ms, 1e-9),
-              1e-3 * static_cast<double>(cloud.size()) * n_img / std::max(render_ms, 1e-9),
-              net_ms / n_img, cast_ms / n_img,
-              1e-3 * n_img * (cp.image_width_px / sp.mask_stride_px + 1) *
-                  (cp.image_height_px / sp.mask_stride_px + 1) / std::max(cast_ms, 1e-9),
-              1e-3 * static_cast<double>(cast_votes) / std::max(cast_ms, 1e-9), cluster_ms,
-              io_ms / n_img);
+  std::printf(
+      "timing: render %.2f ms/image (%.1f images/s, %.2f M points/s splatted), "
+      "network %.2f ms/image, back-projection %.3f ms/image (%.2f M rays/s, %.2f M "
+      "classified points/s), clustering %.1f ms, image+record I/O %.2f ms/image\n",
+      render_ms / n_img, 1000.0 * n_img / std::max(render_ms, 1e-9),
+      1e-3 * static_cast<double>(cloud.size()) * n_img / std::max(render_ms, 1e-9), net_ms / n_img,
+      cast_ms / n_img,
+      1e-3 * n_img * (cp.image_width_px / sp.mask_stride_px + 1) *
+          (cp.image_height_px / sp.mask_stride_px + 1) / std::max(cast_ms, 1e-9),
+      1e-3 * static_cast<double>(cast_votes) / std::max(cast_ms, 1e-9), cluster_ms, io_ms / n_img);
   std::printf("wrote %s/instances.json%s\n", out_dir.c_str(),
               write_images ? " and images/ (PNG + JSON record per image)" : "");
   (void)drawn;
@@ -367,9 +401,12 @@ int runSynthetic(int argc, char** argv) {
   double step = 0.1;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--out") out_dir = ud::tools::optionValue(argc, argv, &i, "--out");
-    else if (a == "--step") step = std::stod(ud::tools::optionValue(argc, argv, &i, "--step"));
-    else fail("unknown option " + a);
+    if (a == "--out")
+      out_dir = ud::tools::optionValue(argc, argv, &i, "--out");
+    else if (a == "--step")
+      step = std::stod(ud::tools::optionValue(argc, argv, &i, "--step"));
+    else
+      fail("unknown option " + a);
   }
   if (out_dir.empty()) fail("synthetic needs --out DIR");
   fs::create_directories(out_dir);
@@ -382,9 +419,11 @@ int runSynthetic(int argc, char** argv) {
   if (!writeSubCloud(out_dir + "/scene.pcd", cloud, rgb, all)) fail("cannot write scene.pcd");
   FILE* f = std::fopen((out_dir + "/path.json").c_str(), "w");
   if (!f) fail("cannot write path.json");
-  std::fprintf(f, "{\n  \"path\": [[0, 0, 3], [35, 0, 3]],\n  \"interval_m\": 5,\n  \"rotations\": 4,\n"
-               "  \"pitch_deg\": -25,\n  \"image_width_px\": 320,\n  \"image_height_px\": 240,\n"
-               "  \"metres_per_pixel\": 0.1,\n  \"splat_radius_px\": 1,\n  \"colour\": \"rgb\"\n}\n");
+  std::fprintf(
+      f,
+      "{\n  \"path\": [[0, 0, 3], [35, 0, 3]],\n  \"interval_m\": 5,\n  \"rotations\": 4,\n"
+      "  \"pitch_deg\": -25,\n  \"image_width_px\": 320,\n  \"image_height_px\": 240,\n"
+      "  \"metres_per_pixel\": 0.1,\n  \"splat_radius_px\": 1,\n  \"colour\": \"rgb\"\n}\n");
   std::fclose(f);
   std::printf("wrote %s/scene.pcd (%zu points, %zu objects) and %s/path.json\n", out_dir.c_str(),
               cloud.size(), objects.size(), out_dir.c_str());
@@ -398,7 +437,8 @@ int runSynthetic(int argc, char** argv) {
 // ---------------------------------------------------------------------------------------------
 // KITTI types and the segmentation class names that count as correct for them.
 bool kittiMatch(const std::string& type, std::string voted) {
-  std::transform(voted.begin(), voted.end(), voted.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(voted.begin(), voted.end(), voted.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   static const std::map<std::string, std::set<std::string>> ok = {
       {"Car", {"car"}},
       {"Van", {"car", "van", "truck"}},
@@ -420,18 +460,25 @@ int runKitti(int argc, char** argv) {
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (modelOption(argc, argv, &i, &mo)) continue;
-    if (a == "--data") data = ud::tools::optionValue(argc, argv, &i, "--data");
-    else if (a == "--box-oracle") oracle = true;
-    else if (a == "--min-confidence") tp.min_confidence = std::stod(ud::tools::optionValue(argc, argv, &i, a.c_str()));
-    else if (a == "--occlusion-margin") tp.occlusion_margin_m = std::stod(ud::tools::optionValue(argc, argv, &i, a.c_str()));
-    else if (a == "--repeat") repeat = static_cast<int>(ud::tools::optionCount(argc, argv, &i, "--repeat"));
-    else fail("unknown option " + a);
+    if (a == "--data")
+      data = ud::tools::optionValue(argc, argv, &i, "--data");
+    else if (a == "--box-oracle")
+      oracle = true;
+    else if (a == "--min-confidence")
+      tp.min_confidence = std::stod(ud::tools::optionValue(argc, argv, &i, a.c_str()));
+    else if (a == "--occlusion-margin")
+      tp.occlusion_margin_m = std::stod(ud::tools::optionValue(argc, argv, &i, a.c_str()));
+    else if (a == "--repeat")
+      repeat = static_cast<int>(ud::tools::optionCount(argc, argv, &i, "--repeat"));
+    else
+      fail("unknown option " + a);
   }
   if (oracle == !mo.params.model_path.empty())
     fail("kitti needs exactly one of --model NET.onnx and --box-oracle");
   core::SegmentationModel model;
   if (oracle) {
-    mo.names = {"background", "Car", "Van", "Truck", "Pedestrian", "Person_sitting", "Cyclist", "Tram", "Misc"};
+    mo.names = {"background",     "Car",     "Van",  "Truck", "Pedestrian",
+                "Person_sitting", "Cyclist", "Tram", "Misc"};
   } else {
     loadModel(&mo, &model);
   }
@@ -478,7 +525,8 @@ int runKitti(int argc, char** argv) {
       if (l.type == "DontCare") continue;
       for (std::size_t i = 0; i < cloud.size(); ++i) {
         const auto& p = cloud[i];
-        const Eigen::Vector3d b = core::kittiBoxLocal(l, calib.veloToRect(Eigen::Vector3d(p.x, p.y, p.z)));
+        const Eigen::Vector3d b =
+            core::kittiBoxLocal(l, calib.veloToRect(Eigen::Vector3d(p.x, p.y, p.z)));
         if (std::fabs(b.x()) > 0.5 * l.length_m || b.y() < 0.2 || b.y() > l.height_m ||
             std::fabs(b.z()) > 0.5 * l.width_m)
           continue;
@@ -516,8 +564,10 @@ int runKitti(int argc, char** argv) {
       pre_ms += model.stats().preprocess_ms;
     }
     if (tp.kept_classes.empty() && !mo.keep.empty()) {
-      const int bound = mo.names.empty() ? scores.classIdBound() : static_cast<int>(mo.names.size());
-      if (!core::resolveKeptClasses(mo.keep, mo.names, bound, &tp.kept_classes, &error)) fail(error);
+      const int bound =
+          mo.names.empty() ? scores.classIdBound() : static_cast<int>(mo.names.size());
+      if (!core::resolveKeptClasses(mo.keep, mo.names, bound, &tp.kept_classes, &error))
+        fail(error);
     }
     core::ImageLabelTransfer transfer(tp);
     std::vector<core::ObjectClassVote> votes;
@@ -560,19 +610,21 @@ int runKitti(int argc, char** argv) {
     det_points += object_points.size();
   }
   if (frames == 0) fail("no usable frames under " + data);
-  std::printf("\n%s on %d KITTI frames: %d/%d labelled objects (>= 10 points, not Misc) voted "
-              "correctly (%.1f%%), %d unknown\n",
-              oracle ? "box oracle" : mo.params.model_path.c_str(), frames, correct, scored,
-              scored ? 100.0 * correct / scored : 0.0, unknown);
+  std::printf(
+      "\n%s on %d KITTI frames: %d/%d labelled objects (>= 10 points, not Misc) voted "
+      "correctly (%.1f%%), %d unknown\n",
+      oracle ? "box oracle" : mo.params.model_path.c_str(), frames, correct, scored,
+      scored ? 100.0 * correct / scored : 0.0, unknown);
   if (!oracle)
     std::printf("network: preprocess %.1f ms + inference %.1f ms per image (%dx%d input)\n",
-                pre_ms / frames, net_ms / frames, mo.params.input_width_px, mo.params.input_height_px);
-  std::printf("transfer (beyond the network): %.3f ms per frame on the labelled objects; %.3f ms "
-              "per revolution on the detector's objects (%.0f objects, %.0f points per "
-              "revolution, transfer + message fill, mean of %d runs)\n",
-              transfer_gt_ms / frames, transfer_det_ms / frames,
-              static_cast<double>(det_objects) / frames, static_cast<double>(det_points) / frames,
-              repeat);
+                pre_ms / frames, net_ms / frames, mo.params.input_width_px,
+                mo.params.input_height_px);
+  std::printf(
+      "transfer (beyond the network): %.3f ms per frame on the labelled objects; %.3f ms "
+      "per revolution on the detector's objects (%.0f objects, %.0f points per "
+      "revolution, transfer + message fill, mean of %d runs)\n",
+      transfer_gt_ms / frames, transfer_det_ms / frames, static_cast<double>(det_objects) / frames,
+      static_cast<double>(det_points) / frames, repeat);
   return 0;
 }
 
@@ -583,17 +635,18 @@ int main(int argc, char** argv) {
   if (mode == "run") return runOffline(argc, argv);
   if (mode == "synthetic") return runSynthetic(argc, argv);
   if (mode == "kitti") return runKitti(argc, argv);
-  std::fprintf(stderr,
-               "usage: urban_detection_spark run --cloud CLOUD.pcd|.bin --path PATH.json "
-               "--model NET.onnx --out DIR\n"
-               "         [--classes NAMES.txt] [--keep a,b] [--model-config image_label_transfer.yaml]\n"
-               "         [--input-size WxH] [--mean r,g,b] [--scale r,g,b] [--bgr] [--probabilities]\n"
-               "         [--stride N] [--min-votes N] [--eps M] [--min-points N] "
-               "[--min-instance-points N]\n"
-               "         [--box-margin M] [--instance-pcd] [--cut a,b] [--no-images] [--write-masks]\n"
-               "       urban_detection_spark synthetic --out DIR [--step M]\n"
-               "       urban_detection_spark kitti [--data DIR] (--model NET.onnx | --box-oracle) "
-               "[--classes NAMES.txt] [--keep a,b]\n"
-               "         [--min-confidence C] [--occlusion-margin M] [--repeat N]\n");
+  std::fprintf(
+      stderr,
+      "usage: urban_detection_spark run --cloud CLOUD.pcd|.bin --path PATH.json "
+      "--model NET.onnx --out DIR\n"
+      "         [--classes NAMES.txt] [--keep a,b] [--model-config image_label_transfer.yaml]\n"
+      "         [--input-size WxH] [--mean r,g,b] [--scale r,g,b] [--bgr] [--probabilities]\n"
+      "         [--stride N] [--min-votes N] [--eps M] [--min-points N] "
+      "[--min-instance-points N]\n"
+      "         [--box-margin M] [--instance-pcd] [--cut a,b] [--no-images] [--write-masks]\n"
+      "       urban_detection_spark synthetic --out DIR [--step M]\n"
+      "       urban_detection_spark kitti [--data DIR] (--model NET.onnx | --box-oracle) "
+      "[--classes NAMES.txt] [--keep a,b]\n"
+      "         [--min-confidence C] [--occlusion-margin M] [--repeat N]\n");
   return 2;
 }

@@ -2,11 +2,11 @@
 // (no downloaded weights). Tests skip visibly when Debian's python3-onnx is not installed.
 #pragma once
 
+#include <unistd.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <string>
-
-#include <unistd.h>
 
 #include "urban_detection/core/spark_segmenter.h"
 
@@ -38,9 +38,9 @@ inline bool makeColourModel(const std::string& dir, int width, int height,
   }
   const std::string model = dir + "/colour_model.onnx";
   *names_path = dir + "/colour_classes.txt";
-  const std::string cmd = "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " +
-                          model + " " + std::to_string(width) + " " + std::to_string(height) +
-                          " " + *names_path;
+  const std::string cmd = "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " + model +
+                          " " + std::to_string(width) + " " + std::to_string(height) + " " +
+                          *names_path;
   if (std::system(cmd.c_str()) != 0) {
     *why = "spark_colour_model.py failed: " + cmd;
     return false;

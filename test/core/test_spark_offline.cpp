@@ -1,7 +1,7 @@
 // Offline SPARK workflow: capture path, orthographic z-buffer rendering, back-projection,
 // DBSCAN (against a brute-force oracle), instances on a synthetic scene with known classes
 // segmented by the tiny colour network, JSON export read back with OpenCV's JSON parser.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <gtest/gtest.h>
 
@@ -9,10 +9,9 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <opencv2/core.hpp>
 #include <random>
 #include <set>
-
-#include <opencv2/core.hpp>
 
 #include "spark_test_model.h"
 #include "urban_detection/core/spark_capture.h"
@@ -117,14 +116,18 @@ TEST(SparkCapture, PathJsonIsValidated) {
   EXPECT_EQ(p.image_height_px, 200);
   EXPECT_EQ(p.colour, "height");
   EXPECT_DOUBLE_EQ(p.max_depth_m, 80.0);  // default kept
-  EXPECT_FALSE(core::readCapturePathJson(write(R"({"path": [[0,0,0]], "rotation": 3})"), &p, &error));
+  EXPECT_FALSE(
+      core::readCapturePathJson(write(R"({"path": [[0,0,0]], "rotation": 3})"), &p, &error));
   EXPECT_NE(error.find("unknown key 'rotation'"), std::string::npos) << error;
   EXPECT_FALSE(core::readCapturePathJson(write(R"({"path": [[0,0]]})"), &p, &error));
   EXPECT_FALSE(core::readCapturePathJson(write(R"({"path": []})"), &p, &error));
-  EXPECT_FALSE(core::readCapturePathJson(write(R"({"path": [[0,0,0]], "rotations": 0})"), &p, &error));
+  EXPECT_FALSE(
+      core::readCapturePathJson(write(R"({"path": [[0,0,0]], "rotations": 0})"), &p, &error));
   EXPECT_NE(error.find("rotations"), std::string::npos) << error;
-  EXPECT_FALSE(core::readCapturePathJson(write(R"({"path": [[0,0,0]], "rotations": 2.5})"), &p, &error));
-  EXPECT_FALSE(core::readCapturePathJson(write(R"({"path": [[0,0,0]], "colour": "x"})"), &p, &error));
+  EXPECT_FALSE(
+      core::readCapturePathJson(write(R"({"path": [[0,0,0]], "rotations": 2.5})"), &p, &error));
+  EXPECT_FALSE(
+      core::readCapturePathJson(write(R"({"path": [[0,0,0]], "colour": "x"})"), &p, &error));
   EXPECT_FALSE(core::readCapturePathJson(write("{\"path\": [[0,0,0]"), &p, &error));
   EXPECT_FALSE(core::readCapturePathJson(dir + "/missing.json", &p, &error));
 }
@@ -137,9 +140,10 @@ TEST(SparkDbscan, MatchesBruteForceDefinition) {
   std::normal_distribution<float> g(0.0f, 0.4f);
   std::uniform_real_distribution<float> u(-10.0f, 10.0f);
   CloudXYZIRT cloud;
-  for (const Eigen::Vector3f& c : {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(3, 0, 0),
-                                  Eigen::Vector3f(-4, 5, 1)})
-    for (int i = 0; i < 120; ++i) cloud.push_back(pt(c.x() + g(rng), c.y() + g(rng), c.z() + g(rng)));
+  for (const Eigen::Vector3f& c :
+       {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(3, 0, 0), Eigen::Vector3f(-4, 5, 1)})
+    for (int i = 0; i < 120; ++i)
+      cloud.push_back(pt(c.x() + g(rng), c.y() + g(rng), c.z() + g(rng)));
   for (int i = 0; i < 60; ++i) cloud.push_back(pt(u(rng), u(rng), u(rng)));
   cloud.push_back(pt(std::numeric_limits<float>::quiet_NaN(), 0, 0));
   std::vector<std::uint32_t> members;
@@ -202,7 +206,7 @@ TEST(SparkDbscan, MatchesBruteForceDefinition) {
 
 TEST(SparkInstances, VotesClassifyAndBoxesCut) {
   CloudXYZIRT cloud;
-  for (int i = 0; i < 20; ++i) cloud.push_back(pt(0.1f * i, 0, 0));    // 0..19: class 1
+  for (int i = 0; i < 20; ++i) cloud.push_back(pt(0.1f * i, 0, 0));       // 0..19: class 1
   for (int i = 0; i < 20; ++i) cloud.push_back(pt(10 + 0.1f * i, 0, 0));  // 20..39: class 2
   cloud.push_back(pt(0.5f, 0.05f, 0.0f));  // 40: inside the first box, never hit
   std::vector<int> point_class(cloud.size(), -1);

@@ -1,7 +1,7 @@
 // Segmentation scores, the ONNX segmentation model (tiny colour network built at test time) and
 // the live image -> object label transfer: synthetic camera with hand-computed projections, and
 // KITTI object frames (calibration, label_2 2-D boxes) from the shared data.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,6 @@
 #include <fstream>
 #include <limits>
 #include <map>
-
 #include <opencv2/core.hpp>
 
 #include "spark_test_model.h"
@@ -32,7 +31,9 @@ cv::Mat blob(int c, int h, int w) {
   const int sizes[4] = {1, c, h, w};
   return cv::Mat(4, sizes, CV_32F, cv::Scalar(0));
 }
-float& at(cv::Mat& b, int c, int y, int x) { return b.ptr<float>()[(c * b.size[2] + y) * b.size[3] + x]; }
+float& at(cv::Mat& b, int c, int y, int x) {
+  return b.ptr<float>()[(c * b.size[2] + y) * b.size[3] + x];
+}
 
 TEST(SegmentationScores, ArgmaxAndSoftmaxConfidence) {
   cv::Mat b = blob(3, 2, 2);
@@ -108,7 +109,7 @@ TEST(SegmentationModel, ColourNetworkLabelsPixelsByColour) {
   std::string error;
   ASSERT_TRUE(model.load(p, &error)) << error;
   // A 64 x 32 BGR image (twice the network size): four vertical bands.
-  cv::Mat img(32, 64, CV_8UC3, cv::Scalar(128, 128, 128));  // grey background
+  cv::Mat img(32, 64, CV_8UC3, cv::Scalar(128, 128, 128));    // grey background
   img(cv::Rect(16, 0, 16, 32)).setTo(cv::Scalar(0, 0, 255));  // red (BGR)
   img(cv::Rect(32, 0, 16, 32)).setTo(cv::Scalar(0, 255, 0));  // green
   img(cv::Rect(48, 0, 16, 32)).setTo(cv::Scalar(255, 0, 0));  // blue
@@ -269,6 +270,15 @@ TEST(ImageLabelTransfer, EmptyAndInvalidInputsGiveUnknown) {
   EXPECT_EQ(votes[0].class_id, -1);
   transfer.transfer(pts, opticalFromLidar(), syntheticCamera(), syntheticLabels(), &votes);
   EXPECT_EQ(votes[0].class_id, test::kCar);
+  // Ids far above the point count take the sorted-list path: same votes, ids in order.
+  for (int i = 0; i < 4; ++i) addPoint(&pts, 4000000000u, 10.0f, -2.0f - 0.01f * i, 0.0f);
+  transfer.transfer(pts, opticalFromLidar(), syntheticCamera(), syntheticLabels(), &votes);
+  ASSERT_EQ(votes.size(), 2u);
+  EXPECT_EQ(votes[0].object_id, 1u);
+  EXPECT_EQ(votes[0].class_id, test::kCar);
+  EXPECT_EQ(votes[1].object_id, 4000000000u);
+  EXPECT_EQ(votes[1].class_id, test::kVegetation);
+  EXPECT_EQ(votes[1].points, 4u);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -286,8 +296,7 @@ bool loadKitti(const std::string& id, KittiFrame* f, std::string* error) {
   if (!core::readKittiCalibration(dir + "calib/" + id + ".txt", &f->calib, error) ||
       !core::readKittiLabels(dir + "label_2/" + id + ".txt", &f->labels, error) ||
       !core::readKittiBin(dir + "velodyne/" + id + ".bin", &f->cloud, error) ||
-      !core::readPngSize(dir + "image_2/" + id + ".png", &f->camera.width_px,
-                         &f->camera.height_px))
+      !core::readPngSize(dir + "image_2/" + id + ".png", &f->camera.width_px, &f->camera.height_px))
     return false;
   f->camera.projection = f->calib.p2;
   f->cam_from_velo.linear() = f->calib.r0_rect * f->calib.tr_velo_to_cam.leftCols<3>();
@@ -335,8 +344,8 @@ TEST(ImageLabelTransferKitti, BoxPointsProjectIntoTheirTwoDimensionalBox) {
         if (u < 0 || v < 0 || u >= f.camera.width_px || v >= f.camera.height_px) continue;
         ++in_image;
         const double m = 3.0;  // [px] label boxes are hand-drawn
-        inside += u >= l.bbox[0] - m && u <= l.bbox[2] + m && v >= l.bbox[1] - m &&
-                  v <= l.bbox[3] + m;
+        inside +=
+            u >= l.bbox[0] - m && u <= l.bbox[2] + m && v >= l.bbox[1] - m && v <= l.bbox[3] + m;
       }
       if (in_image < 10) continue;
       ++checked;
@@ -355,7 +364,7 @@ TEST(ImageLabelTransferKitti, OracleMasksGiveEachLabelledObjectItsClass) {
   if (!std::filesystem::exists(dir + "/image_2/000000.png"))
     GTEST_SKIP() << "KITTI object frames not found under " << dir;
   const std::map<std::string, int> class_ids = {
-      {"Car", 1}, {"Van", 2}, {"Truck", 3}, {"Pedestrian", 4}, {"Person_sitting", 5},
+      {"Car", 1},     {"Van", 2},  {"Truck", 3}, {"Pedestrian", 4}, {"Person_sitting", 5},
       {"Cyclist", 6}, {"Tram", 7}, {"Misc", 8}};
   ImageLabelTransfer transfer;
   int objects = 0, correct = 0;
@@ -380,9 +389,9 @@ TEST(ImageLabelTransferKitti, OracleMasksGiveEachLabelledObjectItsClass) {
       mask(cv::Rect(a, b + cv::Point(1, 1)) & cv::Rect(0, 0, mask.cols, mask.rows))
           .setTo(it->second);
       for (const std::size_t i : pointsInLabel(f, l))
-        addPoint(&pts, static_cast<std::uint32_t>(k + 1), f.cloud[i].x, f.cloud[i].y,
-                 f.cloud[i].z);
-      if (l.occluded == 0 && l.truncated < 0.3) truth[static_cast<std::uint32_t>(k + 1)] = it->second;
+        addPoint(&pts, static_cast<std::uint32_t>(k + 1), f.cloud[i].x, f.cloud[i].y, f.cloud[i].z);
+      if (l.occluded == 0 && l.truncated < 0.3)
+        truth[static_cast<std::uint32_t>(k + 1)] = it->second;
     }
     SegmentationScores scores;
     scores.assignLabels(mask, 0);

@@ -19,7 +19,8 @@ sensor_msgs::Image makeImage(const std::string& encoding, int channels) {
   m.data.assign(m.step * m.height, 0);
   for (int y = 0; y < 2; ++y)
     for (int x = 0; x < 3; ++x)
-      for (int c = 0; c < channels; ++c) m.data[y * m.step + x * channels + c] = 10 * (y * 3 + x) + c;
+      for (int c = 0; c < channels; ++c)
+        m.data[y * m.step + x * channels + c] = 10 * (y * 3 + x) + c;
   return m;
 }
 

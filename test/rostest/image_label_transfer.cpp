@@ -14,9 +14,10 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <tf2_ros/static_transform_broadcaster.h>
-#include <visualization_msgs/MarkerArray.h>
 #include <unistd.h>
+#include <visualization_msgs/MarkerArray.h>
 
+#include <Eigen/Geometry>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -24,8 +25,6 @@
 #include <functional>
 #include <mutex>
 #include <thread>
-
-#include <Eigen/Geometry>
 
 #include "urban_detection/DetectedObjectArray.h"
 
@@ -57,12 +56,14 @@ TEST(ImageLabelTransferNodelet, LaunchFileWithoutModelRefusesToStart) {
   // The transfer nodelet is loaded in the manager (onInit ran and refused), it just never
   // advertises its output.
   nodelet::NodeletList list;
-  EXPECT_TRUE(waitFor([&] {
-    if (!ros::service::call("/urban_detection_manager/list", list)) return false;
-    for (const auto& n : list.response.nodelets)
-      if (n == "/image_label_transfer") return true;
-    return false;
-  }, 20.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        if (!ros::service::call("/urban_detection_manager/list", list)) return false;
+        for (const auto& n : list.response.nodelets)
+          if (n == "/image_label_transfer") return true;
+        return false;
+      },
+      20.0));
   ros::Duration(1.0).sleep();
   EXPECT_EQ(sub.getNumPublishers(), 0u);
   EXPECT_EQ(got, nullptr);
@@ -136,12 +137,12 @@ struct Scene {
 TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
   if (std::system("/usr/bin/python3 -c 'import onnx' >/dev/null 2>&1") != 0)
     GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("ud_ilt_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("ud_ilt_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string model = (dir / "colour.onnx").string(), names = (dir / "classes.txt").string();
-  const std::string cmd = "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " +
-                          model + " 100 80 " + names;
+  const std::string cmd =
+      "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " + model + " 100 80 " + names;
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const std::string ns = "/ilt/image_label_transfer/";
   ASSERT_TRUE(ros::param::has(ns + "transfer/min_confidence"))
@@ -169,7 +170,8 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
   tf.sendTransform(t);
 
   nodelet::Loader manager(false);
-  ASSERT_TRUE(manager.load("/ilt/image_label_transfer", "urban_detection/ImageLabelTransfer", {}, {}));
+  ASSERT_TRUE(
+      manager.load("/ilt/image_label_transfer", "urban_detection/ImageLabelTransfer", {}, {}));
   Scene scene;
   scene.advertise();
   ros::Duration(0.5).sleep();
@@ -182,13 +184,16 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
             std::lock_guard<std::mutex> lock(scene.mutex);
             scene.received.push_back(m);
           }));
-  ASSERT_TRUE(waitFor([&] { return scene.points.getNumSubscribers() > 0 &&
-                                   scene.image.getNumSubscribers() > 0; }, 10.0));
-  const bool got = waitFor([&] {
-    scene.publish(ros::Time::now());
-    std::lock_guard<std::mutex> lock(scene.mutex);
-    return !scene.received.empty();
-  }, 20.0);
+  ASSERT_TRUE(waitFor(
+      [&] { return scene.points.getNumSubscribers() > 0 && scene.image.getNumSubscribers() > 0; },
+      10.0));
+  const bool got = waitFor(
+      [&] {
+        scene.publish(ros::Time::now());
+        std::lock_guard<std::mutex> lock(scene.mutex);
+        return !scene.received.empty();
+      },
+      20.0);
   ASSERT_TRUE(got) << "no objects/classified";
   DetectedObjectArray::ConstPtr out;
   {
@@ -199,8 +204,8 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
   EXPECT_EQ(out->header.frame_id, "velodyne");
   EXPECT_EQ(out->objects[0].class_label, "car");
   // Pure red: logits 4 * relu(0.5, 2, -1, -1) = (2, 8, 0, 0) -> p(car) = e^8 / (e^8 + e^2 + 2).
-  EXPECT_NEAR(out->objects[0].class_confidence, std::exp(8.0) / (std::exp(8.0) + std::exp(2.0) + 2.0),
-              1e-3);
+  EXPECT_NEAR(out->objects[0].class_confidence,
+              std::exp(8.0) / (std::exp(8.0) + std::exp(2.0) + 2.0), 1e-3);
   EXPECT_EQ(out->objects[1].class_label, "vegetation");
   EXPECT_EQ(out->objects[2].class_label, "unknown");  // behind the camera
   EXPECT_FLOAT_EQ(out->objects[2].class_confidence, 0.0f);

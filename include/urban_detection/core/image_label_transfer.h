@@ -6,11 +6,10 @@
 /// seed paper Sec. 3.4, here with the real camera instead of a virtual one). ROS-free.
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
 
 #include "urban_detection/core/point_types.h"
 #include "urban_detection/core/spark_segmenter.h"
@@ -35,13 +34,13 @@ struct PinholeCamera {
 
 /// Parameters of the vote, mirrored in config/image_label_transfer.yaml (`transfer:`).
 struct ImageLabelTransferParams {
-  double min_depth_m = 0.5;      ///< [m] points closer to (or behind) the camera are ignored
-  int min_points = 3;            ///< [-] objects with fewer considered points stay unknown
-  double min_confidence = 0.3;   ///< [0..1] objects whose best confidence is lower stay unknown
+  double min_depth_m = 0.5;     ///< [m] points closer to (or behind) the camera are ignored
+  int min_points = 3;           ///< [-] objects with fewer considered points stay unknown
+  double min_confidence = 0.3;  ///< [0..1] objects whose best confidence is lower stay unknown
   /// [m] a point is occluded (does not vote) when, in its image cell, a point of another object
   /// is closer to the camera by more than this; <= 0 disables the test.
   double occlusion_margin_m = 1.0;
-  int occlusion_cell_px = 8;     ///< [px] side of the image cells of the occlusion test
+  int occlusion_cell_px = 8;  ///< [px] side of the image cells of the occlusion test
   /// Classes that vote, indexed by class id (true = votes); empty = every class votes. Pixels
   /// of other classes (road, sky, building, ...) count as considered but vote for nothing.
   std::vector<bool> kept_classes;
@@ -49,8 +48,8 @@ struct ImageLabelTransferParams {
 
 /// The vote of one object.
 struct ObjectClassVote {
-  std::uint32_t object_id = 0;   ///< the object's label in the object points
-  int class_id = -1;             ///< winning class, -1 = unknown (too few points, too unsure)
+  std::uint32_t object_id = 0;  ///< the object's label in the object points
+  int class_id = -1;            ///< winning class, -1 = unknown (too few points, too unsure)
   /// [0..1] summed pixel confidence of the winning class / considered points (with confident
   /// pixels this is the share of the object's visible points that fall on the class).
   float confidence = 0.0f;
@@ -89,18 +88,19 @@ class ImageLabelTransfer {
 
  private:
   struct Projected {
-    std::int32_t slot;   // index into votes
-    std::int32_t cell;   // occlusion cell, -1 when the test is off
-    float depth;         // [m]
-    std::int32_t sx, sy; // score-map pixel
+    std::int32_t slot;    // index into votes
+    std::int32_t cell;    // occlusion cell, -1 when the test is off
+    float depth;          // [m]
+    std::int32_t sx, sy;  // score-map pixel
   };
   ImageLabelTransferParams params_;
   ImageLabelTransferStats stats_;
-  std::vector<std::uint32_t> ids_;          // sorted unique object ids
+  std::vector<std::uint32_t> ids_;        // sorted unique object ids
+  std::vector<std::int32_t> slot_of_id_;  // object id -> slot (ids up to ~4x the points)
   std::vector<Projected> projected_;
-  std::vector<float> cell_depth_;           // per occlusion cell: nearest depth
-  std::vector<std::int32_t> cell_slot_;     // ... and the object slot it belongs to
-  std::vector<float> scores_;               // [slot][class] summed confidences
+  std::vector<float> cell_depth_;        // per occlusion cell: nearest depth
+  std::vector<std::int32_t> cell_slot_;  // ... and the object slot it belongs to
+  std::vector<float> scores_;            // [slot][class] summed confidences
 };
 
 }  // namespace core

@@ -6,12 +6,11 @@
 /// into the cloud ("the first point hit along the view ray") is a look-up. ROS-free.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "urban_detection/core/point_types.h"
 
@@ -53,14 +52,13 @@ struct OrthoCamera {
   double yaw_deg = 0.0;    ///< [deg] heading of the view direction about z (0 = +x)
   double pitch_deg = 0.0;  ///< [deg]
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< rows: right, down, forward
-  int width_px = 0, height_px = 0;                           ///< [px]
-  double metres_per_pixel = 0.05;                            ///< [m/px]
-  double max_depth_m = 80.0;                                 ///< [m]
+  int width_px = 0, height_px = 0;                         ///< [px]
+  double metres_per_pixel = 0.05;                          ///< [m/px]
+  double max_depth_m = 80.0;                               ///< [m]
 
   /// Builds the rotation from yaw and pitch.
   static OrthoCamera make(const Eigen::Vector3d& position, double yaw_deg, double pitch_deg,
-                          int width_px, int height_px, double metres_per_pixel,
-                          double max_depth_m);
+                          int width_px, int height_px, double metres_per_pixel, double max_depth_m);
   /// Image coordinates (continuous, pixel centres at +0.5) and depth along the view ray [m].
   void project(const Eigen::Vector3d& p, double* x_px, double* y_px, double* depth_m) const;
   /// The point on the view ray of pixel centre (x, y) at `depth_m` (inverse of project()).
@@ -86,9 +84,7 @@ class OrthoRenderer {
   std::size_t render(const CloudXYZIRT& cloud, const std::vector<cv::Vec3b>& colours,
                      const OrthoCamera& camera, int splat_radius_px, cv::Mat* image);
   /// Index of the first point hit by the view ray of pixel (x, y) of the last render, or -1.
-  std::int32_t hit(int x, int y) const {
-    return index_[static_cast<std::size_t>(y) * width_ + x];
-  }
+  std::int32_t hit(int x, int y) const { return index_[static_cast<std::size_t>(y) * width_ + x]; }
   /// [m] depth of that hit (infinity when none).
   float depth(int x, int y) const { return depth_[static_cast<std::size_t>(y) * width_ + x]; }
   int width() const { return width_; }

@@ -5,11 +5,10 @@
 /// are exported as JSON and cut out as sub-clouds. ROS-free.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "urban_detection/core/point_types.h"
 #include "urban_detection/core/spark_capture.h"
@@ -20,13 +19,13 @@ namespace core {
 
 /// Parameters of back-projection and clustering, mirrored in config/spark.json ("spark").
 struct SparkParams {
-  int mask_stride_px = 4;         ///< [px] every n-th mask pixel in x and y is cast back
-  int min_point_votes = 1;        ///< [-] a point needs this many votes to be classified
-  double dbscan_eps_m = 0.5;      ///< [m] DBSCAN neighbourhood radius
-  int dbscan_min_points = 4;      ///< [-] DBSCAN core point: this many neighbours (itself incl.)
-  int min_instance_points = 10;   ///< [-] smaller clusters are dropped
-  double box_margin_m = 0.1;      ///< [m] boxes are enlarged by this for sub-clouds and cuts
-  std::vector<bool> kept_classes; ///< by class id, true = classified; empty = all classes
+  int mask_stride_px = 4;          ///< [px] every n-th mask pixel in x and y is cast back
+  int min_point_votes = 1;         ///< [-] a point needs this many votes to be classified
+  double dbscan_eps_m = 0.5;       ///< [m] DBSCAN neighbourhood radius
+  int dbscan_min_points = 4;       ///< [-] DBSCAN core point: this many neighbours (itself incl.)
+  int min_instance_points = 10;    ///< [-] smaller clusters are dropped
+  double box_margin_m = 0.1;       ///< [m] boxes are enlarged by this for sub-clouds and cuts
+  std::vector<bool> kept_classes;  ///< by class id, true = classified; empty = all classes
 };
 
 /// Accumulates the class votes of cast-back pixels per cloud point.
@@ -64,7 +63,7 @@ int dbscan(const CloudXYZIRT& cloud, const std::vector<std::uint32_t>& members, 
 
 /// One segmented object instance.
 struct SparkInstance {
-  std::uint32_t id = 0;                ///< 1..N
+  std::uint32_t id = 0;  ///< 1..N
   int class_id = -1;
   std::vector<std::uint32_t> indices;  ///< classified points of the cluster (cloud positions)
   Eigen::Vector3f min_pt = Eigen::Vector3f::Zero();    ///< [m] axis-aligned box

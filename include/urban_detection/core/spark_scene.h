@@ -5,12 +5,11 @@
 /// 3 pole). ROS-free.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "urban_detection/core/point_types.h"
 
@@ -19,10 +18,10 @@ namespace core {
 
 /// One object of the scene: its class id, true axis-aligned box and point range.
 struct SparkSceneObject {
-  int class_id = 0;              ///< 1 car, 2 vegetation, 3 pole
+  int class_id = 0;                ///< 1 car, 2 vegetation, 3 pole
   Eigen::Vector3f min_pt, max_pt;  ///< [m] true box
-  std::uint32_t first = 0;       ///< first point position in the cloud
-  std::uint32_t count = 0;       ///< number of points (contiguous)
+  std::uint32_t first = 0;         ///< first point position in the cloud
+  std::uint32_t count = 0;         ///< number of points (contiguous)
 };
 
 /// Builds the scene: ground (z = 0, x in [-5, 40], y in [-15, 15]) then the objects, with the

@@ -12,11 +12,10 @@
 #pragma once
 
 #include <array>
-#include <string>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/dnn.hpp>
+#include <string>
+#include <vector>
 
 namespace urban_detection {
 namespace core {
@@ -62,10 +61,10 @@ class SegmentationScores {
 
 /// Network input geometry and normalisation, mirrored in config/image_label_transfer.yaml.
 struct SegmentationModelParams {
-  std::string model_path;             ///< ONNX file; mandatory
-  int input_width_px = 1024;          ///< [px] the image is resized to this before inference
-  int input_height_px = 512;          ///< [px]
-  bool input_rgb = true;              ///< network expects RGB channel order (images come BGR)
+  std::string model_path;     ///< ONNX file; mandatory
+  int input_width_px = 1024;  ///< [px] the image is resized to this before inference
+  int input_height_px = 512;  ///< [px]
+  bool input_rgb = true;      ///< network expects RGB channel order (images come BGR)
   /// Per-channel mean subtracted from the 0..255 pixel values, in the network's channel order.
   std::array<double, 3> mean = {123.675, 116.28, 103.53};
   /// Per-channel factor applied after the mean (1 / standard deviation; 1/255 for [0, 1]).
@@ -98,22 +97,20 @@ class SegmentationModel {
   SegmentationModelParams params_;
   cv::dnn::Net net_;
   bool loaded_ = false;
-  cv::Mat resized_, colour_, blob_, output_;  // scratch reused between images
+  cv::Mat resized_, colour_, float_, blob_, output_;  // scratch reused between images
   SegmentationModelStats stats_;
 };
 
 /// Reads a class-names file: one name per line (line n = class id n), blank lines are kept as
 /// empty names, a trailing newline is ignored, '\r' stripped. Returns false if unreadable or
 /// empty.
-bool readClassNames(const std::string& path, std::vector<std::string>* names,
-                    std::string* error);
+bool readClassNames(const std::string& path, std::vector<std::string>* names, std::string* error);
 
 /// Resolves `keep` (class names or decimal ids) against `names` into a membership table of size
 /// `bound` (true = the class votes). Empty `keep` keeps every class. Returns false with `error`
 /// naming the first entry that is neither a known name nor an id below `bound`.
-bool resolveKeptClasses(const std::vector<std::string>& keep,
-                        const std::vector<std::string>& names, int bound,
-                        std::vector<bool>* kept, std::string* error);
+bool resolveKeptClasses(const std::vector<std::string>& keep, const std::vector<std::string>& names,
+                        int bound, std::vector<bool>* kept, std::string* error);
 
 }  // namespace core
 }  // namespace urban_detection
