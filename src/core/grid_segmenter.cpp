@@ -39,6 +39,7 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
   split_z_.assign(n + 1, -std::numeric_limits<float>::infinity());
   label_lut_.assign(n + 1, static_cast<std::uint8_t>(SegmentClass::kUnknown));
   hops_.assign(n, 0);
+  dense_.assign(n, 0);
   // Terrain bit map of fillTerrain: a zero word of padding on both sides of each row, so
   // windows reaching past the grid's left and right edges read zeros.
   bit_words_ = static_cast<std::size_t>((grid_.cols() + 63) / 64 + 2);
@@ -58,6 +59,7 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   for (const std::int32_t c : grid_.occupiedCells()) {
     cell_class_[c] = SegmentClass::kUnknown;
     wall_support_[c] = 0;
+    dense_[c] = 0;
   }
   for (const std::int32_t c : touched_) ground_state_[c] = kNoGround;
   touched_.clear();
@@ -69,7 +71,9 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
 
   const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
   for (const std::int32_t c : grid_.occupiedCells()) {
-    if (grid_.cell(c).count < min_pts) cell_class_[c] = SegmentClass::kClutter;
+    const bool sparse = grid_.cell(c).count < min_pts;
+    if (sparse) cell_class_[c] = SegmentClass::kClutter;
+    dense_[c] = sparse ? 0 : 1;
   }
 
   growGround();
@@ -170,8 +174,9 @@ void GridSegmenter::growGround() {
       }
       const std::int32_t nc = c + offsets[d];
       if (ground_state_[nc] != kNoGround) continue;
-      const GridCell& cell = grid_.cell(nc);
-      if (cell.count == 0 || cell_class_[nc] == SegmentClass::kClutter) {
+      // dense_ (one byte per cell) answers "empty or sparse" for most neighbours, which are
+      // empty, without loading their 16-byte GridCell from the 1.6 MB cell array.
+      if (!dense_[nc]) {
         // Empty and sparse cells carry the terrain across the gaps between far rings and
         // through shadows, for a limited distance; sparse cells keep it for their points.
         if (hop >= max_hops) continue;
@@ -182,6 +187,7 @@ void GridSegmenter::growGround() {
         queue_.push_back(nc);
         continue;
       }
+      const GridCell& cell = grid_.cell(nc);
       const bool is_flat = cell.zRange() < flat;
       const float e = is_flat ? cell.zMean() : cell.z_min;
       if (std::fabs(e - g) >= step) continue;

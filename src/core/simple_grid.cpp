@@ -20,6 +20,7 @@ SimpleGrid::SimpleGrid(const SimpleGridParams& params) : params_(params) {
   params_.max_range_m = range;
   side_ = std::max(1, static_cast<int>(std::ceil(2.0 * range / cell)));
   inv_cell_ = static_cast<float>(1.0 / cell);
+  inv_side_ = 1.0 / side_;
   origin_m_ = static_cast<float>(-0.5 * side_ * cell);
   cells_.assign(static_cast<std::size_t>(side_) * side_, GridCell());
 }

@@ -159,3 +159,33 @@ TEST(SegmenterReference, RealScansMatchTheReference) {
 
 }  // namespace
 }  // namespace urban_detection
+
+namespace urban_detection {
+namespace {
+
+// SimpleGrid::rowOf / colOf take the quotient from a floating-point reciprocal: they must equal
+// integer division for every index, checked at each row boundary (where rounding would show)
+// for small, default and large grids (2000 x 2000 cells).
+TEST(SimpleGridIndex, RowAndColumnEqualIntegerDivisionAtEveryRowBoundary) {
+  for (const auto& geometry : {std::pair<double, double>{1.0, 3.0}, {0.5, 80.0}, {0.4, 50.0},
+                               {0.25, 250.0}, {0.05, 20.0}, {0.3, 97.3}}) {
+    core::SimpleGridParams p;
+    p.cell_size_m = geometry.first;
+    p.max_range_m = geometry.second;
+    const core::SimpleGrid grid(p);
+    const std::int64_t side = grid.cols(), cells = side * side;
+    std::size_t wrong = 0;
+    for (std::int64_t row = 0; row < side; ++row) {
+      for (std::int64_t d = -2; d <= 2; ++d) {
+        const std::int64_t i = row * side + d;
+        if (i < 0 || i >= cells) continue;
+        const auto idx = static_cast<std::int32_t>(i);
+        wrong += grid.rowOf(idx) != i / side || grid.colOf(idx) != i % side;
+      }
+    }
+    EXPECT_EQ(wrong, 0u) << "side " << side;
+  }
+}
+
+}  // namespace
+}  // namespace urban_detection

@@ -116,6 +116,7 @@ class GridSegmenter {
   std::vector<std::uint8_t> wall_support_;  // cell top at the upper edge of the field of view
   std::vector<float> ground_z_;          // [m] local ground elevation per cell
   std::vector<std::uint8_t> ground_state_;
+  std::vector<std::uint8_t> dense_;      // 1: occupied with at least min_points_per_cell points
   std::vector<std::uint8_t> hops_;       // empty cells crossed to reach a bridged cell
   std::vector<std::int32_t> queue_;
   std::vector<std::int32_t> touched_;    // cells whose ground state was set this frame
