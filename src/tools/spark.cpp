@@ -422,7 +422,8 @@ int runOffline(int argc, char** argv) {
   const double n_img = static_cast<double>(std::max<std::size_t>(1, poses.size()));
   std::printf(
       "timing: render %.2f ms/image (%.1f images/s, %.2f M points/s splatted), "
-      "segmentation (network or mask file) %.2f ms/image, back-projection %.3f ms/image (%.2f M rays/s, %.2f M "
+      "segmentation (network or mask file) %.2f ms/image, back-projection %.3f ms/image (%.2f M "
+      "rays/s, %.2f M "
       "classified points/s), clustering %.1f ms, image+record I/O %.2f ms/image\n",
       render_ms / n_img, 1000.0 * n_img / std::max(render_ms, 1e-9),
       1e-3 * static_cast<double>(cloud.size()) * n_img / std::max(render_ms, 1e-9), net_ms / n_img,
