@@ -1,11 +1,15 @@
 // urban_detection_spark: 2-D semantic segmentation transferred to 3-D point clouds (issue 9,
 // second seed paper "SPARK").
 //
-//   urban_detection_spark run --cloud CLOUD --path PATH.json --model NET.onnx --out DIR [options]
+//   urban_detection_spark run --cloud CLOUD --path PATH.json (--model NET.onnx | --masks DIR |
+//                             --render-only) --out DIR [options]
 //       Offline workflow (paper Sec. 3.2-3.5): orthographic virtual camera along the path ->
 //       images + a JSON record per image, network on each image, every n-th mask pixel cast
 //       back into the cloud (first point hit, z-buffer of point splats), DBSCAN per class ->
 //       DIR/instances.json; optional per-instance PCD sub-clouds and the cloud with classes cut.
+//       --render-only stops after the images (for an external segmenter, as the paper's Python
+//       script); --masks DIR then casts its label images DIR/img_NNNNN.png back (8-bit class id
+//       per pixel, 255 = no class).
 //   urban_detection_spark synthetic --out DIR
 //       Writes the coloured synthetic street (scene.pcd, x y z rgb) and a path (path.json) to try
 //       `run` with the colour network of test/spark_colour_model.py.
@@ -232,7 +236,8 @@ int runOffline(int argc, char** argv) {
   ModelOptions mo;
   core::SparkParams sp;
   std::vector<std::string> cut;
-  bool instance_pcd = false, write_images = true, write_masks = false;
+  bool instance_pcd = false, write_images = true, write_masks = false, render_only = false;
+  std::string masks_dir;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* o) { return ud::tools::optionValue(argc, argv, &i, o); };
@@ -266,17 +271,30 @@ int runOffline(int argc, char** argv) {
       write_images = false;
     else if (a == "--write-masks")
       write_masks = true;
+    else if (a == "--render-only")
+      render_only = true;
+    else if (a == "--masks")
+      masks_dir = value("--masks");
     else
       fail("unknown option " + a + " (see the file comment of src/tools/spark.cpp)");
   }
   if (cloud_path.empty() || path_json.empty() || out_dir.empty())
-    fail("run needs --cloud, --path, --model and --out");
+    fail("run needs --cloud, --path, --out and one of --model, --masks, --render-only");
+  if (render_only + !masks_dir.empty() + !mo.params.model_path.empty() != 1)
+    fail("run needs exactly one of --model NET.onnx, --masks DIR and --render-only");
+  if (render_only && !write_images) fail("--render-only writes images; drop --no-images");
   if (!(sp.dbscan_eps_m > 0.0)) fail("--eps must be > 0");
   std::string error;
   core::CapturePathParams cp;
   if (!core::readCapturePathJson(path_json, &cp, &error)) fail(error);
   core::SegmentationModel model;
-  loadModel(&mo, &model);
+  std::string error_names;
+  if (!mo.params.model_path.empty()) {
+    loadModel(&mo, &model);
+  } else if (!mo.names_file.empty() &&
+             !core::readClassNames(mo.names_file, &mo.names, &error_names)) {
+    fail(error_names);
+  }
   ud::CloudXYZIRT cloud;
   std::vector<cv::Vec3b> rgb, colours;
   if (!readCloud(cloud_path, &cloud, &rgb, &error)) fail(error);
@@ -313,7 +331,21 @@ int runOffline(int argc, char** argv) {
         fail(error);
     }
     const auto t2 = Clock::now();
-    if (!model.run(image, &scores, &error)) fail(error);
+    if (render_only) {
+      render_ms += msBetween(t0, t1);
+      io_ms += msBetween(t1, t2);
+      continue;
+    }
+    if (!masks_dir.empty()) {
+      // Label images of an external segmenter (paper Sec. 3.3: a Python script): 8-bit class
+      // id per pixel, 255 = no class, any size (sampled at the scaled pixel).
+      const std::string mask_file = masks_dir + "/" + name + ".png";
+      const cv::Mat mask = cv::imread(mask_file, cv::IMREAD_GRAYSCALE);
+      if (mask.empty()) fail("cannot read mask " + mask_file);
+      scores.assignLabels(mask, 255);
+    } else if (!model.run(image, &scores, &error)) {
+      fail(error);
+    }
     const auto t3 = Clock::now();
     if (!kept_resolved) {
       const int bound =
@@ -331,6 +363,15 @@ int runOffline(int argc, char** argv) {
     io_ms += msBetween(t1, t2) + msBetween(t3, t4);
     net_ms += msBetween(t2, t3);
     cast_ms += msBetween(t4, t5);
+  }
+  if (render_only) {
+    std::printf(
+        "rendered %zu images to %s/images (PNG + JSON record each) in %.1f ms (%.1f "
+        "images/s without I/O); segment them into %s/masks/img_NNNNN.png (8-bit class "
+        "ids, 255 = none) and rerun with --masks\n",
+        poses.size(), out_dir.c_str(), render_ms, 1000.0 * poses.size() / std::max(render_ms, 1e-9),
+        out_dir.c_str());
+    return 0;
   }
   const auto c0 = Clock::now();
   std::vector<int> point_class;
@@ -381,7 +422,8 @@ int runOffline(int argc, char** argv) {
   const double n_img = static_cast<double>(std::max<std::size_t>(1, poses.size()));
   std::printf(
       "timing: render %.2f ms/image (%.1f images/s, %.2f M points/s splatted), "
-      "network %.2f ms/image, back-projection %.3f ms/image (%.2f M rays/s, %.2f M "
+      "segmentation (network or mask file) %.2f ms/image, back-projection %.3f ms/image (%.2f M "
+      "rays/s, %.2f M "
       "classified points/s), clustering %.1f ms, image+record I/O %.2f ms/image\n",
       render_ms / n_img, 1000.0 * n_img / std::max(render_ms, 1e-9),
       1e-3 * static_cast<double>(cloud.size()) * n_img / std::max(render_ms, 1e-9), net_ms / n_img,
@@ -638,7 +680,7 @@ int main(int argc, char** argv) {
   std::fprintf(
       stderr,
       "usage: urban_detection_spark run --cloud CLOUD.pcd|.bin --path PATH.json "
-      "--model NET.onnx --out DIR\n"
+      "(--model NET.onnx | --masks DIR | --render-only) --out DIR\n"
       "         [--classes NAMES.txt] [--keep a,b] [--model-config image_label_transfer.yaml]\n"
       "         [--input-size WxH] [--mean r,g,b] [--scale r,g,b] [--bgr] [--probabilities]\n"
       "         [--stride N] [--min-votes N] [--eps M] [--min-points N] "
