@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,8 @@
 #include <sstream>
 
 #include <Eigen/Geometry>
+
+#include "urban_detection/core/object_class.h"
 
 namespace urban_detection {
 namespace core {
@@ -348,6 +351,130 @@ void buildSemanticKittiGroundTruth(const std::vector<std::uint32_t>& labels,
     }
   }
   gt->finalize(params.min_points);
+}
+
+// ------------------------------------------------------------------------------------------
+// Simulated drives
+
+void buildSimulatedGroundTruth(const GroundTruthFrame& frame,
+                               const SimulatedGroundTruthParams& params, EvalFrame* gt) {
+  const std::size_t n = frame.instance_ids.size();
+  gt->reset(n);
+  std::map<std::uint32_t, std::int32_t> object_of_instance;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t id = frame.instance_ids[i];
+    const auto cls = static_cast<ObjectClass>(i < frame.classes.size() ? frame.classes[i] : 0);
+    if (id == 0 || cls == ObjectClass::kGround || cls == ObjectClass::kWall) continue;
+    if (!isStreetObject(cls)) {
+      gt->role[i] = PointRole::kDontCare;  // trees, trunks, poles, signs
+      continue;
+    }
+    auto it = object_of_instance.find(id);
+    if (it == object_of_instance.end()) {
+      EvalObject o;
+      o.label = toString(cls);
+      o.id = id;
+      it = object_of_instance.emplace(id, static_cast<std::int32_t>(gt->objects.size())).first;
+      gt->objects.push_back(o);
+    }
+    gt->object_of_point[i] = it->second;
+  }
+  gt->finalize(params.min_points);
+}
+
+SimulatedDriveReader::SimulatedDriveReader(const std::string& pcap_path,
+                                           const std::string& gt_path,
+                                           const Calibration& calibration, double cut_angle_deg,
+                                           const DecoderParams& decoder_params)
+    : pcap_(pcap_path),
+      gt_reader_(gt_path),
+      cutter_(cut_angle_deg),
+      decoder_(calibration, decoder_params) {}
+
+bool SimulatedDriveReader::fillWindow(double stamp_s) {
+  // Drop frames older than this revolution (revolutions the pcap does not hold), then read
+  // until the window reaches past its stamp.
+  constexpr double kTolS = 5e-5;  // findGroundTruthFrame's default tolerance
+  while (!window_.empty() && window_.front().stamp_s < stamp_s - kTolS) {
+    window_.erase(window_.begin());
+  }
+  while (!gt_end_ && (window_.empty() || window_.back().stamp_s <= stamp_s + kTolS)) {
+    GroundTruthFrame f;
+    const GroundTruthReader::Result r = gt_reader_.next(&f);
+    if (r != GroundTruthReader::Result::kFrame) {
+      gt_end_ = true;
+      if (r == GroundTruthReader::Result::kCorrupt) end_message_ = gt_reader_.error();
+      break;
+    }
+    if (f.stamp_s < stamp_s - kTolS) continue;
+    window_.push_back(std::move(f));
+  }
+  return !window_.empty();
+}
+
+SimulatedDriveReader::Result SimulatedDriveReader::next(CloudXYZIRT* cloud, GroundTruthFrame* gt,
+                                                        std::string* message) {
+  message->clear();
+  cloud->clear();
+  if (!has_pending_) {
+    if (pcap_end_) {
+      *message = end_message_;
+      return Result::kEnd;
+    }
+    const PcapReader::Result r = pcap_.next(&pending_);
+    if (r != PcapReader::Result::kPacket) {
+      pcap_end_ = true;
+      if (r == PcapReader::Result::kTruncated) end_message_ = "truncated pcap";
+      *message = end_message_;
+      return Result::kEnd;
+    }
+    cutter_.startsNewRevolution(blockAzimuth(pending_.data.data(), 0));
+    has_pending_ = true;
+  }
+  // The pending packet opens this revolution; read until a packet crosses the cut angle.
+  const double stamp_s = pending_.stamp_s;
+  PcapPacket p = pending_;
+  has_pending_ = false;
+  for (;;) {
+    if (decoder_.decode(p.data.data(), p.data.size(), p.stamp_s - stamp_s, cloud, nullptr) !=
+        PacketStatus::kOk) {
+      ++bad_packets_;
+    }
+    const PcapReader::Result r = pcap_.next(&p);
+    if (r != PcapReader::Result::kPacket) {
+      pcap_end_ = true;
+      if (r == PcapReader::Result::kTruncated) end_message_ = "truncated pcap";
+      break;
+    }
+    if (cutter_.startsNewRevolution(blockAzimuth(p.data.data(), 0))) {
+      pending_ = p;
+      has_pending_ = true;
+      break;
+    }
+  }
+  ++revolutions_;
+  char stamp[32];
+  std::snprintf(stamp, sizeof(stamp), "%.6f", stamp_s);
+  if (!fillWindow(stamp_s)) {
+    *message = std::string("revolution at ") + stamp + " s: no ground-truth frame left";
+    return Result::kSkipped;
+  }
+  const std::ptrdiff_t k = findGroundTruthFrame(window_, stamp_s);
+  if (k < 0) {
+    *message = std::string("revolution at ") + stamp +
+               " s: no ground-truth frame of this stamp (partial revolution?)";
+    return Result::kSkipped;
+  }
+  if (window_[k].instance_ids.size() != cloud->size()) {
+    *message = std::string("revolution at ") + stamp + " s: " + std::to_string(cloud->size()) +
+               " decoded points but " + std::to_string(window_[k].instance_ids.size()) +
+               " labels in its ground-truth frame";
+    window_.erase(window_.begin(), window_.begin() + k + 1);
+    return Result::kSkipped;
+  }
+  *gt = std::move(window_[k]);
+  window_.erase(window_.begin(), window_.begin() + k + 1);
+  return Result::kFrame;
 }
 
 }  // namespace core

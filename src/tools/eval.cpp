@@ -5,7 +5,8 @@
 //                        [--detector hierarchical|kdtree|both] [--config FILE]...
 //                        [--json FILE] [--max-frames N] [--min-gt-points N] [--details]
 //
-// The ground-truth rules of each dataset are documented in eval_datasets.h.
+// The ground-truth rules of each dataset (KITTI object, SemanticKITTI, simulated drive) are
+// documented in eval_datasets.h.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -25,8 +26,13 @@
 #include "urban_detection/core/hierarchical_grid_detector.h"
 #include "urban_detection/core/kdtree_detector.h"
 #include "urban_detection/core/kitti_io.h"
+#include "urban_detection/core/object_class.h"
 #include "urban_detection/core/params_yaml.h"
 #include "urban_detection/ros/segmentation_params.h"
+
+#include <Eigen/Core>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "tool_common.h"
 
@@ -45,16 +51,31 @@ struct Frame {
   std::vector<std::uint16_t> point_class;  // dataset class per point, for diagnostics
 };
 
+// Frames are read in order (a simulated drive is a stream).
 class Dataset {
  public:
+  enum class Status { kFrame, kSkipped, kEnd };
   virtual ~Dataset() = default;
   virtual std::string name() const = 0;
-  virtual std::size_t size() const = 0;
-  virtual bool load(std::size_t i, Frame* f, std::string* error) = 0;
+  virtual Status next(Frame* f, std::string* error) = 0;
   virtual std::string className(std::uint16_t c) const = 0;
 };
 
-class KittiObjectDataset : public Dataset {
+// Datasets of files, frame i by index.
+class IndexedDataset : public Dataset {
+ public:
+  Status next(Frame* f, std::string* error) override {
+    if (next_ >= size()) return Status::kEnd;
+    return load(next_++, f, error) ? Status::kFrame : Status::kSkipped;
+  }
+  virtual std::size_t size() const = 0;
+  virtual bool load(std::size_t i, Frame* f, std::string* error) = 0;
+
+ private:
+  std::size_t next_ = 0;
+};
+
+class KittiObjectDataset : public IndexedDataset {
  public:
   // Point classes for diagnostics.
   enum : std::uint16_t { kBackground = 0, kOutOfView = 1, kDontCareBox = 2, kExcluded = 3,
@@ -106,7 +127,7 @@ class KittiObjectDataset : public Dataset {
   std::vector<std::string> bins_;
 };
 
-class SemanticKittiDataset : public Dataset {
+class SemanticKittiDataset : public IndexedDataset {
  public:
   SemanticKittiDataset(const std::string& dir, const core::SemanticKittiGroundTruthParams& p)
       : params_(p) {
@@ -158,6 +179,38 @@ class SemanticKittiDataset : public Dataset {
   core::SemanticKittiGroundTruthParams params_;
   std::vector<Item> frames_;
   std::vector<std::uint32_t> labels_;
+};
+
+class SimulatedDriveDataset : public Dataset {
+ public:
+  SimulatedDriveDataset(const std::string& gt, const std::string& pcap,
+                        const core::Calibration& cal, double cut_angle_deg,
+                        const core::SimulatedGroundTruthParams& p)
+      : reader_(pcap, gt, cal, cut_angle_deg), params_(p) {}
+  std::string name() const override { return "sim"; }
+  Status next(Frame* f, std::string* error) override {
+    switch (reader_.next(&f->cloud, &frame_, error)) {
+      case core::SimulatedDriveReader::Result::kEnd:
+        if (!error->empty()) std::fprintf(stderr, "warning: %s\n", error->c_str());
+        return Status::kEnd;
+      case core::SimulatedDriveReader::Result::kSkipped:
+        return Status::kSkipped;
+      case core::SimulatedDriveReader::Result::kFrame:
+        break;
+    }
+    f->id = "rev" + std::to_string(frame_.revolution);
+    core::buildSimulatedGroundTruth(frame_, params_, &f->gt);
+    f->point_class.assign(frame_.classes.begin(), frame_.classes.end());
+    return Status::kFrame;
+  }
+  std::string className(std::uint16_t c) const override {
+    return core::toString(static_cast<core::ObjectClass>(c));
+  }
+
+ private:
+  core::SimulatedDriveReader reader_;
+  core::SimulatedGroundTruthParams params_;
+  core::GroundTruthFrame frame_;
 };
 
 // ------------------------------------------------------------------------------------------
@@ -255,9 +308,15 @@ void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::Segment
     }
     ++diag->missed_by_cause[cause];
     if (out) {
-      std::fprintf(out, "  %s %-18s missed %-12s id %-5u %6zu pts %5.1f m  fg %3.0f%%  %s\n",
+      // The detections holding its points: "points of this object/detection size" each.
+      std::string pieces;
+      for (const auto& kv : det_count) {
+        pieces += " " + std::to_string(kv.second) + "/" +
+                  std::to_string(dets[kv.first].indices.size());
+      }
+      std::fprintf(out, "  %s %-18s missed %-12s id %-5u %6zu pts %5.1f m (%.1f, %.1f)  fg %3.0f%%  %s  in:%s\n",
                    f.id.c_str(), detector.c_str(), o.label.c_str(), o.id, pts[g].size(), range,
-                   100.0 * fg / np, cause.c_str());
+                   cx / np, cy / np, 100.0 * fg / np, cause.c_str(), pieces.c_str());
     }
   }
   for (std::size_t d = 0; d < dets.size(); ++d) {
@@ -284,6 +343,97 @@ void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::Segment
                    std::hypot(c.x(), c.y()), c.x(), c.y());
     }
   }
+}
+
+// ------------------------------------------------------------------------------------------
+// Debug pictures (--png DIR): top view of one frame, ground truth left, detections right.
+
+struct PngView {
+  double cx = 0.0, cy = 0.0, half_m = 30.0;  // [m] centre and half side of the view
+  double px_per_m = 20.0;
+};
+
+cv::Scalar idColour(std::uint32_t id) {
+  std::uint32_t h = id * 2654435761u;
+  return cv::Scalar(60 + (h & 0xFF) % 196, 60 + ((h >> 8) & 0xFF) % 196,
+                    60 + ((h >> 16) & 0xFF) % 196);
+}
+
+void writeFramePng(const std::string& path, const Frame& f, const urban_detection::LabeledCloud& fg,
+                   const std::vector<core::DetectedObject>& dets, const core::FrameMatch& m,
+                   const PngView& v) {
+  const int side = static_cast<int>(2.0 * v.half_m * v.px_per_m);
+  cv::Mat img(side, 2 * side + 10, CV_8UC3, cv::Scalar(0, 0, 0));
+  auto toPx = [&](double x, double y, int panel) {
+    // x forward = up, y left = left.
+    return cv::Point(panel * (side + 10) + static_cast<int>((v.half_m - (y - v.cy)) * v.px_per_m),
+                     static_cast<int>((v.half_m - (x - v.cx)) * v.px_per_m));
+  };
+  auto inView = [&](double x, double y) {
+    return std::abs(x - v.cx) < v.half_m && std::abs(y - v.cy) < v.half_m;
+  };
+  const std::size_t n = f.cloud.size();
+  std::vector<std::int32_t> det_of(n, -1);
+  for (std::size_t d = 0; d < dets.size(); ++d) {
+    for (std::uint32_t i : dets[d].indices) {
+      if (i < n) det_of[i] = static_cast<std::int32_t>(d);
+    }
+  }
+  std::vector<std::uint8_t> is_fg(n, 0);
+  for (const auto& p : fg) {
+    if (p.index < n) is_fg[p.index] = 1;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& p = f.cloud[i];
+    if (!inView(p.x, p.y)) continue;
+    const std::int32_t g = f.gt.object_of_point[i];
+    cv::Scalar cg = cv::Scalar(70, 40, 40);
+    if (g >= 0) {
+      cg = idColour(f.gt.objects[g].id);
+    } else if (f.gt.role.size() == n && f.gt.role[i] == core::PointRole::kDontCare) {
+      cg = cv::Scalar(110, 110, 110);
+    }
+    if (!is_fg[i]) cg *= 0.45;
+    img.at<cv::Vec3b>(toPx(p.x, p.y, 0)) = cv::Vec3b(cg[0], cg[1], cg[2]);
+    cv::Scalar cd = is_fg[i] ? cv::Scalar(90, 90, 90) : cv::Scalar(35, 35, 35);
+    if (det_of[i] >= 0) cd = idColour(7919u * static_cast<std::uint32_t>(det_of[i] + 1));
+    img.at<cv::Vec3b>(toPx(p.x, p.y, 1)) = cv::Vec3b(cd[0], cd[1], cd[2]);
+  }
+  for (std::size_t d = 0; d < dets.size(); ++d) {
+    if (m.verdict[d] != core::DetectionVerdict::kFalse) continue;
+    const auto& o = dets[d];
+    for (int panel = 0; panel < 2; ++panel) {
+      cv::rectangle(img, toPx(o.max_pt.x(), o.max_pt.y(), panel) - cv::Point(2, 2),
+                    toPx(o.min_pt.x(), o.min_pt.y(), panel) + cv::Point(2, 2),
+                    cv::Scalar(0, 0, 255), 1);
+    }
+  }
+  // Missed GT objects: yellow boxes around their points.
+  std::vector<Eigen::Vector4d> box(f.gt.objects.size(), Eigen::Vector4d(1e9, 1e9, -1e9, -1e9));
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t g = f.gt.object_of_point[i];
+    if (g < 0) continue;
+    auto& b = box[g];
+    b[0] = std::min<double>(b[0], f.cloud[i].x);
+    b[1] = std::min<double>(b[1], f.cloud[i].y);
+    b[2] = std::max<double>(b[2], f.cloud[i].x);
+    b[3] = std::max<double>(b[3], f.cloud[i].y);
+  }
+  for (std::size_t g = 0; g < f.gt.objects.size(); ++g) {
+    if (f.gt.objects[g].ignored || m.matched_detection[g] >= 0 || box[g][0] > box[g][2]) continue;
+    for (int panel = 0; panel < 2; ++panel) {
+      cv::rectangle(img, toPx(box[g][2], box[g][3], panel) - cv::Point(3, 3),
+                    toPx(box[g][0], box[g][1], panel) + cv::Point(3, 3), cv::Scalar(0, 255, 255),
+                    1);
+    }
+  }
+  // 5 m grid ticks and the sensor.
+  for (int panel = 0; panel < 2; ++panel) {
+    cv::circle(img, toPx(0, 0, panel), 3, cv::Scalar(255, 255, 255), -1);
+  }
+  cv::putText(img, f.id, cv::Point(5, 15), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+              cv::Scalar(255, 255, 255), 1);
+  cv::imwrite(path, img);
 }
 
 // ------------------------------------------------------------------------------------------
@@ -329,36 +479,73 @@ std::string countsJson(const std::map<std::string, std::size_t>& m) {
 
 void usage() {
   std::fprintf(stderr,
-      "usage: urban_detection_eval (--kitti-object DIR | --semantic-kitti DIR)\n"
+      "usage: urban_detection_eval (--kitti-object DIR | --semantic-kitti DIR |\n"
+      "                             --sim GTFILE --pcap PCAP [--calibration FILE]\n"
+      "                             [--cut-angle DEG])\n"
       "         [--detector hierarchical|kdtree|both] [--config FILE]... [--json FILE]\n"
       "         [--max-frames N] [--min-gt-points N] [--details]\n"
+      "  --sim GTFILE    ground-truth file of urban_detection_simulate (--gt), with the pcap it\n"
+      "                  wrote (--pcap); --calibration is the one the drive was simulated with\n"
+      "                  (default: nominal HDL-64E S2), --cut-angle the revolution cut [deg]\n"
       "  --config FILE   segmentation.yaml or detection.yaml style file (auto-detected by its\n"
       "                  keys), or a combined file with `segmentation:` / `detection:` maps;\n"
       "                  later files override earlier ones. Without it the in-class defaults\n"
       "                  (mirrored by config/*.yaml) are used.\n"
-      "  --details       print every missed object and false detection with its cause\n");
+      "  --details       print every missed object and false detection with its cause\n"
+      "  --png DIR       write a top view per frame (first detector): ground truth left,\n"
+      "                  detections right; yellow boxes missed objects, red false detections\n"
+      "  --png-view CX,CY,HALF_M   the square shown [m] (default 0,0,30)\n");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string kitti_dir, skitti_dir, json_path, detector_arg = "hierarchical";
+  std::string kitti_dir, skitti_dir, sim_gt, sim_pcap, calibration_path, json_path,
+      detector_arg = "hierarchical";
+  double cut_angle_deg = 0.0;
   std::vector<std::string> configs;
   long max_frames = -1;
   long min_gt_points = 10;
   bool details = false;
+  std::string png_dir;
+  PngView png_view;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* what) { return urban_detection::tools::optionValue(argc, argv, &i, what); };
     auto integer = [&](const char* what) { return urban_detection::tools::optionCount(argc, argv, &i, what); };
     if (a == "--kitti-object") kitti_dir = value("--kitti-object");
     else if (a == "--semantic-kitti") skitti_dir = value("--semantic-kitti");
+    else if (a == "--sim") sim_gt = value("--sim");
+    else if (a == "--pcap") sim_pcap = value("--pcap");
+    else if (a == "--calibration") calibration_path = value("--calibration");
+    else if (a == "--cut-angle") {
+      const std::string v = value("--cut-angle");
+      char* end = nullptr;
+      cut_angle_deg = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !std::isfinite(cut_angle_deg)) {
+        std::fprintf(stderr, "error: --cut-angle needs a number of degrees, got '%s'\n",
+                     v.c_str());
+        return 2;
+      }
+    }
     else if (a == "--detector") detector_arg = value("--detector");
     else if (a == "--config") configs.push_back(value("--config"));
     else if (a == "--json") json_path = value("--json");
     else if (a == "--max-frames") max_frames = integer("--max-frames");
     else if (a == "--min-gt-points") min_gt_points = integer("--min-gt-points");
     else if (a == "--details") details = true;
+    else if (a == "--png") png_dir = value("--png");
+    else if (a == "--png-view") {
+      const std::string v = value("--png-view");
+      if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &png_view.cx, &png_view.cy, &png_view.half_m) !=
+              3 ||
+          !(png_view.half_m > 0.0 && png_view.half_m <= 100.0)) {
+        std::fprintf(stderr, "error: --png-view needs CX,CY,HALF_M (metres), got '%s'\n",
+                     v.c_str());
+        return 2;
+      }
+      png_view.px_per_m = std::min(40.0, 600.0 / png_view.half_m);
+    }
     else if (a == "-h" || a == "--help") { usage(); return 0; }
     else {
       std::fprintf(stderr, "error: unknown argument '%s'\n", a.c_str());
@@ -366,9 +553,18 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if ((kitti_dir.empty() + skitti_dir.empty()) != 1) {
+  if ((!kitti_dir.empty() + !skitti_dir.empty() + !sim_gt.empty()) != 1) {
     std::fprintf(stderr, "error: give exactly one dataset\n");
     usage();
+    return 2;
+  }
+  if (sim_gt.empty() != sim_pcap.empty()) {
+    std::fprintf(stderr, "error: --sim GTFILE and --pcap PCAP go together\n");
+    usage();
+    return 2;
+  }
+  if (sim_gt.empty() && (!calibration_path.empty() || cut_angle_deg != 0.0)) {
+    std::fprintf(stderr, "error: --calibration and --cut-angle apply to --sim only\n");
     return 2;
   }
 
@@ -414,35 +610,45 @@ int main(int argc, char** argv) {
     p.min_points = static_cast<std::size_t>(min_gt_points);
     dataset.reset(new KittiObjectDataset(kitti_dir, p));
     dataset_path = kitti_dir;
-  } else {
+  } else if (!skitti_dir.empty()) {
     core::SemanticKittiGroundTruthParams p;
     p.min_points = static_cast<std::size_t>(min_gt_points);
     dataset.reset(new SemanticKittiDataset(skitti_dir, p));
     dataset_path = skitti_dir;
+  } else {
+    core::SimulatedGroundTruthParams p;
+    p.min_points = static_cast<std::size_t>(min_gt_points);
+    try {
+      const core::Calibration cal = core::loadCalibration(calibration_path);
+      dataset.reset(new SimulatedDriveDataset(sim_gt, sim_pcap, cal, cut_angle_deg, p));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 1;
+    }
+    dataset_path = sim_pcap;
   }
-  if (dataset->size() == 0) {
-    std::fprintf(stderr, "error: no frames found in %s\n", dataset_path.c_str());
-    return 1;
-  }
-  std::size_t frames = dataset->size();
-  if (max_frames >= 0) frames = std::min<std::size_t>(frames, static_cast<std::size_t>(max_frames));
+  const std::size_t max_frames_n =
+      max_frames >= 0 ? static_cast<std::size_t>(max_frames) : static_cast<std::size_t>(-1);
 
   std::vector<core::DetectionEvaluator> evaluators(detectors.size());
   std::vector<Diagnostics> diags(detectors.size());
   std::map<std::string, std::size_t> fg_composition;  // foreground points by dataset class
   std::ostringstream rows;
   bool first_row = true;
-  std::size_t failed = 0;
+  std::size_t failed = 0, frames = 0;
   Frame f;
   std::vector<core::SegmentClass> seg;
   urban_detection::LabeledCloud foreground;
   std::vector<core::DetectedObject> objects;
   core::FrameMatch match;
   if (details) std::printf("per-object details (missed GT objects, false detections):\n");
-  for (std::size_t i = 0; i < frames; ++i) {
+  while (frames < max_frames_n) {
     std::string err;
-    if (!dataset->load(i, &f, &err)) {
-      std::fprintf(stderr, "warning: skipping frame %zu: %s\n", i, err.c_str());
+    const Dataset::Status status = dataset->next(&f, &err);
+    if (status == Dataset::Status::kEnd) break;
+    ++frames;
+    if (status == Dataset::Status::kSkipped) {
+      std::fprintf(stderr, "warning: skipping frame %zu: %s\n", frames - 1, err.c_str());
       ++failed;
       continue;
     }
@@ -460,6 +666,12 @@ int main(int argc, char** argv) {
       evaluators[k].evaluate(f.gt, objects, &match);
       diagnose(f, *dataset, seg, objects, match, detectors[k]->name(), &diags[k],
                details ? stdout : nullptr);
+      if (!png_dir.empty() && k == 0) {
+        std::string id = f.id;
+        std::replace(id.begin(), id.end(), '/', '_');
+        writeFramePng(png_dir + "/" + dataset->name() + "_" + id + ".png", f, foreground, objects,
+                      match, png_view);
+      }
       rows << (first_row ? "" : ",\n") << "    {\"frame\": \"" << jsonEscape(f.id)
            << "\", \"detector\": \"" << detectors[k]->name() << "\", " << scoreJson(match.score)
            << "}";
@@ -467,6 +679,10 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (frames == 0) {
+    std::fprintf(stderr, "error: no frames found in %s\n", dataset_path.c_str());
+    return 1;
+  }
   std::printf("\n%-15s %-18s %6s %5s %5s %5s %5s %9s %7s %7s\n", "dataset", "detector", "frames",
               "NO", "MO", "FO", "ign", "precision", "recall", "F-rate");
   for (std::size_t k = 0; k < detectors.size(); ++k) {

@@ -1,5 +1,6 @@
 // Dataset readers of the evaluation: KITTI box -> LiDAR geometry on a hand-computed box, the
-// camera frustum and DontCare rules, SemanticKITTI label decoding, file readers.
+// camera frustum and DontCare rules, SemanticKITTI label decoding, file readers, and the
+// replay of a short simulated drive (pcap + ground truth) with its exact instances.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,9 +8,14 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <set>
+#include <stdexcept>
 
 #include "urban_detection/core/eval_datasets.h"
 #include "urban_detection/core/kitti_io.h"
+#include "urban_detection/core/lidar_simulator.h"
+#include "urban_detection/core/simulation_config.h"
 
 namespace urban_detection {
 namespace core {
@@ -280,6 +286,155 @@ TEST(SharedData, KittiAndSemanticKittiFrames) {
   int ignored = 0;
   for (const auto& o : gt.objects) ignored += o.ignored ? 1 : 0;
   EXPECT_EQ(ignored, 1);
+}
+
+}  // namespace
+}  // namespace core
+}  // namespace urban_detection
+
+namespace urban_detection {
+namespace core {
+namespace {
+
+// ------------------------------------------------------------------------------------------
+// Simulated drives: pcap + ground-truth file of the simulator, replayed for the evaluation.
+
+namespace sim_test {
+
+struct Drive {
+  std::string pcap, gt;
+  std::vector<GroundTruthFrame> frames;  // as written
+};
+
+// Simulates `revolutions` revolutions of the demo drive; writes every revolution's packets and
+// the ground-truth frames whose index is not in `drop_gt`.
+Drive simulate(const std::string& name, int revolutions, const std::set<int>& drop_gt = {}) {
+  const SimulationConfig c =
+      loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
+  LidarSimulator sim(generateScene(c.scene, c.drive), c.scene, c.drive,
+                     Calibration::nominalHdl64eS2(), c.sensor);
+  Drive d;
+  d.pcap = testing::TempDir() + "/" + name + ".pcap";
+  d.gt = testing::TempDir() + "/" + name + ".gt";
+  PcapWriter pcap(d.pcap);
+  GroundTruthWriter gt(d.gt);
+  SimRevolution rev;
+  for (int r = 0; r < revolutions; ++r) {
+    sim.simulateNext(&rev);
+    for (std::size_t i = 0; i < rev.packets.size(); ++i) {
+      pcap.write(rev.packets[i], rev.packet_stamps_s[i]);
+    }
+    d.frames.emplace_back();
+    makeGroundTruthFrame(sim, rev, &d.frames.back());
+    if (!drop_gt.count(r)) gt.write(d.frames.back());
+  }
+  gt.close();
+  return d;
+}
+
+}  // namespace sim_test
+
+TEST(SimulatedDrive, ReplaysEveryRevolutionWithItsGroundTruth) {
+  const sim_test::Drive d = sim_test::simulate("ud_eval_sim", 3);
+  SimulatedDriveReader reader(d.pcap, d.gt, Calibration::nominalHdl64eS2());
+  CloudXYZIRT cloud;
+  GroundTruthFrame gt;
+  std::string msg;
+  for (std::size_t r = 0; r < 3; ++r) {
+    ASSERT_EQ(reader.next(&cloud, &gt, &msg), SimulatedDriveReader::Result::kFrame) << msg;
+    EXPECT_EQ(gt.revolution, r);
+    EXPECT_EQ(cloud.size(), d.frames[r].instance_ids.size());
+    EXPECT_EQ(gt.instance_ids, d.frames[r].instance_ids);
+    EXPECT_GT(cloud.size(), 100000u);  // a full HDL-64E revolution
+  }
+  EXPECT_EQ(reader.next(&cloud, &gt, &msg), SimulatedDriveReader::Result::kEnd);
+  EXPECT_EQ(reader.revolutions(), 3u);
+  EXPECT_EQ(reader.badPackets(), 0u);
+  std::remove(d.pcap.c_str());
+  std::remove(d.gt.c_str());
+}
+
+TEST(SimulatedDrive, RevolutionsArePairedByStampNotByPosition) {
+  // The GT file lacks revolution 1: revolution 1 is skipped (with a message), revolution 2
+  // still gets its own frame, not the next one in the file.
+  const sim_test::Drive d = sim_test::simulate("ud_eval_sim_gap", 3, {1});
+  SimulatedDriveReader reader(d.pcap, d.gt, Calibration::nominalHdl64eS2());
+  CloudXYZIRT cloud;
+  GroundTruthFrame gt;
+  std::string msg;
+  ASSERT_EQ(reader.next(&cloud, &gt, &msg), SimulatedDriveReader::Result::kFrame) << msg;
+  EXPECT_EQ(gt.revolution, 0u);
+  EXPECT_EQ(reader.next(&cloud, &gt, &msg), SimulatedDriveReader::Result::kSkipped);
+  EXPECT_NE(msg.find("no ground-truth frame"), std::string::npos) << msg;
+  ASSERT_EQ(reader.next(&cloud, &gt, &msg), SimulatedDriveReader::Result::kFrame) << msg;
+  EXPECT_EQ(gt.revolution, 2u);
+  EXPECT_EQ(cloud.size(), d.frames[2].instance_ids.size());
+  EXPECT_EQ(reader.next(&cloud, &gt, &msg), SimulatedDriveReader::Result::kEnd);
+  EXPECT_THROW(SimulatedDriveReader(d.pcap + ".missing", d.gt, Calibration::nominalHdl64eS2()),
+               std::runtime_error);
+  std::remove(d.pcap.c_str());
+  std::remove(d.gt.c_str());
+}
+
+TEST(SimulatedDrive, GroundTruthRulesAndAPerfectDetector) {
+  const sim_test::Drive d = sim_test::simulate("ud_eval_sim_gt", 1);
+  const GroundTruthFrame& frame = d.frames[0];
+  SimulatedGroundTruthParams params;
+  params.min_points = 10;
+  EvalFrame gt;
+  buildSimulatedGroundTruth(frame, params, &gt);
+  // The number of GT objects, from the simulator's own per-object point counts.
+  std::size_t expected = 0, expected_ignored = 0;
+  for (const GroundTruthObject& o : frame.objects) {
+    if (!isStreetObject(o.object_class) || o.num_points == 0) continue;
+    ++(o.num_points >= params.min_points ? expected : expected_ignored);
+  }
+  ASSERT_GT(expected, 10u);
+  std::size_t counted = 0, ignored = 0;
+  for (const EvalObject& o : gt.objects) ++(o.ignored ? ignored : counted);
+  EXPECT_EQ(counted, expected);
+  EXPECT_EQ(ignored, expected_ignored);
+
+  // Detections made of the exact instances: every GT object matched, nothing false.
+  std::map<std::uint32_t, DetectedObject> by_instance;
+  std::vector<std::uint32_t> wall, pole;
+  for (std::size_t i = 0; i < frame.instance_ids.size(); ++i) {
+    const auto cls = static_cast<ObjectClass>(frame.classes[i]);
+    if (frame.instance_ids[i] > 0 && isStreetObject(cls)) {
+      by_instance[frame.instance_ids[i]].indices.push_back(static_cast<std::uint32_t>(i));
+    } else if (cls == ObjectClass::kWall && wall.size() < 50) {
+      wall.push_back(static_cast<std::uint32_t>(i));
+    } else if (cls == ObjectClass::kPole && pole.size() < 50) {
+      pole.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  std::vector<DetectedObject> dets;
+  for (auto& kv : by_instance) dets.push_back(kv.second);
+  DetectionEvaluator eval;
+  FrameMatch m;
+  eval.evaluate(gt, dets, &m);
+  EXPECT_EQ(m.score.no, expected);
+  EXPECT_EQ(m.score.tp, expected);
+  EXPECT_EQ(m.score.mo, 0u);
+  EXPECT_EQ(m.score.fo, 0u);
+  EXPECT_EQ(m.score.ignored, expected_ignored);  // detections of too-small objects
+  EXPECT_DOUBLE_EQ(m.score.fRate(), 1.0);
+  // A piece of a wall is a false detection; a pole is a real object without a target class:
+  // ignored.
+  ASSERT_FALSE(wall.empty());
+  ASSERT_FALSE(pole.empty());
+  DetectedObject w, p;
+  w.indices = wall;
+  p.indices = pole;
+  dets.push_back(w);
+  dets.push_back(p);
+  eval.evaluate(gt, dets, &m);
+  EXPECT_EQ(m.score.fo, 1u);
+  EXPECT_EQ(m.verdict[dets.size() - 2], DetectionVerdict::kFalse);
+  EXPECT_EQ(m.verdict[dets.size() - 1], DetectionVerdict::kIgnored);
+  EXPECT_EQ(m.score.tp, expected);
+  std::remove(d.pcap.c_str());
+  std::remove(d.gt.c_str());
 }
 
 }  // namespace

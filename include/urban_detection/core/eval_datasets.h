@@ -14,6 +14,12 @@
 ///   points, and thing points without an instance id, are don't-care (real objects without an
 ///   instance label). Everything else (building, fence, other-structure, vegetation, ground
 ///   classes) is scored background: a detection made mostly of it is false.
+/// - Simulated drives (urban_detection_simulate: a pcap plus its ground-truth file): exact
+///   per-point instances. GT objects are the instances of the street-object classes
+///   (isStreetObject: cars, vans, pedestrians, cyclists, bins, benches). Points of the other
+///   scene objects (tree crowns and trunks, poles, signs) are don't-care: real, but not
+///   targets of the detector (the segmentation labels them tall). Ground and walls are scored
+///   background. GT objects with fewer than `min_points` points are ignored.
 #pragma once
 
 #include <array>
@@ -24,7 +30,11 @@
 
 #include <Eigen/Core>
 
+#include "urban_detection/core/calibration.h"
 #include "urban_detection/core/evaluation.h"
+#include "urban_detection/core/ground_truth.h"
+#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/pcap_io.h"
 #include "urban_detection/core/point_types.h"
 
 namespace urban_detection {
@@ -137,6 +147,62 @@ struct SemanticKittiGroundTruthParams {
 void buildSemanticKittiGroundTruth(const std::vector<std::uint32_t>& labels,
                                    const SemanticKittiGroundTruthParams& params,
                                    EvalFrame* gt);
+
+// ------------------------------------------------------------------------------------------
+// Simulated drives
+
+/// Ground-truth construction parameters for simulated drives.
+struct SimulatedGroundTruthParams {
+  std::size_t min_points = 10;  ///< GT objects with fewer points are ignored
+};
+
+/// Builds the ground truth of one simulated revolution from its per-point labels (rules in the
+/// file comment). `frame.instance_ids[i]` labels point i of the decoded revolution.
+void buildSimulatedGroundTruth(const GroundTruthFrame& frame,
+                               const SimulatedGroundTruthParams& params, EvalFrame* gt);
+
+/// Replays a simulated drive for evaluation: reads the packets of a pcap, cuts them into
+/// revolutions at `cut_angle_deg` (RevolutionCutter, as PacketToCloud does), decodes them with
+/// the calibration the drive was simulated with, and pairs each revolution with the
+/// ground-truth frame of the same stamp (findGroundTruthFrame; the stamp of a revolution is
+/// the capture time of its first packet). Both files are streamed: memory does not grow with
+/// the drive's length.
+class SimulatedDriveReader {
+ public:
+  /// Throws std::runtime_error (naming the file) when either file cannot be opened.
+  SimulatedDriveReader(const std::string& pcap_path, const std::string& gt_path,
+                       const Calibration& calibration, double cut_angle_deg = 0.0,
+                       const DecoderParams& decoder_params = DecoderParams());
+
+  enum class Result {
+    kFrame,    ///< `cloud` and `gt` hold one revolution and its ground truth
+    kSkipped,  ///< a revolution without a usable GT frame (no frame of its stamp, e.g. a
+               ///< partial first revolution, or a point count that differs); `message` says
+               ///< why, `cloud` holds the revolution
+    kEnd,      ///< no more revolutions; a truncated pcap or GT file ends the drive early and
+               ///< sets `message`
+  };
+  Result next(CloudXYZIRT* cloud, GroundTruthFrame* gt, std::string* message);
+
+  std::size_t revolutions() const { return revolutions_; }  ///< revolutions cut so far
+  std::size_t badPackets() const { return bad_packets_; }   ///< packets the decoder rejected
+
+ private:
+  bool fillWindow(double stamp_s);
+
+  PcapReader pcap_;
+  GroundTruthReader gt_reader_;
+  RevolutionCutter cutter_;
+  PacketDecoder decoder_;
+  PcapPacket pending_;          // first packet of the next revolution
+  bool has_pending_ = false;
+  bool pcap_end_ = false;
+  bool gt_end_ = false;
+  std::string end_message_;
+  std::vector<GroundTruthFrame> window_;  // GT frames read ahead, sorted by stamp
+  std::size_t revolutions_ = 0;
+  std::size_t bad_packets_ = 0;
+};
 
 }  // namespace core
 }  // namespace urban_detection
