@@ -6,7 +6,8 @@
 #   scripts/run fuzz seeds                      rewrite the seed corpora (test/fuzz/make_seeds.cpp)
 # Called by `scripts/run fuzz` after setup + the normal build (fuzz_velodyne_scan takes the
 # generated message headers from $UD_WS/devel/include). Seeds: test/fuzz/corpus/<target>/
-# (read only); inputs found while fuzzing go to <build>/corpus/<target>/, crashes, leaks and
+# (read only; crash-* files there are fixed findings replayed as regressions), dictionary
+# test/fuzz/<target>.dict when present; inputs found while fuzzing go to <build>/corpus/<target>/, crashes, leaks and
 # sanitizer reports to <build>/artifacts/ with the log in <build>/logs/<target>.log.
 # Exit status: 0 when every target ran clean, 1 otherwise.
 # Environment: UD_WS, UD_JOBS, UD_FUZZ_BUILD (default $UD_WS-fuzz), CXX_FUZZ (clang++).
