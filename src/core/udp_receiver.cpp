@@ -46,6 +46,10 @@ UdpReceiver::UdpReceiver(const UdpReceiverParams& params) {
   }
   socklen_t len = sizeof(rcvbuf_bytes_);
   getsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf_bytes_, &len);
+  // The kernel then attaches its count of datagrams dropped for a full receive buffer to each
+  // datagram: the only way to know how many packets a flood (or a stalled reader) cost.
+  const int on = 1;
+  setsockopt(fd_, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof(on));
 
   sockaddr_in local{};
   local.sin_family = AF_INET;
@@ -69,14 +73,29 @@ UdpReceiver::~UdpReceiver() {
 
 UdpReceiver::Result UdpReceiver::receive(RawPacket* packet, int timeout_ms, std::size_t* size) {
   // One byte more than a packet so that oversized datagrams are recognised (MSG_TRUNC makes
-  // recvfrom report their true length).
+  // recvmsg report their true length).
   std::uint8_t buffer[kPacketSize + 1];
   sockaddr_in sender{};
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(std::uint32_t))];
   for (int attempt = 0; attempt < 2; ++attempt) {
-    socklen_t sender_len = sizeof(sender);
-    const ssize_t n = recvfrom(fd_, buffer, sizeof(buffer), MSG_TRUNC,
-                               reinterpret_cast<sockaddr*>(&sender), &sender_len);
+    iovec iov{buffer, sizeof(buffer)};
+    msghdr msg{};
+    msg.msg_name = &sender;
+    msg.msg_namelen = sizeof(sender);
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control;
+    msg.msg_controllen = sizeof(control);
+    const ssize_t n = recvmsg(fd_, &msg, MSG_TRUNC);
     if (n >= 0) {
+      for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
+        if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+          std::uint32_t dropped = 0;  // cumulative since the socket opened, wraps at 2^32
+          std::memcpy(&dropped, CMSG_DATA(c), sizeof(dropped));
+          kernel_drops_ += static_cast<std::uint32_t>(dropped - last_kernel_drops_);
+          last_kernel_drops_ = dropped;
+        }
+      }
       if (size) *size = static_cast<std::size_t>(n);
       if (filter_sender_ && sender.sin_addr.s_addr != device_addr_) return Result::kOtherSender;
       if (static_cast<std::size_t>(n) != kPacketSize) return Result::kWrongSize;
@@ -84,7 +103,7 @@ UdpReceiver::Result UdpReceiver::receive(RawPacket* packet, int timeout_ms, std:
       return Result::kPacket;
     }
     if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
-      last_error_ = errnoText("recvfrom");
+      last_error_ = errnoText("recvmsg");
       return Result::kError;
     }
     if (attempt == 1) break;

@@ -1,23 +1,68 @@
 // urban_detection/HierarchicalGridDetector: segmentation/foreground -> objects, objects/points
 // with the hierarchical grid model (paper Sec. 3.2). Parameters: ~hierarchical_grid/*
-// (config/detection.yaml).
+// (config/detection.yaml), tunable in ~hierarchical_grid (config/HierarchicalGridDetector.cfg).
 #include "urban_detection/core/point_types.h"
 
 #include <pluginlib/class_list_macros.hpp>
 
+#include "urban_detection/HierarchicalGridDetectorConfig.h"
 #include "urban_detection/core/hierarchical_grid_detector.h"
 #include "urban_detection/ros/detection_params.h"
 #include "urban_detection/ros/detector_nodelet.h"
+#include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
 
 class HierarchicalGridDetector : public DetectorNodelet {
  protected:
   std::unique_ptr<core::ObjectDetector> createDetector(const ros::NodeHandle& pnh) override {
-    core::HierarchicalGridDetectorParams params;
-    ros_conv::loadHierarchicalGridParams(ros::NodeHandle(pnh, "hierarchical_grid"), &params);
-    return std::make_unique<core::HierarchicalGridDetector>(params);
+    ros_conv::loadHierarchicalGridParams(ros::NodeHandle(pnh, "hierarchical_grid"), &params_);
+    return std::make_unique<core::HierarchicalGridDetector>(params_);
   }
+
+  void startReconfigure(const ros::NodeHandle& pnh) override {
+    HierarchicalGridDetectorConfig c;
+    c.coarse_cell_m = params_.coarse_cell_m;
+    c.xi = params_.xi;
+    c.psi_max_m = params_.psi_max_m;
+    c.dense_refinement = params_.dense_refinement;
+    c.dense_min_weighted_points = params_.dense_min_weighted_points;
+    c.weight_enabled = params_.weight.enabled;
+    c.min_split_height_span_m = params_.min_split_height_span_m;
+    c.max_split_range_m = params_.max_split_range_m;
+    c.min_gap_subcells = params_.min_gap_subcells;
+    c.min_points = params_.min_points;
+    c.max_extent_m = params_.max_extent_m;
+    reconfigure_ = std::make_unique<Reconfigure>(
+        ros::NodeHandle(pnh, "hierarchical_grid"), c, [this](const auto& config) {
+          return apply(config);
+        });
+  }
+
+  // The whole set is validated, then a new detector replaces the old between two revolutions.
+  std::string apply(const HierarchicalGridDetectorConfig& c) {
+    core::HierarchicalGridDetectorParams p = params_;
+    p.coarse_cell_m = c.coarse_cell_m;
+    p.xi = c.xi;
+    p.psi_max_m = c.psi_max_m;
+    p.dense_refinement = c.dense_refinement;
+    p.dense_min_weighted_points = c.dense_min_weighted_points;
+    p.weight.enabled = c.weight_enabled;
+    p.min_split_height_span_m = c.min_split_height_span_m;
+    p.max_split_range_m = c.max_split_range_m;
+    p.min_gap_subcells = c.min_gap_subcells;
+    p.min_points = c.min_points;
+    p.max_extent_m = c.max_extent_m;
+    const std::string error = core::validate(p);
+    if (!error.empty()) return error;
+    replaceDetector(std::make_unique<core::HierarchicalGridDetector>(p));
+    params_ = p;
+    return "";
+  }
+
+  using Reconfigure = ros_conv::ValidatedReconfigure<HierarchicalGridDetectorConfig>;
+  core::HierarchicalGridDetectorParams params_;  // in force
+  std::unique_ptr<Reconfigure> reconfigure_;
 };
 
 }  // namespace urban_detection

@@ -1,6 +1,7 @@
 // urban_detection/ObjectMarkers: objects -> objects/markers (MarkerArray) for rviz: DELETEALL,
 // then a yaw-oriented box and an id text per object. Lazy. Parameters: ~markers/*
-// (config/detection.yaml).
+// (config/detection.yaml), tunable in ~markers (config/ObjectMarkers.cfg).
+#include <memory>
 #include <mutex>
 
 #include <boost/make_shared.hpp>
@@ -9,8 +10,11 @@
 #include <ros/ros.h>
 
 #include "urban_detection/DetectedObjectArray.h"
+#include "urban_detection/ObjectMarkersConfig.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/param_loading.h"
+#include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
 
@@ -23,10 +27,28 @@ class ObjectMarkers : public nodelet::Nodelet {
       loadParam(pnh, "box_alpha", &params_.box_alpha, 0.0, 1.0);
       loadParam(pnh, "text_size_m", &params_.text_size_m, 0.01, 10.0, "m");
       loadParam(pnh, "min_box_size_m", &params_.min_box_size_m, 0.0, 10.0, "m");
+      loadParam(pnh, "colour_by_class", &params_.colour_by_class);
+      loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     } catch (const ParamError& e) {
       NODELET_FATAL("ObjectMarkers: %s; the nodelet stays idle", e.what());
       return;
     }
+    ObjectMarkersConfig c;
+    c.show_ids = params_.show_ids;
+    c.box_alpha = params_.box_alpha;
+    c.text_size_m = params_.text_size_m;
+    c.min_box_size_m = params_.min_box_size_m;
+    reconfigure_ = std::make_unique<Reconfigure>(pnh, c, [this](const ObjectMarkersConfig& n) {
+      std::lock_guard<std::mutex> lock(params_mutex_);  // applied from the next message on
+      params_.show_ids = n.show_ids;
+      params_.box_alpha = n.box_alpha;
+      params_.text_size_m = n.text_size_m;
+      params_.min_box_size_m = n.min_box_size_m;
+      return std::string();  // every value within the cfg's ranges is valid
+    });
+    diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
+        getNodeHandle(), getPrivateNodeHandle(), getName(), "markers");
+    diagnostics_->setActive(false);
     ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
       connectCb();
     };
@@ -37,20 +59,33 @@ class ObjectMarkers : public nodelet::Nodelet {
 
   void connectCb() {
     std::lock_guard<std::mutex> lock(mutex_);
+    diagnostics_->setActive(pub_.getNumSubscribers() > 0);
     if (pub_.getNumSubscribers() > 0 && !sub_) {
-      sub_ = getNodeHandle().subscribe("objects", 2, &ObjectMarkers::objectsCb, this);
+      sub_ = getNodeHandle().subscribe("objects", queue_size_, &ObjectMarkers::objectsCb, this);
     } else if (pub_.getNumSubscribers() == 0 && sub_) {
       sub_.shutdown();
     }
   }
 
   void objectsCb(const DetectedObjectArray::ConstPtr& objects) {
+    const ros::WallTime start = ros::WallTime::now();
+    diagnostics_->input(objects->header.seq);
     auto markers = boost::make_shared<visualization_msgs::MarkerArray>();
-    ros_conv::buildObjectMarkers(*objects, params_, markers.get());
+    {
+      std::lock_guard<std::mutex> lock(params_mutex_);
+      ros_conv::buildObjectMarkers(*objects, params_, markers.get());
+    }
     pub_.publish(boost::shared_ptr<const visualization_msgs::MarkerArray>(markers));
+    diagnostics_->frame((ros::WallTime::now() - start).toSec());
+    diagnostics_->output();
   }
 
+  using Reconfigure = ros_conv::ValidatedReconfigure<ObjectMarkersConfig>;
   ros_conv::ObjectMarkerParams params_;
+  std::mutex params_mutex_;  // params_ between messages and reconfigure
+  int queue_size_ = 2;
+  std::unique_ptr<Reconfigure> reconfigure_;
+  std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::mutex mutex_;
   ros::Publisher pub_;
   ros::Subscriber sub_;

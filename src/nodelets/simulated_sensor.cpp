@@ -15,6 +15,7 @@
 
 #include "urban_detection/core/simulation_config.h"
 #include "urban_detection/ros/simulation_conversions.h"
+#include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
 
@@ -33,6 +34,10 @@ class SimulatedSensor : public nodelet::Nodelet {
     gt_pub_ = nh.advertise<GroundTruth>("ground_truth", 4);
     tf_.reset(new tf2_ros::TransformBroadcaster());
     static_tf_.reset(new tf2_ros::StaticTransformBroadcaster());
+    diagnostics_.reset(new ros_conv::StageDiagnostics(nh, getPrivateNodeHandle(), getName(),
+                                                      "simulation", "revolutions_simulated"));
+    diagnostics_->setHardwareId("simulated HDL-64E");
+    if (realtime_) diagnostics_->setExpectedRate(config_.sensor.rpm / 60.0 * rate_factor_);
     running_ = true;
     worker_ = std::thread(&SimulatedSensor::run, this);
   }
@@ -79,18 +84,26 @@ class SimulatedSensor : public nodelet::Nodelet {
       const ros::WallTime wall0 = ros::WallTime::now();
       bool first = true;
       while (running_ && ros::ok() && !sim.driveFinished()) {
+        const ros::WallTime start = ros::WallTime::now();
         sim.simulateNext(&rev);
+        diagnostics_->input();
+        diagnostics_->frame((ros::WallTime::now() - start).toSec());
         const double rev_s = 60.0 / c.sensor.rpm;
         if (realtime_) {  // publish when the revolution's last packet would have arrived
           const ros::WallTime due = wall0 + ros::WallDuration((rev.start_time_s + rev_s) / rate_factor_);
           const ros::WallDuration wait = due - ros::WallTime::now();
           if (wait > ros::WallDuration(0.0)) wait.sleep();
+          if (wait < ros::WallDuration(-rev_s / rate_factor_)) {  // the machine is too slow
+            diagnostics_->count("late_revolutions");
+          }
         }
         if (publish_tf_) publishTf(sim, rev, rev_s, first);
         first = false;
         auto scan = boost::make_shared<VelodyneScan>();
         ros_conv::toScanMsg(rev, frames_.sensor, scan.get());
+        scan->header.seq = ++revolutions_;  // numbered: consumers count what they never got
         scan_pub_.publish(boost::shared_ptr<const VelodyneScan>(scan));
+        diagnostics_->output();
         if (gt_pub_.getNumSubscribers() > 0) {
           auto gt = boost::make_shared<GroundTruth>();
           ros_conv::toGroundTruthMsg(rev, frames_.sensor, gt.get());
@@ -127,6 +140,8 @@ class SimulatedSensor : public nodelet::Nodelet {
   ros::Publisher scan_pub_, gt_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;
+  std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::uint32_t revolutions_ = 0;  // published so far (header.seq), worker thread only
   std::atomic<bool> running_{false};
   std::thread worker_;
 };

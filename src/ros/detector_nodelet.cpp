@@ -6,17 +6,23 @@
 
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/ros/object_conversions.h"
+#include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {
 
 void DetectorNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   try {
+    loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     detector_ = createDetector(getPrivateNodeHandle());
   } catch (const std::exception& e) {
     NODELET_FATAL("%s: %s; the nodelet stays idle", getName().c_str(), e.what());
     return;
   }
+  startReconfigure(getPrivateNodeHandle());
+  diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(nh, getPrivateNodeHandle(),
+                                                              getName(), "detection");
+  diagnostics_->setActive(false);
   ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
     connectCb();
   };
@@ -26,11 +32,17 @@ void DetectorNodelet::onInit() {
   NODELET_INFO("%s: %s detector ready", getName().c_str(), detector_->name().c_str());
 }
 
+void DetectorNodelet::replaceDetector(std::unique_ptr<core::ObjectDetector> detector) {
+  std::lock_guard<std::mutex> lock(detector_mutex_);
+  detector_ = std::move(detector);
+}
+
 void DetectorNodelet::connectCb() {
   std::lock_guard<std::mutex> lock(connect_mutex_);
   const bool wanted = objects_pub_.getNumSubscribers() > 0 || points_pub_.getNumSubscribers() > 0;
+  diagnostics_->setActive(wanted);
   if (wanted && !sub_) {
-    sub_ = getNodeHandle().subscribe("segmentation/foreground", 2,
+    sub_ = getNodeHandle().subscribe("segmentation/foreground", queue_size_,
                                      &DetectorNodelet::foregroundCb, this);
   } else if (!wanted && sub_) {
     sub_.shutdown();
@@ -38,6 +50,9 @@ void DetectorNodelet::connectCb() {
 }
 
 void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& foreground) {
+  const ros::WallTime start = ros::WallTime::now();
+  diagnostics_->input(foreground->header.seq);
+  std::lock_guard<std::mutex> lock(detector_mutex_);  // one parameter set per revolution
   detector_->detect(*foreground, &objects_);
   std_msgs::Header header;
   pcl_conversions::fromPCL(foreground->header, header);
@@ -51,6 +66,8 @@ void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& 
     ros_conv::buildObjectPoints(*foreground, objects_, points.get(), &id_of_index_);
     points_pub_.publish(boost::shared_ptr<const LabeledCloud>(points));
   }
+  diagnostics_->frame((ros::WallTime::now() - start).toSec());
+  diagnostics_->output();
   NODELET_DEBUG_THROTTLE(5.0, "%s: %zu foreground points -> %zu objects", getName().c_str(),
                          foreground->size(), objects_.size());
 }

@@ -2,6 +2,8 @@
 
 #include <arpa/inet.h>
 
+#include <cmath>
+
 namespace urban_detection {
 
 PacketSourceParams loadPacketSourceParams(const ros::NodeHandle& nh) {
@@ -19,11 +21,23 @@ PacketSourceParams loadPacketSourceParams(const ros::NodeHandle& nh) {
   loadParam(nh, "loop", &p.loop);
   loadParam(nh, "use_pcap_time", &p.use_pcap_time);
   loadParam(nh, "cut_angle", &p.cut_angle_deg, 0.0, 360.0, "deg");
+  loadParam(nh, "rpm", &p.rpm, 300.0, 1200.0, "rev/min");
   loadParam(nh, "frame_id", &p.frame_id);
   if (p.frame_id.empty()) throw ParamError("parameter '" + nh.resolveName("frame_id") +
                                            "' must not be empty");
   loadParam(nh, "queue_size", &p.queue_size, 1, 1000);
   return p;
+}
+
+double PacketSourceParams::expectedRevolutionRateHz() const {
+  const double sensor_hz = rpm / 60.0;
+  if (pcap.empty()) return sensor_hz;
+  return rate > 0.0 ? sensor_hz * rate : 0.0;  // as fast as possible: no expectation
+}
+
+std::size_t PacketSourceParams::expectedPacketsPerRevolution() const {
+  const double packet_period_s = core::kBlocksPerPacket / 2 * core::kFiringPeriodS;
+  return static_cast<std::size_t>(std::lround(60.0 / rpm / packet_period_s));
 }
 
 PacketToCloudParams loadPacketToCloudParams(const ros::NodeHandle& nh) {

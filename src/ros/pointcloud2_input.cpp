@@ -1,5 +1,6 @@
 #include "urban_detection/ros/pointcloud2_input.h"
 
+#include <cmath>
 #include <cstring>
 
 #include <pcl_conversions/pcl_conversions.h>
@@ -68,7 +69,10 @@ bool fromPointCloud2(const sensor_msgs::PointCloud2& msg, CloudXYZIRT* cloud,
   *info = PointCloud2InputInfo();
   const Field fx = findField(msg, "x"), fy = findField(msg, "y"), fz = findField(msg, "z");
   if (fx.type == 0 || fy.type == 0 || fz.type == 0) {
-    *error = "PointCloud2 without x, y and z fields";
+    std::string present;
+    for (const auto& f : msg.fields) present += (present.empty() ? "" : ", ") + f.name;
+    *error = "PointCloud2 without x, y and z fields (fields: " +
+             (present.empty() ? std::string("none") : present) + ")";
     return false;
   }
   if (msg.is_bigendian) {
@@ -105,6 +109,7 @@ bool fromPointCloud2(const sensor_msgs::PointCloud2& msg, CloudXYZIRT* cloud,
       p.intensity = fi.type ? static_cast<float>(read(pt, fi)) : 0.0f;
       p.ring = fr.type ? static_cast<std::uint16_t>(read(pt, fr)) : 0;
       p.time = ft.type ? static_cast<float>(read(pt, ft)) : 0.0f;
+      info->non_finite += !(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
     }
   }
   cloud->width = static_cast<std::uint32_t>(w);

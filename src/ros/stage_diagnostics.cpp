@@ -7,8 +7,9 @@ namespace ros_conv {
 
 StageDiagnostics::StageDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh,
                                    const std::string& name, const std::string& task,
-                                   double load_warn_fraction)
+                                   const std::string& input_name, double load_warn_fraction)
     : updater_(new diagnostic_updater::Updater(nh, pnh, name)),
+      input_name_(input_name),
       load_warn_fraction_(load_warn_fraction),
       window_start_(ros::WallTime::now()) {
   updater_->setHardwareID("none");
@@ -18,18 +19,45 @@ StageDiagnostics::StageDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh,
                               [this](const ros::WallTimerEvent&) { updater_->force_update(); });
 }
 
+void StageDiagnostics::input(std::uint32_t seq) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++inputs_.total;
+  ++inputs_.window;
+  const std::uint32_t gap = gaps_.add(seq);
+  skipped_.total += gap;
+  skipped_.window += gap;
+}
+
 void StageDiagnostics::frame(double processing_s) {
   std::lock_guard<std::mutex> lock(mutex_);
-  ++frames_total_;
-  ++window_frames_;
+  ++frames_.total;
+  ++frames_.window;
   window_sum_s_ += processing_s;
   window_max_s_ = std::max(window_max_s_, processing_s);
 }
 
-void StageDiagnostics::rejected() {
+void StageDiagnostics::output() {
   std::lock_guard<std::mutex> lock(mutex_);
-  ++rejected_total_;
-  ++window_rejected_;
+  ++outputs_.total;
+  ++outputs_.window;
+}
+
+void StageDiagnostics::rejected() { count("rejected_inputs"); }
+
+void StageDiagnostics::count(const std::string& key, std::uint64_t n, bool warn) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Counter& c = counters_[key];
+  c.total += n;
+  c.window += n;
+  c.warn = warn;
+}
+
+void StageDiagnostics::setTotal(const std::string& key, std::uint64_t total, bool warn) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Counter& c = counters_[key];
+  if (total > c.total) c.window += total - c.total;
+  c.total = total;
+  c.warn = warn;
 }
 
 void StageDiagnostics::setActive(bool active) {
@@ -37,36 +65,62 @@ void StageDiagnostics::setActive(bool active) {
   active_ = active;
 }
 
+void StageDiagnostics::setExpectedRate(double hz) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  expected_hz_ = hz;
+}
+
 void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   std::lock_guard<std::mutex> lock(mutex_);
   const ros::WallTime now = ros::WallTime::now();
   const double window_s = std::max((now - window_start_).toSec(), 1e-3);
-  const double rate_hz = static_cast<double>(window_frames_) / window_s;
-  const double mean_s = window_frames_ > 0 ? window_sum_s_ / static_cast<double>(window_frames_)
-                                           : 0.0;
+  const double input_hz = static_cast<double>(inputs_.window) / window_s;
+  const double output_hz = static_cast<double>(outputs_.window) / window_s;
+  const double mean_s =
+      frames_.window > 0 ? window_sum_s_ / static_cast<double>(frames_.window) : 0.0;
   // Busy fraction of the wall time: above the threshold the input queue overflows.
   const double load = window_sum_s_ / window_s;
-  if (window_rejected_ > 0) {
-    stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "rejecting malformed input");
-  } else if (window_frames_ > 0 && load > load_warn_fraction_) {
+  const auto grown = std::find_if(counters_.begin(), counters_.end(), [](const auto& kv) {
+    return kv.second.warn && kv.second.window > 0;
+  });
+  if (skipped_.window > 0) {
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
-                  "falling behind: busy %.0f%% of the time (%.1f ms per frame at %.1f Hz)",
-                  100.0 * load, 1e3 * mean_s, rate_hz);
+                  "falling behind: skipped %lu revolutions in %.1f s (newest revolution wins)",
+                  static_cast<unsigned long>(skipped_.window), window_s);
+  } else if (frames_.window > 0 && load > load_warn_fraction_) {
+    stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                  "falling behind: busy %.0f%% of the time (%.1f ms per revolution)",
+                  100.0 * load, 1e3 * mean_s);
+  } else if (grown != counters_.end()) {
+    stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "dropping input: %s +%lu",
+                  grown->first.c_str(), static_cast<unsigned long>(grown->second.window));
+  } else if (active_ && expected_hz_ > 0.0 && inputs_.window > 0 &&
+             output_hz < 0.8 * expected_hz_) {
+    stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                  "output %.1f Hz below the sensor's %.1f Hz", output_hz, expected_hz_);
   } else if (!active_) {
     stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle (no subscriber)");
-  } else if (window_frames_ == 0) {
+  } else if (inputs_.window == 0 && frames_.window == 0) {
     stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "waiting for input");
   } else {
     stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "processing");
   }
-  stat.add("input rate [Hz]", rate_hz);
+  stat.add("input rate [Hz]", input_hz);
+  stat.add("output rate [Hz]", output_hz);
+  if (expected_hz_ > 0.0) stat.add("expected rate [Hz]", expected_hz_);
   stat.add("mean processing time [ms]", 1e3 * mean_s);
   stat.add("max processing time [ms]", 1e3 * window_max_s_);
   stat.add("busy fraction", load);
-  stat.add("frames", frames_total_);
-  stat.add("rejected frames", rejected_total_);
+  stat.add(input_name_, inputs_.total);
+  stat.add("revolutions", frames_.total);
+  stat.add("outputs", outputs_.total);
+  stat.add("skipped_revolutions", skipped_.total);
+  for (auto& kv : counters_) {
+    stat.add(kv.first, kv.second.total);
+    kv.second.window = 0;
+  }
   window_start_ = now;
-  window_frames_ = window_rejected_ = 0;
+  inputs_.window = frames_.window = outputs_.window = skipped_.window = 0;
   window_sum_s_ = window_max_s_ = 0.0;
 }
 

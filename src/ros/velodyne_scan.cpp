@@ -14,8 +14,9 @@ void toMessage(const core::RawPacket& packet, const ros::Time& stamp, VelodynePa
   std::memcpy(msg->data.data(), packet.data(), core::kPacketSize);
 }
 
-ScanAssembler::ScanAssembler(double cut_angle_deg, const std::string& frame_id)
-    : cutter_(cut_angle_deg), frame_id_(frame_id) {}
+ScanAssembler::ScanAssembler(double cut_angle_deg, const std::string& frame_id,
+                             std::size_t expected_packets)
+    : cutter_(cut_angle_deg), frame_id_(frame_id), expected_packets_(expected_packets) {}
 
 VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::Time& stamp) {
   VelodyneScan::Ptr finished;

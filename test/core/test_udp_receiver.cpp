@@ -111,6 +111,25 @@ TEST(UdpReceiver, FiltersBySenderAddress) {
   EXPECT_EQ(receiver.receive(&packet, 1000), Result::kPacket);
 }
 
+// A flood into a small receive buffer that nobody reads: every datagram is either delivered
+// or counted as a kernel drop, exactly (loopback loses nothing else). The count travels with
+// the next datagram queued after the drops, hence the one extra packet.
+TEST(UdpReceiver, CountsKernelDropsOfAFlood) {
+  UdpReceiver receiver(UdpReceiverParams{0, "", 64 * 1024});
+  Sender sender;
+  const int sent = 2000;  // ~2.4 MB of payload into a buffer of ~128 kB
+  for (int i = 0; i < sent; ++i) sender.send(receiver.port(), pattern(kPacketSize));
+  RawPacket packet{};
+  int delivered = 0;
+  while (receiver.receive(&packet, 100) == Result::kPacket) ++delivered;
+  ASSERT_GT(delivered, 0);
+  ASSERT_LT(delivered, sent) << "the buffer was expected to overflow";
+  EXPECT_EQ(receiver.kernelDrops(), 0u) << "drops are only known from a later datagram";
+  sender.send(receiver.port(), pattern(kPacketSize));
+  ASSERT_EQ(receiver.receive(&packet, 1000), Result::kPacket);
+  EXPECT_EQ(receiver.kernelDrops(), static_cast<std::uint64_t>(sent - delivered));
+}
+
 TEST(UdpReceiver, RejectsBadConfiguration) {
   EXPECT_THROW(UdpReceiver(UdpReceiverParams{0, "not-an-ip", 1 << 20}), std::invalid_argument);
   EXPECT_THROW(UdpReceiver(UdpReceiverParams{70000, "", 1 << 20}), std::invalid_argument);

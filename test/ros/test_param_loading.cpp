@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "urban_detection/ros/packet_params.h"
 #include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {
@@ -44,6 +45,33 @@ TEST(ParamLoading, IntegerRangeWithoutUnit) {
   } catch (const ParamError& e) {
     EXPECT_STREQ(e.what(), "parameter 'port' = 0 is out of range: accepted [1, 65535]");
   }
+}
+
+}  // namespace
+}  // namespace urban_detection
+
+namespace urban_detection {
+namespace {
+
+// One packet every 6 x 48 us = 288 us: 60 / rpm / 288e-6 packets per revolution (by hand:
+// 600 rpm -> 0.1 s / 288 us = 347.2; 300 rpm -> 694.4; 1200 rpm -> 173.6).
+TEST(PacketSourceParams, RpmSizesTheRevolutionAndTheExpectedRate) {
+  PacketSourceParams p;
+  p.rpm = 600.0;
+  EXPECT_EQ(p.expectedPacketsPerRevolution(), 347u);
+  EXPECT_DOUBLE_EQ(p.expectedRevolutionRateHz(), 10.0);
+  p.rpm = 300.0;
+  EXPECT_EQ(p.expectedPacketsPerRevolution(), 694u);
+  EXPECT_DOUBLE_EQ(p.expectedRevolutionRateHz(), 5.0);
+  p.rpm = 1200.0;
+  EXPECT_EQ(p.expectedPacketsPerRevolution(), 174u);
+  // A replay at half speed delivers half the revolutions per second; "as fast as possible"
+  // has no expected rate.
+  p.pcap = "drive.pcap";
+  p.rate = 0.5;
+  EXPECT_DOUBLE_EQ(p.expectedRevolutionRateHz(), 10.0);
+  p.rate = 0.0;
+  EXPECT_DOUBLE_EQ(p.expectedRevolutionRateHz(), 0.0);
 }
 
 }  // namespace

@@ -329,7 +329,9 @@ TEST(PacketToCloud, BadParametersAndCalibrationFailInitClearly) {
   EXPECT_TRUE(waitFor([&] {
     return rosout.contains(rosgraph_msgs::Log::FATAL, "max_range") &&
            rosout.contains(rosgraph_msgs::Log::FATAL, "accepted [0.1, 250] m") &&
-           rosout.contains(rosgraph_msgs::Log::FATAL, calibration);
+           rosout.contains(rosgraph_msgs::Log::FATAL, calibration) &&
+           rosout.contains(rosgraph_msgs::Log::FATAL, "laser 0") &&
+           rosout.contains(rosgraph_msgs::Log::FATAL, "field 'rot_correction'");
   }, 10.0));
   for (const char* ns : {"/badparam", "/badrange", "/badcal"}) {
     Collector<CloudXYZIRT> clouds;

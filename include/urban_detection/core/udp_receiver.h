@@ -50,6 +50,10 @@ class UdpReceiver {
   /// net.core.rmem_max for an unprivileged process.
   int rcvbufBytes() const { return rcvbuf_bytes_; }
   const std::string& lastError() const { return last_error_; }
+  /// Datagrams the kernel dropped because the receive buffer was full (the reader fell behind
+  /// the sender, e.g. a flood), as of the last datagram received (SO_RXQ_OVFL). Drops are only
+  /// learnt when a later datagram arrives.
+  std::uint64_t kernelDrops() const { return kernel_drops_; }
 
  private:
   int fd_ = -1;
@@ -58,6 +62,8 @@ class UdpReceiver {
   bool filter_sender_ = false;
   std::uint32_t device_addr_ = 0;  // network byte order
   std::string last_error_;
+  std::uint64_t kernel_drops_ = 0;
+  std::uint32_t last_kernel_drops_ = 0;  // the kernel's 32-bit counter at the last datagram
 };
 
 }  // namespace core

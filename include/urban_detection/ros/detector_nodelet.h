@@ -2,8 +2,10 @@
 /// The code shared by the detector nodelets (HierarchicalGridDetector, KdTreeDetector):
 /// segmentation/foreground -> objects (DetectedObjectArray) and objects/points (LabeledCloud,
 /// label = object id). Lazy (subscribes upstream only while an output has subscribers) and
-/// zero copy (fresh boost::shared_ptr per frame, never touched after publishing). A derived
-/// nodelet only builds its core::ObjectDetector from its parameters.
+/// zero copy (fresh boost::shared_ptr per frame, never touched after publishing), input queue
+/// of ~queue_size revolutions (the newest win), StageDiagnostics on /diagnostics. A derived
+/// nodelet builds its core::ObjectDetector from its parameters and may serve
+/// dynamic_reconfigure, swapping in a new detector between two revolutions.
 #pragma once
 
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
@@ -19,6 +21,7 @@
 #include <ros/ros.h>
 
 #include "urban_detection/core/object_detector.h"
+#include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
 
@@ -27,13 +30,21 @@ class DetectorNodelet : public nodelet::Nodelet {
   /// Loads the parameters from `pnh` and builds the detector; throws (ParamError,
   /// std::invalid_argument) with a message naming the bad parameter.
   virtual std::unique_ptr<core::ObjectDetector> createDetector(const ros::NodeHandle& pnh) = 0;
+  /// Called once after createDetector() succeeded; serves dynamic_reconfigure if the detector
+  /// has tunable parameters.
+  virtual void startReconfigure(const ros::NodeHandle& /*pnh*/) {}
+  /// Replaces the detector; takes effect between two revolutions, never during one.
+  void replaceDetector(std::unique_ptr<core::ObjectDetector> detector);
 
  private:
   void onInit() final;
   void connectCb();
   void foregroundCb(const boost::shared_ptr<const LabeledCloud>& foreground);  // zero copy
 
+  std::mutex detector_mutex_;  // detector_ between revolutions and reconfigure
   std::unique_ptr<core::ObjectDetector> detector_;
+  std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  int queue_size_ = 2;
   std::vector<core::DetectedObject> objects_;  // reused between frames
   std::unordered_map<std::uint32_t, std::uint32_t> id_of_index_;
   std::mutex connect_mutex_;

@@ -24,8 +24,15 @@ struct PacketSourceParams {
   bool loop = false;                     // replay the capture forever
   bool use_pcap_time = false;            // stamp with capture time instead of "now"-based time
   double cut_angle_deg = 0.0;            // [deg] azimuth where one revolution ends (param `cut_angle`)
+  double rpm = 600.0;                    // [rev/min] 300..1200 spin rate: expected revolution rate
+                                         //     and size (revolutions are still cut by azimuth)
   std::string frame_id = "velodyne";     // header.frame_id of the scans
   int queue_size = 10;                   // [messages] publisher queue
+
+  /// Revolutions per second the sensor (or the replay at `rate`) should deliver [Hz].
+  double expectedRevolutionRateHz() const;
+  /// Packets in one revolution at `rpm` (one packet per 288 us whatever the spin rate).
+  std::size_t expectedPacketsPerRevolution() const;
 };
 
 /// urban_detection/PacketToCloud: VelodyneScan -> CloudXYZIRT.

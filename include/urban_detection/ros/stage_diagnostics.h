@@ -1,11 +1,11 @@
 /// \file stage_diagnostics.h
-/// diagnostic_updater status of one processing stage of the pipeline (a nodelet that turns one
-/// input message per revolution into outputs): input rate, processing time per revolution and
-/// whether the stage keeps up with its input. Shared by the stage nodelets so that every stage
-/// reports the same keys on /diagnostics.
+/// diagnostic_updater status of one nodelet of the pipeline, the same keys for every nodelet:
+/// input rate, output rate, processing time per revolution, skipped revolutions, and named
+/// counters of dropped or bad input. Every nodelet reports through this one class.
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -17,36 +17,82 @@
 namespace urban_detection {
 namespace ros_conv {
 
-/// Publishes, once per second, a status named `task` for the nodelet `name`:
-///   OK    "processing" / "idle (no subscriber)" / "waiting for input";
-///   WARN  when the mean processing time over the last second exceeds `load_warn_fraction`
-///         of the mean input period (the stage falls behind the sensor and its input queue
-///         drops revolutions), or when frames were rejected (bad input) in the last second.
-/// Values: input rate [Hz], mean and max processing time [ms], totals of frames and rejects.
-/// Thread-safe: frame()/rejected() are called from the stage's callback, update() from a timer.
-class StageDiagnostics {
+/// Counts revolutions lost between two stages from the gaps in the header.seq numbers that the
+/// sources (PacketSource, SimulatedSensor) give their revolutions and every stage passes on.
+/// seq 0 (a driver that does not number its messages) is ignored; a smaller seq than the
+/// previous one is a restarted source (a looped replay, a new drive), not a gap.
+class SeqGapCounter {
  public:
-  StageDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name,
-                   const std::string& task, double load_warn_fraction = 0.9);
-
-  /// One input processed in `processing_s` seconds of wall time.
-  void frame(double processing_s);
-  /// One input rejected (e.g. malformed cloud).
-  void rejected();
-  /// Whether the stage currently has a subscriber (shown as idle otherwise).
-  void setActive(bool active);
+  /// Returns the number of revolutions missing before `seq`.
+  std::uint32_t add(std::uint32_t seq) {
+    std::uint32_t gap = 0;
+    if (seq != 0 && last_ != 0 && seq > last_ + 1) gap = seq - last_ - 1;
+    if (seq != 0) last_ = seq;
+    return gap;
+  }
 
  private:
+  std::uint32_t last_ = 0;
+};
+
+/// Publishes, once per second, a status named `task` for the nodelet `name`:
+///   WARN  "skipped N revolutions": input revolutions were lost before this stage (its input
+///         queue keeps only the newest; an upstream stage or the network dropped them);
+///   WARN  "falling behind": the processing time exceeds `load_warn_fraction` of the wall time;
+///   WARN  "<counter>: +N": a counter registered as a warning grew in the last second;
+///   WARN  "output below the sensor rate": with setExpectedRate(), output < 0.8 x expected;
+///   OK    "processing" / "idle (no subscriber)" / "waiting for input" otherwise.
+/// Values: input and output rates [Hz], mean and max processing time per revolution [ms], busy
+/// fraction, totals of inputs, outputs, skipped revolutions and of every counter.
+/// Thread-safe: the counting calls come from callbacks and worker threads, the update from a
+/// wall timer of the nodelet's callback queue.
+class StageDiagnostics {
+ public:
+  /// `input_name` is the key of the input total ("packets" for a source).
+  StageDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name,
+                   const std::string& task, const std::string& input_name = "inputs",
+                   double load_warn_fraction = 0.9);
+
+  /// One input message arrived (a packet for a source, a revolution for a stage). `seq` is its
+  /// header.seq: gaps count as skipped revolutions (0 = not numbered).
+  void input(std::uint32_t seq = 0);
+  /// One revolution processed in `processing_s` seconds of wall time.
+  void frame(double processing_s);
+  /// One revolution published.
+  void output();
+  /// One input rejected (malformed); same as count("rejected inputs", 1, true).
+  void rejected();
+  /// Adds `n` to the named counter; a `warn` counter that grows turns the status to WARN.
+  void count(const std::string& key, std::uint64_t n = 1, bool warn = true);
+  /// Sets a counter that the caller keeps itself (a total, e.g. the kernel's drops).
+  void setTotal(const std::string& key, std::uint64_t total, bool warn = true);
+  /// Whether the stage currently has a subscriber (shown as idle otherwise).
+  void setActive(bool active);
+  /// Revolutions per second the sensor delivers (rpm / 60); 0 = not checked.
+  void setExpectedRate(double hz);
+  /// Shown in the status; for a source the sensor address or file.
+  void setHardwareId(const std::string& id) { updater_->setHardwareID(id); }
+  /// Status computed now, closing the current window (for tests and the timer).
+  void update() { updater_->force_update(); }
+
+ private:
+  struct Counter {
+    std::uint64_t total = 0, window = 0;
+    bool warn = true;
+  };
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
 
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   ros::WallTimer timer_;
+  std::string input_name_;
   double load_warn_fraction_;
   std::mutex mutex_;
-  bool active_ = false;
+  bool active_ = true;
+  double expected_hz_ = 0.0;
   ros::WallTime window_start_;
-  std::uint64_t frames_total_ = 0, rejected_total_ = 0;
-  std::uint64_t window_frames_ = 0, window_rejected_ = 0;
+  SeqGapCounter gaps_;
+  Counter inputs_, frames_, outputs_, skipped_;
+  std::map<std::string, Counter> counters_;
   double window_sum_s_ = 0.0, window_max_s_ = 0.0;
 };
 

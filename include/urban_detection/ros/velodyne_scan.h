@@ -33,8 +33,11 @@ class ScanAssembler {
   /// gathered so far are dropped and counted in forcedCuts().
   static constexpr std::size_t kMaxPacketsPerScan = 3 * 695;
 
-  /// `cut_angle_deg` [deg, 0..360]; `frame_id` goes into every scan's header.
-  ScanAssembler(double cut_angle_deg, const std::string& frame_id);
+  /// `cut_angle_deg` [deg, 0..360]; `frame_id` goes into every scan's header;
+  /// `expected_packets` sizes the first revolution's buffer (later ones take the size of the
+  /// previous revolution); the cut stays by azimuth whatever the expectation.
+  ScanAssembler(double cut_angle_deg, const std::string& frame_id,
+                std::size_t expected_packets = 700);
 
   /// Adds a packet received at `stamp`. Returns the finished revolution when this packet
   /// starts a new one (the packet then opens the next scan), otherwise null. The scan's

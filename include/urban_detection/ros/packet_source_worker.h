@@ -1,0 +1,65 @@
+/// \file packet_source_worker.h
+/// The reading thread of the PacketSource nodelet: HDL-64E packets from a live UDP socket or a
+/// paced pcap replay, grouped into one VelodyneScan per whole revolution (ScanAssembler) and
+/// handed to a publish function. Counts everything that goes wrong on StageDiagnostics and logs
+/// it throttled; never throws once started.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include <ros/time.h>
+
+#include "urban_detection/core/pcap_io.h"
+#include "urban_detection/core/udp_receiver.h"
+#include "urban_detection/ros/packet_params.h"
+#include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/velodyne_scan.h"
+
+namespace urban_detection {
+
+class PacketSourceWorker {
+ public:
+  using PublishFn = std::function<void(const VelodyneScan::Ptr& scan)>;
+  using ListenedFn = std::function<bool()>;  // whether the scans have a subscriber
+
+  /// Opens the socket or the capture; throws std::runtime_error / std::invalid_argument with
+  /// the system's reason (port in use, missing file). `diagnostics` must outlive the worker.
+  PacketSourceWorker(const PacketSourceParams& params, ros_conv::StageDiagnostics* diagnostics,
+                     PublishFn publish, ListenedFn listened);
+  ~PacketSourceWorker();  // stops and joins the thread
+
+  /// Starts the reading thread. Live: the socket is read all the time, subscribers or not (an
+  /// unread socket fills with stale packets a late subscriber would get first). Replay: pauses
+  /// while nobody listens, so no recorded revolution is lost.
+  void start();
+  /// Whether the thread still runs (a replay stops at the end of the file or on a truncation).
+  bool running() const { return running_; }
+  /// Human-readable description of the input ("UDP port 2368 ..." or "pcap file").
+  std::string describe() const;
+  /// A configuration problem worth a warning at start ("" if none): a receive buffer smaller
+  /// than requested because of net.core.rmem_max.
+  std::string warning() const;
+
+ private:
+  void udpLoop();
+  void pcapLoop();
+  void addPacket(const core::RawPacket& packet, const ros::Time& stamp);
+
+  PacketSourceParams params_;
+  ros_conv::StageDiagnostics* diagnostics_;
+  PublishFn publish_;
+  ListenedFn listened_;
+  std::unique_ptr<core::UdpReceiver> receiver_;
+  std::unique_ptr<core::PcapReader> pcap_;
+  ScanAssembler assembler_;  // reading thread only
+  std::thread thread_;
+  std::atomic<bool> running_{false};
+  std::uint64_t packets_ = 0, scans_ = 0;
+  double revolution_s_ = 0.0;  // [s] time spent on the packets of the open revolution
+};
+
+}  // namespace urban_detection

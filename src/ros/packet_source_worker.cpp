@@ -1,0 +1,177 @@
+#include "urban_detection/ros/packet_source_worker.h"
+
+#include <ros/console.h>
+#include <ros/init.h>
+
+#include <algorithm>
+#include <chrono>
+
+namespace urban_detection {
+
+PacketSourceWorker::PacketSourceWorker(const PacketSourceParams& params,
+                                       ros_conv::StageDiagnostics* diagnostics,
+                                       PublishFn publish, ListenedFn listened)
+    : params_(params),
+      diagnostics_(diagnostics),
+      publish_(std::move(publish)),
+      listened_(std::move(listened)),
+      assembler_(params.cut_angle_deg, params.frame_id, params.expectedPacketsPerRevolution()) {
+  if (params_.pcap.empty()) {
+    receiver_ = std::make_unique<core::UdpReceiver>(
+        core::UdpReceiverParams{params_.port, params_.device_ip, params_.rcvbuf_bytes});
+  } else {
+    pcap_ = std::make_unique<core::PcapReader>(params_.pcap, params_.port);
+  }
+}
+
+PacketSourceWorker::~PacketSourceWorker() {
+  running_ = false;
+  if (thread_.joinable()) thread_.join();
+}
+
+void PacketSourceWorker::start() {
+  running_ = true;
+  thread_ = std::thread([this] { receiver_ ? udpLoop() : pcapLoop(); });
+}
+
+std::string PacketSourceWorker::describe() const {
+  if (pcap_) return "pcap " + params_.pcap;
+  return "UDP port " + std::to_string(receiver_->port()) +
+         (params_.device_ip.empty() ? "" : " from " + params_.device_ip) + ", receive buffer " +
+         std::to_string(receiver_->rcvbufBytes()) + " bytes";
+}
+
+std::string PacketSourceWorker::warning() const {
+  if (!receiver_ || receiver_->rcvbufBytes() / 2 >= params_.rcvbuf_bytes) return "";
+  return "UDP receive buffer limited to " + std::to_string(receiver_->rcvbufBytes() / 2) +
+         " bytes instead of rcvbuf_bytes = " + std::to_string(params_.rcvbuf_bytes) +
+         ": raise net.core.rmem_max (sysctl) or run with CAP_NET_ADMIN, or bursts may be lost";
+}
+
+void PacketSourceWorker::udpLoop() {
+  core::RawPacket raw;
+  std::size_t size = 0;
+  while (running_ && ros::ok()) {
+    switch (receiver_->receive(&raw, 100, &size)) {
+      case core::UdpReceiver::Result::kPacket:
+        diagnostics_->setTotal("kernel_dropped_packets", receiver_->kernelDrops());
+        addPacket(raw, ros::Time::now());
+        break;
+      case core::UdpReceiver::Result::kWrongSize:
+        diagnostics_->count("bad_size_packets");
+        ROS_WARN_THROTTLE(5, "PacketSource: dropped a %zu-byte datagram (HDL-64E packets are "
+                             "%zu bytes)", size, core::kPacketSize);
+        break;
+      case core::UdpReceiver::Result::kOtherSender:
+        diagnostics_->count("other_sender_packets");
+        ROS_WARN_THROTTLE(5, "PacketSource: ignoring datagrams not from device_ip %s",
+                          params_.device_ip.c_str());
+        break;
+      case core::UdpReceiver::Result::kError:
+        diagnostics_->count("socket_errors");
+        ROS_ERROR_THROTTLE(5, "PacketSource: UDP receive failed: %s",
+                           receiver_->lastError().c_str());
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        break;
+      case core::UdpReceiver::Result::kTimeout:
+        break;
+    }
+  }
+}
+
+// Replays at `rate` times the recorded speed (0: as fast as possible). Stamps are the capture
+// times shifted so that the first packet is stamped "now" (use_pcap_time: unshifted), and keep
+// increasing across loops; intra-revolution time differences stay those of the sensor.
+void PacketSourceWorker::pcapLoop() {
+  using Clock = std::chrono::steady_clock;
+  core::PcapPacket packet;
+  bool anchored = false, first = true;
+  Clock::time_point wall_anchor;
+  double replay_anchor_s = 0, stamp_offset_s = 0, loop_shift_s = 0;
+  double first_s = 0, last_s = 0;
+  std::size_t in_pass = 0;
+  while (running_ && ros::ok()) {
+    if (!listened_()) {  // lazy: pause, and resume without a burst
+      anchored = false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
+    const core::PcapReader::Result result = pcap_->next(&packet);
+    if (result == core::PcapReader::Result::kTruncated) {
+      diagnostics_->count("truncated_captures");
+      ROS_ERROR("PacketSource: pcap '%s' is truncated after %lu packets; replay stops",
+                params_.pcap.c_str(), static_cast<unsigned long>(packets_));
+      break;
+    }
+    if (result == core::PcapReader::Result::kEnd) {
+      if (in_pass == 0) {
+        ROS_ERROR("PacketSource: pcap '%s' has no HDL-64E packet for UDP port %d",
+                  params_.pcap.c_str(), params_.port);
+        break;
+      }
+      if (!params_.loop) break;
+      const double span_s = last_s - first_s;
+      loop_shift_s += span_s + (in_pass > 1 ? span_s / static_cast<double>(in_pass - 1) : 0.1);
+      pcap_->rewind();
+      assembler_.reset();  // never splice the end of the file to its start in one scan
+      in_pass = 0;
+      continue;
+    }
+    if (in_pass++ == 0) first_s = packet.stamp_s;
+    last_s = packet.stamp_s;
+    const double replay_s = packet.stamp_s + loop_shift_s;
+    if (first) {
+      stamp_offset_s = params_.use_pcap_time ? 0.0 : ros::Time::now().toSec() - replay_s;
+      first = false;
+    }
+    if (!anchored) {
+      wall_anchor = Clock::now();
+      replay_anchor_s = replay_s;
+      anchored = true;
+    }
+    if (params_.rate > 0) {
+      const auto due = wall_anchor + std::chrono::duration_cast<Clock::duration>(
+                                         std::chrono::duration<double>(
+                                             (replay_s - replay_anchor_s) / params_.rate));
+      while (running_ && Clock::now() < due) {  // interruptible sleep
+        std::this_thread::sleep_for(
+            std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(50)));
+      }
+    }
+    addPacket(packet.data, ros::Time(std::max(0.0, replay_s + stamp_offset_s)));
+  }
+  assembler_.reset();  // the revolution open at the end of the file is partial
+  diagnostics_->setTotal("partial_revolutions_dropped", assembler_.partialDropped(), false);
+  if (pcap_->skipped() > 0) {
+    diagnostics_->setTotal("skipped_pcap_records", pcap_->skipped(), false);
+    ROS_WARN("PacketSource: pcap '%s': skipped %lu records that are not HDL-64E data packets",
+             params_.pcap.c_str(), static_cast<unsigned long>(pcap_->skipped()));
+  }
+  ROS_INFO("PacketSource: pcap replay finished: %lu packets, %lu revolutions",
+           static_cast<unsigned long>(packets_), static_cast<unsigned long>(scans_));
+  running_ = false;
+}
+
+void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Time& stamp) {
+  const auto start = std::chrono::steady_clock::now();
+  ++packets_;
+  diagnostics_->input();
+  const std::size_t forced_before = assembler_.forcedCuts();
+  VelodyneScan::Ptr scan = assembler_.add(packet, stamp);
+  diagnostics_->setTotal("partial_revolutions_dropped", assembler_.partialDropped(), false);
+  if (assembler_.forcedCuts() != forced_before) {
+    diagnostics_->setTotal("forced_cuts", assembler_.forcedCuts());
+    ROS_WARN_THROTTLE(5, "PacketSource: no revolution boundary at cut_angle %.2f deg within %zu "
+                         "packets: dropped them (is the sensor spinning?)",
+                      params_.cut_angle_deg, ScanAssembler::kMaxPacketsPerScan);
+  }
+  revolution_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!scan) return;
+  ++scans_;
+  diagnostics_->frame(revolution_s_);
+  revolution_s_ = 0.0;
+  publish_(scan);  // a fresh message, never touched again: zero copy inside a manager
+  diagnostics_->output();
+}
+
+}  // namespace urban_detection

@@ -1,0 +1,312 @@
+// Load (issue 8), with the nodelets loaded into this process (nodelet::Loader):
+//  * UDP flood: PacketSource (and PacketToCloud behind it) receive a continuous spin at 5x the
+//    HDL-64E packet rate for 10 s, then at the normal rate: nothing crashes, every datagram is
+//    either received or counted as a kernel drop on /diagnostics, whole revolutions come out
+//    again at 10 Hz once the rate is back to normal.
+//  * Back-pressure: a burst of clouds far faster than GridSegmentation can segment them: its
+//    input queue (queue_size 1) stays bounded, the newest revolution wins, and the revolutions
+//    it never saw are counted exactly (skipped_revolutions) and reported as a warning.
+#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+
+#include <arpa/inet.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <nodelet/loader.h>
+#include <pcl_ros/point_cloud.h>
+#include <ros/ros.h>
+#include <sys/socket.h>
+#include <unistd.h>
+#include <urban_detection/VelodyneScan.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "urban_detection/core/hdl64e_packet.h"
+
+namespace urban_detection {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+bool waitFor(const std::function<bool()>& done, double timeout_s) {
+  const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
+  while (Clock::now() < end) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return done();
+}
+
+// Statuses on /diagnostics: latest value of a key, and whether a summary was ever seen.
+struct DiagnosticsWatcher {
+  std::mutex mutex;
+  std::vector<diagnostic_msgs::DiagnosticStatus> statuses;
+  ros::Subscriber sub;
+  DiagnosticsWatcher() {
+    sub = ros::NodeHandle().subscribe("/diagnostics", 100, &DiagnosticsWatcher::cb, this);
+  }
+  void cb(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex);
+    statuses.insert(statuses.end(), msg->status.begin(), msg->status.end());
+  }
+  long value(const std::string& name, const std::string& key) {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (auto it = statuses.rbegin(); it != statuses.rend(); ++it) {
+      if (it->name.find(name) == std::string::npos) continue;
+      for (const auto& kv : it->values) {
+        if (kv.key == key) return std::stol(kv.value);
+      }
+    }
+    return -1;
+  }
+  bool sawWarning(const std::string& name, const std::string& text) {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& s : statuses) {
+      if (s.name.find(name) != std::string::npos &&
+          s.level == diagnostic_msgs::DiagnosticStatus::WARN &&
+          s.message.find(text) != std::string::npos) {
+        return true;
+      }
+    }
+    return false;
+  }
+};
+
+int freeUdpPort() {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
+  socklen_t len = sizeof(addr);
+  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  close(fd);
+  return ntohs(addr.sin_port);
+}
+
+// One revolution of a sensor spinning at 600 rpm: 347 packets (288 us each), the azimuth
+// advancing 0.1728 deg per firing, half a firing off the cut angle 0.
+constexpr int kPacketsPerRevolution = 347;
+std::vector<core::RawPacket> makeRevolution() {
+  const core::PacketEncoder encoder(core::Calibration::nominalHdl64eS2());
+  const double deg_per_firing = 360.0 / (6.0 * kPacketsPerRevolution);
+  std::vector<core::RawPacket> packets;
+  for (int i = 0; i < kPacketsPerRevolution; ++i) {
+    core::Firing firings[6];
+    for (int k = 0; k < 6; ++k) {
+      const double az = (6 * i + k + 0.5) * deg_per_firing;
+      firings[k].azimuth = static_cast<std::uint16_t>(std::lround(az * 100.0) % 36000);
+      firings[k].distance.fill(5000);  // 10 m
+      firings[k].intensity.fill(50);
+    }
+    packets.push_back(encoder.encode(firings, static_cast<std::uint32_t>(i * 288)));
+  }
+  return packets;
+}
+
+// ------------------------------------------------------------------------------------------
+TEST(Load, UdpFloodIsCountedAndOutputRecovers) {
+  const int port = freeUdpPort();
+  DiagnosticsWatcher diagnostics;
+  ros::param::set("/flood/packet_source/port", port);
+  ros::param::set("/flood/packet_source/device_ip", "127.0.0.1");
+  ros::param::set("/flood/packet_source/rcvbuf_bytes", 64 * 1024);  // overflow early
+  ros::param::set("/flood/packet_source/rpm", 600.0);
+  ros::param::set("/flood/packet_to_cloud/queue_size", 1);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/flood/packet_source", "urban_detection/PacketSource", {}, {}));
+  ASSERT_TRUE(manager.load("/flood/packet_to_cloud", "urban_detection/PacketToCloud", {}, {}));
+
+  std::mutex mutex;
+  std::vector<std::pair<double, std::size_t>> scans;  // (wall time [s], packets)
+  std::vector<double> clouds;                          // wall time [s]
+  const auto t0 = Clock::now();
+  auto since = [&t0] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
+  ros::NodeHandle nh("/flood");
+  ros::Subscriber scan_sub = nh.subscribe<VelodyneScan>(
+      "velodyne_packets", 100, [&](const VelodyneScan::ConstPtr& scan) {
+        std::lock_guard<std::mutex> lock(mutex);
+        scans.emplace_back(since(), scan->packets.size());
+      });
+  ros::Subscriber cloud_sub = nh.subscribe<CloudXYZIRT>(
+      "velodyne_points", 100, [&](const boost::shared_ptr<const CloudXYZIRT>&) {
+        std::lock_guard<std::mutex> lock(mutex);
+        clouds.push_back(since());
+      });
+  ASSERT_TRUE(waitFor([&] { return cloud_sub.getNumPublishers() == 1; }, 10.0));
+
+  // The sender: 10 s at 5 x 3472 packets/s, then 4 s at the normal rate, paced per millisecond.
+  const std::vector<core::RawPacket> revolution = makeRevolution();
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+  const double packet_rate = 1.0 / (6 * core::kFiringPeriodS);  // 3472 /s
+  const double flood_s = 10.0, normal_s = 4.0;
+  std::uint64_t sent = 0;
+  double normal_start = 0.0;
+  const auto send_start = Clock::now();
+  for (const auto& [duration_s, factor] : {std::pair<double, double>{flood_s, 5.0},
+                                           std::pair<double, double>{normal_s, 1.0}}) {
+    if (factor == 1.0) normal_start = since();
+    const auto phase_start = Clock::now();
+    const std::uint64_t phase_first = sent;
+    for (;;) {
+      const double t = std::chrono::duration<double>(Clock::now() - phase_start).count();
+      if (t >= duration_s) break;
+      const auto due = static_cast<std::uint64_t>(t * factor * packet_rate);
+      while (sent - phase_first < due) {
+        const core::RawPacket& p = revolution[sent % kPacketsPerRevolution];
+        sendto(fd, p.data(), p.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof(to));
+        ++sent;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }
+  close(fd);
+  const double send_s = std::chrono::duration<double>(Clock::now() - send_start).count();
+  const double end = since();
+
+  // Every datagram is accounted for: received by PacketSource or dropped by the kernel (the
+  // drop count travels with the datagrams received after the drops).
+  long received = -1, dropped = -1;
+  EXPECT_TRUE(waitFor([&] {
+    received = diagnostics.value("flood/packet_source", "packets");
+    dropped = diagnostics.value("flood/packet_source", "kernel_dropped_packets");
+    return received >= 0 && dropped >= 0 && received + dropped == static_cast<long>(sent);
+  }, 10.0)) << "sent " << sent << ", received " << received << ", kernel drops " << dropped;
+  if (dropped > 0) {
+    EXPECT_TRUE(diagnostics.sawWarning("flood/packet_source", "kernel_dropped_packets"));
+  }
+  // Recovery: in the last 2 s at the normal rate, whole revolutions at 10 Hz on both topics.
+  std::lock_guard<std::mutex> lock(mutex);
+  int recent_scans = 0, recent_clouds = 0;
+  for (const auto& [t, n] : scans) {
+    if (t < end - 2.0 || t > end) continue;
+    ++recent_scans;
+    EXPECT_NEAR(static_cast<double>(n), kPacketsPerRevolution, 1.0);
+  }
+  for (const double t : clouds) recent_clouds += t >= end - 2.0 && t <= end;
+  EXPECT_GE(recent_scans, 17) << "revolutions in the last 2 s at the normal rate";
+  EXPECT_LE(recent_scans, 22);
+  EXPECT_GE(recent_clouds, 15) << "clouds in the last 2 s at the normal rate";
+  EXPECT_GT(normal_start, flood_s - 1.0);
+  std::fprintf(stderr, "flood: %lu datagrams in %.1f s, %ld received, %ld dropped by the kernel, "
+               "%zu revolutions, %zu clouds\n", static_cast<unsigned long>(sent), send_s,
+               received, dropped, scans.size(), clouds.size());
+}
+
+// ------------------------------------------------------------------------------------------
+// A street-like cloud: ground grid and a few boxes; ~`points` points.
+boost::shared_ptr<CloudXYZIRT> makeCloud(std::size_t points) {
+  auto cloud = boost::make_shared<CloudXYZIRT>();
+  const int side = static_cast<int>(std::sqrt(static_cast<double>(points)));
+  for (int i = 0; i < side; ++i) {
+    for (int j = 0; j < side; ++j) {
+      PointXYZIRT p;
+      p.x = -30.0f + 60.0f * static_cast<float>(i) / static_cast<float>(side);
+      p.y = -30.0f + 60.0f * static_cast<float>(j) / static_cast<float>(side);
+      const bool box = std::fmod(std::fabs(p.x), 10.0f) < 1.5f && std::fmod(std::fabs(p.y), 10.0f) < 1.5f;
+      p.z = box ? -0.5f : -1.73f;
+      p.intensity = 10.0f;
+      p.ring = static_cast<std::uint16_t>(j % 64);
+      p.time = 0.0f;
+      cloud->push_back(p);
+    }
+  }
+  cloud->header.frame_id = "velodyne";
+  return cloud;
+}
+
+TEST(Load, BurstFasterThanSegmentationNewestRevolutionWins) {
+  DiagnosticsWatcher diagnostics;
+  ros::param::set("/burst/grid_segmentation/queue_size", 1);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/burst/grid_segmentation", "urban_detection/GridSegmentation", {}, {}));
+  ros::NodeHandle nh("/burst");
+  std::mutex mutex;
+  std::vector<std::uint32_t> seqs;
+  // Advertised before the subscriptions that make the lazy nodelet subscribe to it: a
+  // subscription racing an advertise of the same process may never be connected (roscpp).
+  ros::Publisher pub = nh.advertise<CloudXYZIRT>("velodyne_points", 100);
+  ros::Subscriber sub = nh.subscribe<LabeledCloud>(
+      "segmentation/foreground", 100, [&](const boost::shared_ptr<const LabeledCloud>& fg) {
+        std::lock_guard<std::mutex> lock(mutex);
+        seqs.push_back(fg->header.seq);
+      });
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
+  const boost::shared_ptr<CloudXYZIRT> base = makeCloud(250000);
+
+  // The burst: 30 revolutions published back to back (about 1 ms each, while one segmentation
+  // of 250k points takes tens of ms).
+  const std::uint32_t burst = 30;
+  std::vector<boost::shared_ptr<CloudXYZIRT>> clouds;
+  for (std::uint32_t seq = 1; seq <= burst; ++seq) {
+    clouds.push_back(boost::make_shared<CloudXYZIRT>(*base));
+    clouds.back()->header.seq = seq;
+  }
+  for (const auto& cloud : clouds) pub.publish(cloud);
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    return !seqs.empty() && seqs.back() == burst;
+  }, 20.0)) << "the newest revolution of the burst was not processed";
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  std::vector<std::uint32_t> got;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    got = seqs;
+  }
+  for (std::size_t i = 1; i < got.size(); ++i) EXPECT_LT(got[i - 1], got[i]) << "order";
+  EXPECT_LT(got.size(), burst / 2) << "the queue did not drop old revolutions";
+  // Seen by the stage: got.front() .. burst; everything in between it never processed.
+  const long skipped = static_cast<long>(burst - got.front() + 1 - got.size());
+  EXPECT_GT(skipped, 0);
+  EXPECT_TRUE(waitFor([&] {
+    return diagnostics.value("burst/grid_segmentation", "skipped_revolutions") == skipped;
+  }, 5.0)) << "expected " << skipped << " got "
+           << diagnostics.value("burst/grid_segmentation", "skipped_revolutions");
+  EXPECT_TRUE(waitFor([&] {
+    return diagnostics.sawWarning("burst/grid_segmentation", "skipped");
+  }, 5.0));
+
+  // Back to the sensor's pace (10 Hz): every revolution is processed, no new skips.
+  for (std::uint32_t seq = burst + 1; seq <= burst + 10; ++seq) {
+    auto cloud = boost::make_shared<CloudXYZIRT>(*base);
+    cloud->header.seq = seq;
+    pub.publish(cloud);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_TRUE(waitFor([&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    return seqs.size() == got.size() + 10 && seqs.back() == burst + 10;
+  }, 10.0)) << "revolutions at the normal rate were lost";
+  EXPECT_TRUE(waitFor([&] {
+    return diagnostics.value("burst/grid_segmentation", "revolutions") ==
+           static_cast<long>(got.size() + 10);
+  }, 5.0));
+  EXPECT_EQ(diagnostics.value("burst/grid_segmentation", "skipped_revolutions"), skipped);
+  std::fprintf(stderr, "burst: %u published at once, %zu processed, %ld skipped\n", burst,
+               got.size(), skipped);
+}
+
+}  // namespace
+}  // namespace urban_detection
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_load");
+  ros::NodeHandle nh;
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  ros::shutdown();
+  return result;
+}
