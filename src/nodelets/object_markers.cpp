@@ -27,6 +27,7 @@ class ObjectMarkers : public nodelet::Nodelet {
       loadParam(pnh, "box_alpha", &params_.box_alpha, 0.0, 1.0);
       loadParam(pnh, "text_size_m", &params_.text_size_m, 0.01, 10.0, "m");
       loadParam(pnh, "min_box_size_m", &params_.min_box_size_m, 0.0, 10.0, "m");
+      loadParam(pnh, "colour_by_class", &params_.colour_by_class);
       loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     } catch (const ParamError& e) {
       NODELET_FATAL("ObjectMarkers: %s; the nodelet stays idle", e.what());

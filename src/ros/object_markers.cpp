@@ -1,7 +1,11 @@
 #include "urban_detection/ros/object_markers.h"
 
 #include <algorithm>
+#include <array>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
+#include <map>
 #include <string>
 
 namespace urban_detection {
@@ -28,6 +32,37 @@ std_msgs::ColorRGBA colourForId(std::uint32_t id, double alpha) {
   return col;
 }
 
+std_msgs::ColorRGBA colourForClass(const std::string& class_label, double alpha) {
+  std::string name;
+  for (const char c : class_label) {
+    name += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  }
+  // Cityscapes palette (RGB) for the urban classes a segmentation network typically reports.
+  static const std::map<std::string, std::array<int, 3>> palette = {
+      {"car", {0, 0, 142}},          {"van", {0, 60, 100}},       {"truck", {0, 0, 70}},
+      {"bus", {0, 60, 100}},         {"train", {0, 80, 100}},     {"tram", {0, 80, 100}},
+      {"person", {220, 20, 60}},     {"pedestrian", {220, 20, 60}},
+      {"person_sitting", {220, 20, 60}}, {"rider", {255, 0, 0}}, {"cyclist", {255, 0, 0}},
+      {"bicycle", {119, 11, 32}},    {"motorcycle", {0, 0, 230}}, {"pole", {153, 153, 153}},
+      {"traffic sign", {220, 220, 0}}, {"traffic light", {250, 170, 30}},
+      {"vegetation", {107, 142, 35}}, {"terrain", {152, 251, 152}}, {"building", {70, 70, 70}},
+      {"wall", {102, 102, 156}},     {"fence", {190, 153, 153}},  {"road", {128, 64, 128}},
+      {"sidewalk", {244, 35, 232}}};
+  const auto it = palette.find(name);
+  if (it == palette.end()) {
+    // FNV-1a of the name picks a golden-ratio hue: stable across runs, unlike std::hash.
+    std::uint32_t h = 2166136261u;
+    for (const char c : name) h = (h ^ static_cast<unsigned char>(c)) * 16777619u;
+    return colourForId(h % 1000u, alpha);
+  }
+  std_msgs::ColorRGBA col;
+  col.r = static_cast<float>(it->second[0] / 255.0);
+  col.g = static_cast<float>(it->second[1] / 255.0);
+  col.b = static_cast<float>(it->second[2] / 255.0);
+  col.a = static_cast<float>(alpha);
+  return col;
+}
+
 void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerParams& params,
                         visualization_msgs::MarkerArray* markers) {
   markers->markers.clear();
@@ -47,7 +82,9 @@ void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerPa
     box.scale.x = std::max(o.obb_dimensions.x, params.min_box_size_m);
     box.scale.y = std::max(o.obb_dimensions.y, params.min_box_size_m);
     box.scale.z = std::max(o.obb_dimensions.z, params.min_box_size_m);
-    box.color = colourForId(o.id, params.box_alpha);
+    const bool classified = !o.class_label.empty() && o.class_label != "unknown";
+    box.color = classified && params.colour_by_class ? colourForClass(o.class_label, params.box_alpha)
+                                                     : colourForId(o.id, params.box_alpha);
     markers->markers.push_back(box);
     if (!params.show_ids) continue;
     visualization_msgs::Marker text;
@@ -62,7 +99,11 @@ void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerPa
     text.scale.z = params.text_size_m;
     text.color.r = text.color.g = text.color.b = text.color.a = 1.0f;
     text.text = std::to_string(o.id);
-    if (!o.class_label.empty() && o.class_label != "unknown") text.text += " " + o.class_label;
+    if (classified) {
+      char conf[16];
+      std::snprintf(conf, sizeof conf, " %.2f", o.class_confidence);
+      text.text += " " + o.class_label + conf;
+    }
     markers->markers.push_back(text);
   }
 }

@@ -4,6 +4,8 @@
 /// needed.
 #pragma once
 
+#include <string>
+
 #include <std_msgs/ColorRGBA.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -18,15 +20,23 @@ struct ObjectMarkerParams {
   double box_alpha = 0.45;  // [0..1] box opacity
   double text_size_m = 0.6; // [m] height of the id text
   double min_box_size_m = 0.05;  // [m] box dimensions are at least this (flat objects stay visible)
+  bool colour_by_class = true;   // [-] classified objects take their class colour, others the id's
 };
 
 /// Colour of object `id`: hue from the golden-ratio sequence, so an id always gets the same
 /// colour and consecutive ids contrast.
 std_msgs::ColorRGBA colourForId(std::uint32_t id, double alpha);
 
+/// Colour of an object class (issue 9): a fixed Cityscapes-like colour for the common urban
+/// class names (car, truck, bus, person, rider, bicycle, motorcycle, pole, traffic sign,
+/// traffic light, vegetation, ... case-insensitive, KITTI names included), otherwise a colour
+/// derived from the name, so a class keeps its colour across frames and runs.
+std_msgs::ColorRGBA colourForClass(const std::string& class_label, double alpha);
+
 /// Builds the markers of `objects` (header copied): marker 0 is DELETEALL, then one CUBE per
 /// object (namespace "objects", id = object id) and, with show_ids, one TEXT_VIEW_FACING (ns
-/// "object_ids"). Size: 1 + N * (1 + show_ids).
+/// "object_ids": the id, and for a classified object its class name and confidence, e.g.
+/// "3 car 0.87"). Size: 1 + N * (1 + show_ids).
 void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerParams& params,
                         visualization_msgs::MarkerArray* markers);
 

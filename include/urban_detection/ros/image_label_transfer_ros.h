@@ -1,0 +1,57 @@
+/// \file image_label_transfer_ros.h
+/// ROS glue of the image -> object label transfer (issue 9): sensor_msgs/Image and CameraInfo
+/// to OpenCV / core types, parameter loading, and writing the votes into DetectedObjectArray.
+/// No ROS master needed except for loadImageLabelTransferParams().
+#pragma once
+
+#include <ros/node_handle.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "urban_detection/DetectedObjectArray.h"
+#include "urban_detection/core/image_label_transfer.h"
+#include "urban_detection/core/spark_segmenter.h"
+
+namespace urban_detection {
+namespace ros_conv {
+
+/// Views an 8-bit image message as a BGR (or grey) cv::Mat: bgr8 and mono8 are wrapped without
+/// copying (valid while `msg` lives), rgb8, rgba8 and bgra8 are converted into `scratch`.
+/// Returns false with `error` for other encodings or a step/size mismatch (truncated data).
+bool imageToBgr(const sensor_msgs::Image& msg, cv::Mat* scratch, cv::Mat* bgr, std::string* error);
+
+/// The pinhole model of a rectified image: CameraInfo.P, or K (with a zero fourth column) when
+/// P is all zero. Returns false with `error` for a zero size or an unusable matrix.
+bool cameraFromInfo(const sensor_msgs::CameraInfo& info, core::PinholeCamera* camera,
+                    std::string* error);
+
+/// Copies `objects` into `out` and fills class_label / class_confidence of every object from
+/// `votes` (matched by id): the class name (`names[id]`, or "class_<id>") when a class won,
+/// "unknown" and 0 otherwise.
+void applyVotes(const DetectedObjectArray& objects, const std::vector<core::ObjectClassVote>& votes,
+                const std::vector<std::string>& names, DetectedObjectArray* out);
+
+/// Everything the ImageLabelTransfer nodelet reads from its private namespace
+/// (config/image_label_transfer.yaml).
+struct ImageLabelTransferRosParams {
+  core::SegmentationModelParams model;      // model/*
+  core::ImageLabelTransferParams transfer;  // transfer/* (kept_classes from keep_classes)
+  std::string class_names_file;             // one class name per line; empty: "class_<id>"
+  std::vector<std::string> keep_classes;    // names or ids that vote; empty: all
+  int queue_size = 5;                       // [-] per input and for the synchroniser
+  double max_sync_interval_s = 0.06;        // [s] image vs. cloud stamps may differ by this
+  std::string fixed_frame;                  // [-] non-empty: tf between the image and cloud
+                                            // stamps through this frame (moving platform)
+  double tf_timeout_s = 0.05;               // [s] wait for the camera <- LiDAR transform
+};
+
+/// Loads the parameters from `pnh` (model/*, transfer/*); throws ParamError naming the
+/// parameter and its accepted range. The model and class names files are read by the caller.
+void loadImageLabelTransferParams(const ros::NodeHandle& pnh, ImageLabelTransferRosParams* p);
+
+}  // namespace ros_conv
+}  // namespace urban_detection

@@ -1,0 +1,140 @@
+#include "urban_detection/ros/image_label_transfer_ros.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "urban_detection/ros/object_conversions.h"
+#include "urban_detection/ros/param_loading.h"
+
+namespace urban_detection {
+namespace ros_conv {
+
+bool imageToBgr(const sensor_msgs::Image& msg, cv::Mat* scratch, cv::Mat* bgr, std::string* error) {
+  int channels = 0;
+  int code = -1;  // cvtColor code, -1 = wrap as is
+  if (msg.encoding == "bgr8") {
+    channels = 3;
+  } else if (msg.encoding == "mono8") {
+    channels = 1;
+  } else if (msg.encoding == "rgb8") {
+    channels = 3;
+    code = cv::COLOR_RGB2BGR;
+  } else if (msg.encoding == "rgba8") {
+    channels = 4;
+    code = cv::COLOR_RGBA2BGR;
+  } else if (msg.encoding == "bgra8") {
+    channels = 4;
+    code = cv::COLOR_BGRA2BGR;
+  } else {
+    *error = "unsupported image encoding '" + msg.encoding +
+             "' (accepted: bgr8, rgb8, bgra8, rgba8, mono8)";
+    return false;
+  }
+  const std::size_t row_bytes = static_cast<std::size_t>(msg.width) * channels;
+  if (msg.width == 0 || msg.height == 0 || msg.width > 16384 || msg.height > 16384 ||
+      msg.step < row_bytes || msg.data.size() < static_cast<std::size_t>(msg.step) * msg.height) {
+    *error = "image " + std::to_string(msg.width) + "x" + std::to_string(msg.height) + " step " +
+             std::to_string(msg.step) + " does not match its " + std::to_string(msg.data.size()) +
+             " data bytes";
+    return false;
+  }
+  const cv::Mat view(static_cast<int>(msg.height), static_cast<int>(msg.width), CV_8UC(channels),
+                     const_cast<std::uint8_t*>(msg.data.data()), msg.step);
+  if (code < 0) {
+    *bgr = view;
+  } else {
+    cv::cvtColor(view, *scratch, code);
+    *bgr = *scratch;
+  }
+  return true;
+}
+
+bool cameraFromInfo(const sensor_msgs::CameraInfo& info, core::PinholeCamera* camera,
+                    std::string* error) {
+  camera->width_px = static_cast<int>(info.width);
+  camera->height_px = static_cast<int>(info.height);
+  const bool has_p = std::any_of(info.P.begin(), info.P.end(), [](double v) { return v != 0.0; });
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      camera->projection(r, c) = has_p ? info.P[r * 4 + c] : (c < 3 ? info.K[r * 3 + c] : 0.0);
+    }
+  }
+  if (!camera->valid()) {
+    *error = "CameraInfo (" + std::to_string(info.width) + "x" + std::to_string(info.height) +
+             ") has no usable P or K (zero size, non-finite or non-positive focal length)";
+    return false;
+  }
+  return true;
+}
+
+void applyVotes(const DetectedObjectArray& objects, const std::vector<core::ObjectClassVote>& votes,
+                const std::vector<std::string>& names, DetectedObjectArray* out) {
+  *out = objects;
+  for (DetectedObject& o : out->objects) {
+    o.class_label = kUnknownClass;
+    o.class_confidence = 0.0f;
+    const auto it = std::lower_bound(
+        votes.begin(), votes.end(), o.id,
+        [](const core::ObjectClassVote& v, std::uint32_t id) { return v.object_id < id; });
+    if (it == votes.end() || it->object_id != o.id || it->class_id < 0) continue;
+    const auto id = static_cast<std::size_t>(it->class_id);
+    o.class_label =
+        id < names.size() && !names[id].empty() ? names[id] : "class_" + std::to_string(id);
+    o.class_confidence = it->confidence;
+  }
+}
+
+namespace {
+
+void loadTriple(const ros::NodeHandle& nh, const std::string& name, std::array<double, 3>* v,
+                bool nonzero) {
+  if (!nh.hasParam(name)) return;
+  std::vector<double> list;
+  if (!nh.getParam(name, list) || list.size() != 3) {
+    throw ParamError("parameter '" + nh.resolveName(name) + "' must be a list of 3 numbers");
+  }
+  for (int c = 0; c < 3; ++c) {
+    if (!std::isfinite(list[c]) || (nonzero && list[c] == 0.0)) {
+      throw ParamError("parameter '" + nh.resolveName(name) + "' must hold finite" +
+                       (nonzero ? " non-zero" : "") + " numbers");
+    }
+    (*v)[c] = list[c];
+  }
+}
+
+}  // namespace
+
+void loadImageLabelTransferParams(const ros::NodeHandle& pnh, ImageLabelTransferRosParams* p) {
+  const ros::NodeHandle model(pnh, "model");
+  loadParam(model, "path", &p->model.model_path);
+  loadParam(model, "input_width_px", &p->model.input_width_px, 8, 8192, "px");
+  loadParam(model, "input_height_px", &p->model.input_height_px, 8, 8192, "px");
+  loadParam(model, "input_rgb", &p->model.input_rgb);
+  loadTriple(model, "mean", &p->model.mean, false);
+  loadTriple(model, "scale", &p->model.scale, true);
+  loadParam(model, "output_softmax", &p->model.output_softmax);
+  loadParam(model, "class_names_file", &p->class_names_file);
+  if (model.hasParam("keep_classes")) {
+    std::vector<std::string> keep;
+    if (!model.getParam("keep_classes", keep)) {
+      throw ParamError("parameter '" + model.resolveName("keep_classes") +
+                       "' must be a list of class names (strings)");
+    }
+    p->keep_classes = keep;
+  }
+  const ros::NodeHandle t(pnh, "transfer");
+  loadParam(t, "min_depth_m", &p->transfer.min_depth_m, 0.0, 100.0, "m");
+  loadParam(t, "min_points", &p->transfer.min_points, 1, 1000000);
+  loadParam(t, "min_confidence", &p->transfer.min_confidence, 0.0, 1.0);
+  loadParam(t, "occlusion_margin_m", &p->transfer.occlusion_margin_m, 0.0, 100.0, "m");
+  loadParam(t, "occlusion_cell_px", &p->transfer.occlusion_cell_px, 1, 256, "px");
+  loadParam(t, "queue_size", &p->queue_size, 1, 100);
+  loadParam(t, "max_sync_interval_s", &p->max_sync_interval_s, 0.0, 1.0, "s");
+  loadParam(t, "fixed_frame", &p->fixed_frame);
+  loadParam(t, "tf_timeout_s", &p->tf_timeout_s, 0.0, 1.0, "s");
+}
+
+}  // namespace ros_conv
+}  // namespace urban_detection
