@@ -11,7 +11,6 @@
 #include <nodelet/nodelet.h>
 #include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
-#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
@@ -114,18 +113,10 @@ class ImageLabelTransfer : public nodelet::Nodelet {
       return reject(error);
     }
     Eigen::Isometry3d cam_from_lidar;
-    try {
-      const std::string& cloud_frame = objects->header.frame_id;
-      const ros::Duration timeout(params_.tf_timeout_s);
-      const auto tf = params_.fixed_frame.empty()
-                          ? tf_buffer_->lookupTransform(image->header.frame_id, cloud_frame,
-                                                        image->header.stamp, timeout)
-                          : tf_buffer_->lookupTransform(image->header.frame_id, image->header.stamp,
-                                                        cloud_frame, objects->header.stamp,
-                                                        params_.fixed_frame, timeout);
-      cam_from_lidar = tf2::transformToEigen(tf);
-    } catch (const tf2::TransformException& e) {
-      return reject(std::string("no transform camera <- LiDAR: ") + e.what());
+    if (!ros_conv::lookupCameraFromCloud(*tf_buffer_, image->header, objects->header,
+                                         params_.fixed_frame, params_.tf_timeout_s, &cam_from_lidar,
+                                         &error)) {
+      return reject(error);
     }
     if (!model_.run(bgr_, &scores_, &error)) return reject(error);
     const auto t_net = std::chrono::steady_clock::now();

@@ -1,5 +1,6 @@
 #include "urban_detection/ros/image_label_transfer_ros.h"
 
+#include <tf2_eigen/tf2_eigen.h>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -64,6 +65,25 @@ bool cameraFromInfo(const sensor_msgs::CameraInfo& info, core::PinholeCamera* ca
   if (!camera->valid()) {
     *error = "CameraInfo (" + std::to_string(info.width) + "x" + std::to_string(info.height) +
              ") has no usable P or K (zero size, non-finite or non-positive focal length)";
+    return false;
+  }
+  return true;
+}
+
+bool lookupCameraFromCloud(const tf2_ros::Buffer& tf, const std_msgs::Header& image,
+                           const std_msgs::Header& cloud, const std::string& fixed_frame,
+                           double timeout_s, Eigen::Isometry3d* camera_from_cloud,
+                           std::string* error) {
+  try {
+    const ros::Duration timeout(timeout_s);
+    const geometry_msgs::TransformStamped t =
+        fixed_frame.empty()
+            ? tf.lookupTransform(image.frame_id, cloud.frame_id, image.stamp, timeout)
+            : tf.lookupTransform(image.frame_id, image.stamp, cloud.frame_id, cloud.stamp,
+                                 fixed_frame, timeout);
+    *camera_from_cloud = tf2::transformToEigen(t);
+  } catch (const tf2::TransformException& e) {
+    *error = std::string("no transform camera <- LiDAR: ") + e.what();
     return false;
   }
   return true;

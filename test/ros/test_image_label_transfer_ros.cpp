@@ -161,3 +161,47 @@ TEST(ObjectMarkersClasses, ClassNameConfidenceAndColour) {
 
 }  // namespace
 }  // namespace urban_detection
+
+namespace urban_detection {
+namespace {
+
+TEST(LookupCameraFromCloud, StaticAndMovingPlatform) {
+  tf2_ros::Buffer tf;
+  geometry_msgs::TransformStamped t;
+  t.header.frame_id = "velodyne";
+  t.child_frame_id = "camera";
+  t.transform.translation.x = 1.0;  // camera 1 m ahead of the LiDAR, same orientation
+  t.transform.rotation.w = 1.0;
+  ASSERT_TRUE(tf.setTransform(t, "test", true));
+  std_msgs::Header image, cloud;
+  image.frame_id = "camera";
+  image.stamp = ros::Time(100.0);
+  cloud.frame_id = "velodyne";
+  cloud.stamp = ros::Time(100.05);
+  Eigen::Isometry3d m;
+  std::string error;
+  ASSERT_TRUE(ros_conv::lookupCameraFromCloud(tf, image, cloud, "", 0.0, &m, &error)) << error;
+  EXPECT_TRUE((m * Eigen::Vector3d(5, 0, 0)).isApprox(Eigen::Vector3d(4, 0, 0)));
+  // Moving platform: odom -> velodyne moves +1 m in x between the cloud and image stamps,
+  // so a point fixed in odom seen at the cloud time lies 1 m closer at the image time.
+  for (double s : {100.0, 100.05}) {
+    geometry_msgs::TransformStamped o;
+    o.header.frame_id = "odom";
+    o.header.stamp = ros::Time(s);
+    o.child_frame_id = "velodyne";
+    o.transform.translation.x = s == 100.0 ? 11.0 : 10.0;
+    o.transform.rotation.w = 1.0;
+    ASSERT_TRUE(tf.setTransform(o, "test"));
+  }
+  ASSERT_TRUE(ros_conv::lookupCameraFromCloud(tf, image, cloud, "odom", 0.0, &m, &error)) << error;
+  // cloud-time velodyne point (5,0,0) = odom (15,0,0) = image-time velodyne (4,0,0) = camera
+  // (3,0,0)
+  EXPECT_TRUE((m * Eigen::Vector3d(5, 0, 0)).isApprox(Eigen::Vector3d(3, 0, 0), 1e-9))
+      << (m * Eigen::Vector3d(5, 0, 0)).transpose();
+  image.frame_id = "nowhere";
+  EXPECT_FALSE(ros_conv::lookupCameraFromCloud(tf, image, cloud, "", 0.0, &m, &error));
+  EXPECT_NE(error.find("camera <- LiDAR"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace urban_detection

@@ -7,6 +7,7 @@
 #include <ros/node_handle.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <tf2_ros/buffer.h>
 
 #include <opencv2/core.hpp>
 #include <string>
@@ -28,6 +29,14 @@ bool imageToBgr(const sensor_msgs::Image& msg, cv::Mat* scratch, cv::Mat* bgr, s
 /// P is all zero. Returns false with `error` for a zero size or an unusable matrix.
 bool cameraFromInfo(const sensor_msgs::CameraInfo& info, core::PinholeCamera* camera,
                     std::string* error);
+
+/// The transform of cloud-frame points into the camera's optical frame: at the image stamp, or,
+/// with a `fixed_frame` (moving platform), from the cloud stamp to the image stamp through it.
+/// Waits up to `timeout_s`; false with `error` when tf has no answer.
+bool lookupCameraFromCloud(const tf2_ros::Buffer& tf, const std_msgs::Header& image,
+                           const std_msgs::Header& cloud, const std::string& fixed_frame,
+                           double timeout_s, Eigen::Isometry3d* camera_from_cloud,
+                           std::string* error);
 
 /// Copies `objects` into `out` and fills class_label / class_confidence of every object from
 /// `votes` (matched by id): the class name (`names[id]`, or "class_<id>") when a class won,
