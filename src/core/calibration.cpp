@@ -317,7 +317,12 @@ Calibration loadCalibrationDbXml(const std::string& path) {
     const tinyxml2::XMLElement* px = xmlChild(item, "px", path, entry);
     LaserCorrection c;
     const double id = xmlRequired(px, "id_", path, entry);
-    if (id != std::floor(id)) fail(path, entry, "field 'id_' must be an integer");
+    // Range before the cast: converting inf, NaN or 1e300 to int is undefined behaviour.
+    if (!(id >= 0.0 && id < kNumLasers) || id != std::floor(id)) {
+      fail(path, entry,
+           "field 'id_' must be an integer in 0.." + std::to_string(kNumLasers - 1) + " (got " +
+               xmlChild(px, "id_", path, entry)->GetText() + ")");
+    }
     c.laser_id = static_cast<int>(id);
     const std::string where = laserLabel(index, c.laser_id);
     c.rot_correction_rad = xmlRequired(px, "rotCorrection_", path, where) * kDegToRad;
@@ -341,13 +346,21 @@ Calibration loadCalibrationDbXml(const std::string& path) {
     if (const tinyxml2::XMLElement* e = px->FirstChildElement("focalSlope_")) {
       c.focal_slope = xmlDouble(e, path, where, "focalSlope_");
     }
-    // Intensity limits are separate arrays indexed by laser id.
-    if (c.laser_id >= 0 && c.laser_id < static_cast<int>(min_i.size())) {
-      c.min_intensity = static_cast<int>(min_i[c.laser_id]);
-    }
-    if (c.laser_id >= 0 && c.laser_id < static_cast<int>(max_i.size())) {
-      c.max_intensity = static_cast<int>(max_i[c.laser_id]);
-    }
+    // Intensity limits are separate arrays indexed by laser id. Range before the cast (an
+    // item of 1e20 or nan must not reach static_cast<int>).
+    auto intensity = [&](const std::vector<double>& list, const char* name, int* out) {
+      if (c.laser_id >= static_cast<int>(list.size())) return;
+      const double v = list[c.laser_id];
+      if (!(v >= 0.0 && v <= 255.0) || v != std::floor(v)) {
+        std::ostringstream s;
+        s << "field '" << name << "' item " << c.laser_id << " must be an integer in 0..255 (got "
+          << v << ")";
+        fail(path, where, s.str());
+      }
+      *out = static_cast<int>(v);
+    };
+    intensity(min_i, "minIntensity_", &c.min_intensity);
+    intensity(max_i, "maxIntensity_", &c.max_intensity);
     cal.lasers.push_back(c);
   }
   cal.finalize();

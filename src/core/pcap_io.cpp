@@ -97,6 +97,11 @@ struct PcapReader::Impl {
   int port = kDefaultPort;
   pcap_t* handle = nullptr;
   int linktype = DLT_EN10MB;
+  // Once next() has reported kEnd or kTruncated it keeps reporting it until rewind(): after a
+  // corrupt record header libpcap would otherwise go on parsing the record's payload as
+  // headers and could hand out "packets" from the middle of a record.
+  bool finished = false;
+  Result final_result = Result::kEnd;
 
   void open() {
     char err[PCAP_ERRBUF_SIZE] = {0};
@@ -122,14 +127,21 @@ PcapReader::~PcapReader() { impl_->close(); }
 
 PcapReader::Result PcapReader::next(PcapPacket* packet) {
   if (impl_->handle == nullptr) return Result::kEnd;
+  if (impl_->finished) return impl_->final_result;
   for (;;) {
     pcap_pkthdr* header = nullptr;
     const u_char* frame = nullptr;
     const int rc = pcap_next_ex(impl_->handle, &header, &frame);
-    if (rc == PCAP_ERROR_BREAK) return Result::kEnd;  // -2: end of file
+    if (rc == PCAP_ERROR_BREAK) {  // -2: end of file
+      impl_->finished = true;
+      impl_->final_result = Result::kEnd;
+      return Result::kEnd;
+    }
     if (rc != 1 || header == nullptr || frame == nullptr) {
       // -1: libpcap read error, which for an offline capture means a record cut short by
-      // the end of the file ("truncated dump file").
+      // the end of the file ("truncated dump file") or a corrupt record header.
+      impl_->finished = true;
+      impl_->final_result = Result::kTruncated;
       return Result::kTruncated;
     }
     std::size_t payload_len = 0;
@@ -147,6 +159,7 @@ PcapReader::Result PcapReader::next(PcapPacket* packet) {
 
 void PcapReader::rewind() {
   impl_->close();
+  impl_->finished = false;
   impl_->open();
 }
 

@@ -3,6 +3,7 @@
 #include <boost/make_shared.hpp>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstring>
 
 namespace urban_detection {
@@ -74,7 +75,12 @@ void decodeScan(const core::PacketDecoder& decoder, const VelodyneScan& scan,
       continue;
     }
     const std::size_t begin = cloud->points.size();
-    const double packet_time_s = (packet.stamp - start).toSec();
+    // In nanoseconds, not ros::Time - ros::Time: that Duration throws std::runtime_error when
+    // two stamps of one scan are more than 68 years apart (a corrupt or hostile message), and
+    // the exception would escape the subscriber callback and take the nodelet manager down.
+    const std::uint64_t t = packet.stamp.toNSec(), t0 = start.toNSec();
+    const double packet_time_s = t >= t0 ? static_cast<double>(t - t0) * 1e-9
+                                         : -static_cast<double>(t0 - t) * 1e-9;
     // A fresh counter per packet: correct whether decode() adds to or overwrites its stats.
     core::DecodeStats packet_stats;
     const core::PacketStatus status = decoder.decode(packet.data.data(), packet.data.size(),
