@@ -1,15 +1,19 @@
 #!/usr/bin/env bash
-# Soak test (issue 8). Called by `scripts/run soak [minutes] [options]` after setup + build, with
-# the workspace sourced. Runs the simulated drive in real time (SimulatedSensor at 600 rpm,
-# 10 revolutions/s, looping) through the full pipeline (demo.launch: PacketToCloud,
-# GridSegmentation, HierarchicalGridDetector, ObjectMarkers in one nodelet manager) on its own
-# ROS master, and scripts/soak_monitor.py measures latency, skipped revolutions and the
-# manager's resident memory after a warm-up. Writes results/soak_<minutes>min.json.
+# Soak test (issue 8). Called by `scripts/run soak [minutes] [--sim] [options]` after setup +
+# build, with the workspace sourced. Runs the simulated drive in real time at 600 rpm
+# (10 revolutions/s) through the full pipeline in one nodelet manager on its own ROS master:
+#   default  a pcap of the simulated drive (60 s, written once by urban_detection_simulate into
+#            results/) replayed in a loop by PacketSource at the recorded pace (pcap.launch):
+#            the machine's time goes to the pipeline, not to ray casting;
+#   --sim    SimulatedSensor casting rays live (demo.launch); on a slow machine the simulator
+#            itself lags behind real time and its lag shows up as latency.
+# scripts/soak_monitor.py measures latency, skipped revolutions and the manager's resident
+# memory after a warm-up, and writes results/soak_<minutes>min.json.
 #   scripts/run soak            30 minutes (the figure reported in the README)
 #   scripts/run soak 2          the CI version (2 minutes, 30 s warm-up)
-# Options after the minutes: --warmup S, --max-rss-growth-mb MB, --max-skipped-fraction F,
-# --min-rate-hz HZ (failure bounds, see soak_monitor.py). Exit status 1 when a bound is exceeded.
-# Run it niced on a shared machine: `nice -n 10 scripts/run soak`.
+# Further options: --warmup S, --max-rss-growth-mb MB, --max-skipped-fraction F, --min-rate-hz
+# HZ (failure bounds, see soak_monitor.py). Exit status 1 when a bound is exceeded or a process
+# died. Run it niced on a shared machine: `nice -n 10 scripts/run soak`.
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 OUT="$REPO/results"
@@ -17,6 +21,8 @@ MINUTES="${1:-30}"
 [ $# -gt 0 ] && shift
 WARMUP=60
 if awk "BEGIN { exit !($MINUTES < 10) }"; then WARMUP=30; fi
+SOURCE=pcap
+if [ "${1:-}" = "--sim" ]; then SOURCE=sim; shift; fi
 mkdir -p "$OUT"
 JSON="$OUT/soak_${MINUTES}min.json"
 LOG="$OUT/soak_${MINUTES}min_roslaunch.log"
@@ -34,12 +40,23 @@ cleanup() {
 }
 trap cleanup EXIT
 
-echo "soak: ${MINUTES} min after ${WARMUP} s warm-up, master $ROS_MASTER_URI, log $LOG" >&2
-roslaunch -p "$PORT" urban_detection demo.launch rviz:=false >"$LOG" 2>&1 &
+echo "soak: ${MINUTES} min after ${WARMUP} s warm-up, source $SOURCE, master $ROS_MASTER_URI, log $LOG" >&2
+if [ "$SOURCE" = pcap ]; then
+  PCAP="$OUT/soak_drive.pcap"
+  if [ ! -s "$PCAP" ]; then
+    echo "soak: writing $PCAP (600 simulated revolutions)" >&2
+    "${UD_WS:-$REPO/.ws}/devel/lib/urban_detection/urban_detection_simulate" --revolutions 600 --pcap "$PCAP.tmp" >/dev/null
+    mv "$PCAP.tmp" "$PCAP"
+  fi
+  LAUNCH=(pcap.launch "pcap:=$PCAP" loop:=true rate:=1.0)
+else
+  LAUNCH=(demo.launch)
+fi
+roslaunch -p "$PORT" urban_detection "${LAUNCH[@]}" rviz:=false >"$LOG" 2>&1 &
 LAUNCH_PID=$!
 set +e
 /usr/bin/python3 "$REPO/scripts/soak_monitor.py" --minutes "$MINUTES" --warmup "$WARMUP" \
-    --out "$JSON" "$@"
+    --source "$SOURCE" --out "$JSON" "$@"
 STATUS=$?
 set -e
 if ! kill -0 "$LAUNCH_PID" 2>/dev/null; then

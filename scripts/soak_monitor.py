@@ -14,6 +14,7 @@ Writes a JSON summary (--out) and prints it; exits 1 when a --max-* bound is exc
 """
 import argparse
 import json
+import re
 import sys
 import threading
 import time
@@ -88,7 +89,8 @@ class Monitor:
                 if 'skipped_revolutions' in values:
                     self.stage_skipped[status.name] = int(values['skipped_revolutions'])
                 if self.measuring and status.level >= 1:
-                    key = '%s: %s' % (status.name, status.message)
+                    # One entry per kind of warning: the figures in the message vary.
+                    key = '%s: %s' % (status.name, re.sub(r'[0-9.]+', '#', status.message))
                     self.warnings[key] = self.warnings.get(key, 0) + 1
 
 
@@ -98,6 +100,7 @@ def main():
     parser.add_argument('--warmup', type=float, default=60.0, help='[s] before measuring')
     parser.add_argument('--manager', default='/urban_detection_manager')
     parser.add_argument('--out', required=True)
+    parser.add_argument('--source', default='pcap', help='recorded in the summary')
     parser.add_argument('--max-rss-growth-mb', type=float, default=20.0)
     parser.add_argument('--max-skipped-fraction', type=float, default=0.01)
     parser.add_argument('--min-rate-hz', type=float, default=9.0)
@@ -145,6 +148,7 @@ def main():
     expected = received + gaps
     summary = {
         'minutes': round(duration / 60.0, 2),
+        'source': args.source,
         'warmup_s': args.warmup,
         'revolutions_received': received,
         'rate_hz': round(received / duration, 3),
@@ -159,7 +163,7 @@ def main():
         'rss_mb': {'start': round(samples[0][1], 1), 'end': round(samples[-1][1], 1),
                    'max': round(max(r for _, r in samples), 1),
                    'slope_mb_per_hour': round(3600.0 * slope, 2)},
-        'diagnostics_warnings': warnings,
+        'diagnostics_warning_seconds': warnings,
     }
     failures = []
     if summary['rss_mb']['end'] - summary['rss_mb']['start'] > args.max_rss_growth_mb:

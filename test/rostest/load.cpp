@@ -3,6 +3,7 @@
 //    HDL-64E packet rate for 10 s, then at the normal rate: nothing crashes, every datagram is
 //    either received or counted as a kernel drop on /diagnostics, whole revolutions come out
 //    again at 10 Hz once the rate is back to normal.
+//  * A sensor whose revolutions arrive at half the configured rpm: a warning on /diagnostics.
 //  * Back-pressure: a burst of clouds far faster than GridSegmentation can segment them: its
 //    input queue (queue_size 1) stays bounded, the newest revolution wins, and the revolutions
 //    it never saw are counted exactly (skipped_revolutions) and reported as a warning.
@@ -202,6 +203,40 @@ TEST(Load, UdpFloodIsCountedAndOutputRecovers) {
   std::fprintf(stderr, "flood: %lu datagrams in %.1f s, %ld received, %ld dropped by the kernel, "
                "%zu revolutions, %zu clouds\n", static_cast<unsigned long>(sent), send_s,
                received, dropped, scans.size(), clouds.size());
+}
+
+// A sensor configured at 600 rpm whose revolutions arrive at 5 Hz (packets at half the rate,
+// e.g. a lossy link): PacketSource warns that its output is below the sensor's rate.
+TEST(Load, OutputBelowTheSensorRateIsAWarning) {
+  const int port = freeUdpPort();
+  DiagnosticsWatcher diagnostics;
+  ros::param::set("/slow/packet_source/port", port);
+  ros::param::set("/slow/packet_source/rpm", 600.0);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/slow/packet_source", "urban_detection/PacketSource", {}, {}));
+  const std::vector<core::RawPacket> revolution = makeRevolution();
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+  const double packet_rate = 0.5 / (6 * core::kFiringPeriodS);  // half of 3472 /s
+  const auto start = Clock::now();
+  std::uint64_t sent = 0;
+  for (;;) {
+    const double t = std::chrono::duration<double>(Clock::now() - start).count();
+    if (t >= 4.0) break;
+    while (sent < static_cast<std::uint64_t>(t * packet_rate)) {
+      const core::RawPacket& p = revolution[sent % kPacketsPerRevolution];
+      sendto(fd, p.data(), p.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof(to));
+      ++sent;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  close(fd);
+  EXPECT_TRUE(waitFor([&] {
+    return diagnostics.sawWarning("slow/packet_source", "below the sensor's 10.0 Hz");
+  }, 3.0));
 }
 
 // ------------------------------------------------------------------------------------------
