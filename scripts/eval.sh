@@ -45,7 +45,8 @@ else
 fi
 if [ -x "$BIN/urban_detection_simulate" ]; then
   bash "$REPO/scripts/sim_drive.sh" "$OUT/sim"
-  run sim --sim "$OUT/sim/drive.gt" --pcap "$OUT/sim/drive.pcap"
+  # 40 revolutions: the kd-tree baseline takes seconds per simulated revolution.
+  run sim --sim "$OUT/sim/drive.gt" --pcap "$OUT/sim/drive.pcap" --max-frames 40
 else
   echo "== eval: skipping the simulated drive (urban_detection_simulate not built)"
 fi

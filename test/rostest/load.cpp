@@ -288,7 +288,15 @@ TEST(Load, BurstFasterThanSegmentationNewestRevolutionWins) {
     clouds.push_back(boost::make_shared<CloudXYZIRT>(*base));
     clouds.back()->header.seq = seq;
   }
-  for (const auto& cloud : clouds) pub.publish(cloud);
+  // Revolution 1 alone first, processed before the burst: the stage must have seen a
+  // revolution before the gap for the gap to be visible to it (a fast segmenter could
+  // otherwise receive only the newest one and have nothing to count).
+  pub.publish(clouds.front());
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    return !seqs.empty();
+  }, 20.0)) << "the first revolution was not processed";
+  for (std::size_t i = 1; i < clouds.size(); ++i) pub.publish(clouds[i]);
   ASSERT_TRUE(waitFor([&] {
     std::lock_guard<std::mutex> lock(mutex);
     return !seqs.empty() && seqs.back() == burst;
