@@ -2,6 +2,7 @@
 // camera frustum and DontCare rules, SemanticKITTI label decoding, file readers, and the
 // replay of a short simulated drive (pcap + ground truth) with its exact instances.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -307,15 +308,18 @@ struct Drive {
 };
 
 // Simulates `revolutions` revolutions of the demo drive; writes every revolution's packets and
-// the ground-truth frames whose index is not in `drop_gt`.
+// the ground-truth frames whose index is not in `drop_gt`. The files are named after `name` and
+// this process's pid, so concurrent runs of the test binary (two checkouts, the sanitizer build)
+// never read or delete each other's files.
 Drive simulate(const std::string& name, int revolutions, const std::set<int>& drop_gt = {}) {
   const SimulationConfig c =
       loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
   LidarSimulator sim(generateScene(c.scene, c.drive), c.scene, c.drive,
                      Calibration::nominalHdl64eS2(), c.sensor);
   Drive d;
-  d.pcap = testing::TempDir() + "/" + name + ".pcap";
-  d.gt = testing::TempDir() + "/" + name + ".gt";
+  const std::string base = testing::TempDir() + "/" + name + "_" + std::to_string(::getpid());
+  d.pcap = base + ".pcap";
+  d.gt = base + ".gt";
   PcapWriter pcap(d.pcap);
   GroundTruthWriter gt(d.gt);
   SimRevolution rev;

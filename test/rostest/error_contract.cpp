@@ -31,58 +31,14 @@
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/pcap_io.h"
 #include "urban_detection/core/segment_class.h"
+#include "rostest_util.h"
 
 namespace urban_detection {
 namespace {
 
-bool waitFor(const std::function<bool()>& done, double timeout_s) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return done();
-}
-
-struct RosoutWatcher {
-  std::mutex mutex;
-  std::vector<rosgraph_msgs::Log> logs;
-  ros::Subscriber sub;
-  RosoutWatcher() { sub = ros::NodeHandle().subscribe("/rosout", 200, &RosoutWatcher::cb, this); }
-  void cb(const rosgraph_msgs::Log::ConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(mutex);
-    logs.push_back(*msg);
-  }
-  int count(std::uint8_t level, const std::string& text) {
-    std::lock_guard<std::mutex> lock(mutex);
-    int n = 0;
-    for (const auto& log : logs) n += log.level == level && log.msg.find(text) != std::string::npos;
-    return n;
-  }
-};
-
-struct DiagnosticsWatcher {
-  std::mutex mutex;
-  std::vector<diagnostic_msgs::DiagnosticStatus> statuses;
-  ros::Subscriber sub;
-  DiagnosticsWatcher() {
-    sub = ros::NodeHandle().subscribe("/diagnostics", 100, &DiagnosticsWatcher::cb, this);
-  }
-  void cb(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(mutex);
-    statuses.insert(statuses.end(), msg->status.begin(), msg->status.end());
-  }
-  long value(const std::string& name, const std::string& key) {
-    std::lock_guard<std::mutex> lock(mutex);
-    for (auto it = statuses.rbegin(); it != statuses.rend(); ++it) {
-      if (it->name.find(name) == std::string::npos) continue;
-      for (const auto& kv : it->values) {
-        if (kv.key == key) return std::stol(kv.value);
-      }
-    }
-    return -1;
-  }
-};
+using rostest_util::DiagnosticsWatcher;
+using rostest_util::RosoutWatcher;
+using rostest_util::waitFor;
 
 // Flat road (0.25 m grid, 30 x 30 m) and a 1.5 m high box: ground and short points.
 boost::shared_ptr<CloudXYZIRT> street() {
@@ -258,12 +214,5 @@ TEST(ErrorContract, TruncatedPcapStopsTheReplayWithOneClearError) {
 }  // namespace urban_detection
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_error_contract");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
+  return urban_detection::rostest_util::runRostests(argc, argv, "test_error_contract");
 }

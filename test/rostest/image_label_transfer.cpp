@@ -27,18 +27,12 @@
 #include <thread>
 
 #include "urban_detection/DetectedObjectArray.h"
+#include "rostest_util.h"
 
 namespace urban_detection {
 namespace {
 
-bool waitFor(const std::function<bool()>& done, double timeout_s) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return done();
-}
+using rostest_util::waitFor;
 
 TEST(ImageLabelTransferNodelet, LaunchFileWithoutModelRefusesToStart) {
   ros::NodeHandle nh;
@@ -217,12 +211,5 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
 }  // namespace urban_detection
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_image_label_transfer");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
+  return urban_detection::rostest_util::runRostests(argc, argv, "test_image_label_transfer");
 }

@@ -23,6 +23,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -30,55 +31,15 @@
 #include <vector>
 
 #include "urban_detection/core/hdl64e_packet.h"
+#include "rostest_util.h"
 
 namespace urban_detection {
 namespace {
 
+using rostest_util::DiagnosticsWatcher;
+using rostest_util::waitFor;
+
 using Clock = std::chrono::steady_clock;
-
-bool waitFor(const std::function<bool()>& done, double timeout_s) {
-  const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
-  while (Clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return done();
-}
-
-// Statuses on /diagnostics: latest value of a key, and whether a summary was ever seen.
-struct DiagnosticsWatcher {
-  std::mutex mutex;
-  std::vector<diagnostic_msgs::DiagnosticStatus> statuses;
-  ros::Subscriber sub;
-  DiagnosticsWatcher() {
-    sub = ros::NodeHandle().subscribe("/diagnostics", 100, &DiagnosticsWatcher::cb, this);
-  }
-  void cb(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(mutex);
-    statuses.insert(statuses.end(), msg->status.begin(), msg->status.end());
-  }
-  long value(const std::string& name, const std::string& key) {
-    std::lock_guard<std::mutex> lock(mutex);
-    for (auto it = statuses.rbegin(); it != statuses.rend(); ++it) {
-      if (it->name.find(name) == std::string::npos) continue;
-      for (const auto& kv : it->values) {
-        if (kv.key == key) return std::stol(kv.value);
-      }
-    }
-    return -1;
-  }
-  bool sawWarning(const std::string& name, const std::string& text) {
-    std::lock_guard<std::mutex> lock(mutex);
-    for (const auto& s : statuses) {
-      if (s.name.find(name) != std::string::npos &&
-          s.level == diagnostic_msgs::DiagnosticStatus::WARN &&
-          s.message.find(text) != std::string::npos) {
-        return true;
-      }
-    }
-    return false;
-  }
-};
 
 int freeUdpPort() {
   const int fd = socket(AF_INET, SOCK_DGRAM, 0);
@@ -152,8 +113,10 @@ TEST(Load, UdpFloodIsCountedAndOutputRecovers) {
   inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
   const double packet_rate = 1.0 / (6 * core::kFiringPeriodS);  // 3472 /s
   const double flood_s = 10.0, normal_s = 4.0;
+  const double window_s = 2.0;  // the last part of the normal phase, where output is checked
   std::uint64_t sent = 0;
   double normal_start = 0.0;
+  long drops_before_window = -1;  // kernel drops reported when the window starts
   const auto send_start = Clock::now();
   for (const auto& [duration_s, factor] : {std::pair<double, double>{flood_s, 5.0},
                                            std::pair<double, double>{normal_s, 1.0}}) {
@@ -163,6 +126,9 @@ TEST(Load, UdpFloodIsCountedAndOutputRecovers) {
     for (;;) {
       const double t = std::chrono::duration<double>(Clock::now() - phase_start).count();
       if (t >= duration_s) break;
+      if (factor == 1.0 && drops_before_window < 0 && t >= duration_s - window_s) {
+        drops_before_window = diagnostics.value("flood/packet_source", "kernel_dropped_packets");
+      }
       const auto due = static_cast<std::uint64_t>(t * factor * packet_rate);
       while (sent - phase_first < due) {
         const core::RawPacket& p = revolution[sent % kPacketsPerRevolution];
@@ -188,21 +154,38 @@ TEST(Load, UdpFloodIsCountedAndOutputRecovers) {
     EXPECT_TRUE(diagnostics.sawWarning("flood/packet_source", "kernel_dropped_packets"));
   }
   // Recovery: in the last 2 s at the normal rate, whole revolutions at 10 Hz on both topics.
+  // A revolution may lack packets only when the kernel dropped them in that time (a starved
+  // test process on a loaded machine overflows the deliberately small receive buffer even at
+  // the normal rate), and then only as many as it reported: every missing packet is counted.
+  // Packets missing without a counted drop, a revolution with extra packets, or fewer than
+  // 10 whole revolutions in 2 s fail.
+  ASSERT_GE(drops_before_window, 0) << "no kernel_dropped_packets on /diagnostics";
+  const long drops_in_window = dropped - drops_before_window;
   std::lock_guard<std::mutex> lock(mutex);
-  int recent_scans = 0, recent_clouds = 0;
+  int recent_scans = 0, recent_clouds = 0, whole = 0;
+  long missing = 0;
   for (const auto& [t, n] : scans) {
-    if (t < end - 2.0 || t > end) continue;
+    if (t < end - window_s || t > end) continue;
     ++recent_scans;
-    EXPECT_NEAR(static_cast<double>(n), kPacketsPerRevolution, 1.0);
+    const long delta = kPacketsPerRevolution - static_cast<long>(n);
+    whole += delta == 0;
+    missing += std::labs(delta);
   }
-  for (const double t : clouds) recent_clouds += t >= end - 2.0 && t <= end;
+  for (const double t : clouds) recent_clouds += t >= end - window_s && t <= end;
+  EXPECT_LE(missing, drops_in_window)
+      << "packets missing from (or extra in) the revolutions of the last " << window_s
+      << " s, but only " << drops_in_window << " kernel drops reported in that time";
+  EXPECT_GE(whole, 10) << "whole revolutions in the last 2 s at the normal rate";
   EXPECT_GE(recent_scans, 17) << "revolutions in the last 2 s at the normal rate";
   EXPECT_LE(recent_scans, 22);
   EXPECT_GE(recent_clouds, 15) << "clouds in the last 2 s at the normal rate";
   EXPECT_GT(normal_start, flood_s - 1.0);
-  std::fprintf(stderr, "flood: %lu datagrams in %.1f s, %ld received, %ld dropped by the kernel, "
-               "%zu revolutions, %zu clouds\n", static_cast<unsigned long>(sent), send_s,
-               received, dropped, scans.size(), clouds.size());
+  std::fprintf(stderr,
+               "flood: %lu datagrams in %.1f s, %ld received, %ld dropped by the kernel, "
+               "%zu revolutions, %zu clouds; last %.0f s: %d revolutions, %d whole, %ld kernel "
+               "drops\n",
+               static_cast<unsigned long>(sent), send_s, received, dropped, scans.size(),
+               clouds.size(), window_s, recent_scans, whole, drops_in_window);
 }
 
 // A sensor configured at 600 rpm whose revolutions arrive at 5 Hz (packets at half the rate,
@@ -344,12 +327,5 @@ TEST(Load, BurstFasterThanSegmentationNewestRevolutionWins) {
 }  // namespace urban_detection
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_load");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
+  return urban_detection::rostest_util::runRostests(argc, argv, "test_load");
 }

@@ -30,40 +30,19 @@
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/pcap_io.h"
 #include "urban_detection/ros/velodyne_scan.h"
+#include "rostest_util.h"
 
 namespace urban_detection {
 namespace {
 
+using rostest_util::Collector;
+using rostest_util::DiagnosticsWatcher;
+using rostest_util::RosoutWatcher;
+using rostest_util::waitFor;
+
 constexpr int kPacketsPerRevolution = 60;  // a coarse but valid spin: 1 deg between firings
 constexpr std::uint16_t kDistanceRaw = 5000;  // 10 m at 2 mm per unit: inside every range
 constexpr std::size_t kReturnsPerPacket = 384;
-
-bool waitFor(const std::function<bool()>& done, double timeout_s) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return done();
-}
-
-template <typename M>
-struct Collector {
-  std::mutex mutex;
-  std::vector<boost::shared_ptr<const M>> msgs;
-  void callback(const boost::shared_ptr<const M>& msg) {
-    std::lock_guard<std::mutex> lock(mutex);
-    msgs.push_back(msg);
-  }
-  std::size_t size() {
-    std::lock_guard<std::mutex> lock(mutex);
-    return msgs.size();
-  }
-  boost::shared_ptr<const M> at(std::size_t i) {
-    std::lock_guard<std::mutex> lock(mutex);
-    return msgs.at(i);
-  }
-};
 
 // Packets of a spin starting at `first_az_deg` with 6 deg per packet (1 deg per firing). The
 // azimuths are offset by half a degree from the cut angle 0 so the cut is unambiguous.
@@ -130,49 +109,6 @@ class UdpSender {
  private:
   int fd_;
   sockaddr_in to_{};
-};
-
-// Latest value of `key` in a /diagnostics status whose name contains `name`, or -1.
-struct DiagnosticsWatcher {
-  std::mutex mutex;
-  std::vector<diagnostic_msgs::DiagnosticStatus> statuses;
-  ros::Subscriber sub;
-  DiagnosticsWatcher() {
-    sub = ros::NodeHandle().subscribe("/diagnostics", 50, &DiagnosticsWatcher::callback, this);
-  }
-  void callback(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(mutex);
-    statuses.insert(statuses.end(), msg->status.begin(), msg->status.end());
-  }
-  long value(const std::string& name, const std::string& key) {
-    std::lock_guard<std::mutex> lock(mutex);
-    for (auto it = statuses.rbegin(); it != statuses.rend(); ++it) {
-      if (it->name.find(name) == std::string::npos) continue;
-      for (const auto& kv : it->values) {
-        if (kv.key == key) return std::stol(kv.value);
-      }
-    }
-    return -1;
-  }
-};
-
-// Messages this process logged on /rosout (the nodelets log through it too).
-struct RosoutWatcher {
-  std::mutex mutex;
-  std::vector<rosgraph_msgs::Log> logs;
-  ros::Subscriber sub;
-  RosoutWatcher() { sub = ros::NodeHandle().subscribe("/rosout", 100, &RosoutWatcher::cb, this); }
-  void cb(const rosgraph_msgs::Log::ConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(mutex);
-    logs.push_back(*msg);
-  }
-  bool contains(std::uint8_t level, const std::string& text) {
-    std::lock_guard<std::mutex> lock(mutex);
-    for (const auto& log : logs) {
-      if (log.level == level && log.msg.find(text) != std::string::npos) return true;
-    }
-    return false;
-  }
 };
 
 void decodeReference(const VelodyneScan& scan, CloudXYZIRT* cloud) {
@@ -549,12 +485,5 @@ TEST(PacketSource, BadParametersFailInitClearly) {
 }  // namespace urban_detection
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_nodelets");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
+  return urban_detection::rostest_util::runRostests(argc, argv, "test_nodelets");
 }
