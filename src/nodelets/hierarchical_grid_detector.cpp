@@ -33,13 +33,13 @@ class HierarchicalGridDetector : public DetectorNodelet {
     c.min_gap_subcells = params_.min_gap_subcells;
     c.min_points = params_.min_points;
     c.max_extent_m = params_.max_extent_m;
+    reconfigure_nh_ = ros::NodeHandle(pnh, "hierarchical_grid");
     reconfigure_ = std::make_unique<Reconfigure>(
-        ros::NodeHandle(pnh, "hierarchical_grid"), c, [this](const auto& config) {
-          return apply(config);
-        });
+        reconfigure_nh_, c, [this](const auto& config) { return apply(config); });
   }
 
-  // The whole set is validated, then a new detector replaces the old between two revolutions.
+  // The whole set is validated (the loader's ranges and cross-field checks), then a new detector
+  // replaces the old between two revolutions.
   std::string apply(const HierarchicalGridDetectorConfig& c) {
     core::HierarchicalGridDetectorParams p = params_;
     p.coarse_cell_m = c.coarse_cell_m;
@@ -53,7 +53,7 @@ class HierarchicalGridDetector : public DetectorNodelet {
     p.min_gap_subcells = c.min_gap_subcells;
     p.min_points = c.min_points;
     p.max_extent_m = c.max_extent_m;
-    const std::string error = core::validate(p);
+    const std::string error = ros_conv::checkHierarchicalGridParams(reconfigure_nh_, p);
     if (!error.empty()) return error;
     replaceDetector(std::make_unique<core::HierarchicalGridDetector>(p));
     params_ = p;
@@ -62,6 +62,7 @@ class HierarchicalGridDetector : public DetectorNodelet {
 
   using Reconfigure = ros_conv::ValidatedReconfigure<HierarchicalGridDetectorConfig>;
   core::HierarchicalGridDetectorParams params_;  // in force
+  ros::NodeHandle reconfigure_nh_;               // ~hierarchical_grid
   std::unique_ptr<Reconfigure> reconfigure_;
 };
 

@@ -26,18 +26,20 @@ class KdTreeDetector : public DetectorNodelet {
     c.min_cluster_size = params_.min_cluster_size;
     c.max_cluster_size = params_.max_cluster_size;
     c.max_extent_m = params_.max_extent_m;
+    reconfigure_nh_ = ros::NodeHandle(pnh, "kdtree");
     reconfigure_ = std::make_unique<Reconfigure>(
-        ros::NodeHandle(pnh, "kdtree"), c, [this](const auto& config) { return apply(config); });
+        reconfigure_nh_, c, [this](const auto& config) { return apply(config); });
   }
 
-  // The whole set is validated, then a new detector replaces the old between two revolutions.
+  // The whole set is validated (the loader's ranges and cross-field checks), then a new detector
+  // replaces the old between two revolutions.
   std::string apply(const KdTreeDetectorConfig& c) {
     core::KdTreeDetectorParams p = params_;
     p.cluster_tolerance_m = c.cluster_tolerance_m;
     p.min_cluster_size = c.min_cluster_size;
     p.max_cluster_size = c.max_cluster_size;
     p.max_extent_m = c.max_extent_m;
-    const std::string error = core::validate(p);
+    const std::string error = ros_conv::checkKdTreeParams(reconfigure_nh_, p);
     if (!error.empty()) return error;
     replaceDetector(std::make_unique<core::KdTreeDetector>(p));
     params_ = p;
@@ -46,6 +48,7 @@ class KdTreeDetector : public DetectorNodelet {
 
   using Reconfigure = ros_conv::ValidatedReconfigure<KdTreeDetectorConfig>;
   core::KdTreeDetectorParams params_;  // in force
+  ros::NodeHandle reconfigure_nh_;     // ~kdtree
   std::unique_ptr<Reconfigure> reconfigure_;
 };
 

@@ -23,11 +23,7 @@ class ObjectMarkers : public nodelet::Nodelet {
   void onInit() override {
     const ros::NodeHandle pnh(getPrivateNodeHandle(), "markers");
     try {
-      loadParam(pnh, "show_ids", &params_.show_ids);
-      loadParam(pnh, "box_alpha", &params_.box_alpha, 0.0, 1.0);
-      loadParam(pnh, "text_size_m", &params_.text_size_m, 0.01, 10.0, "m");
-      loadParam(pnh, "min_box_size_m", &params_.min_box_size_m, 0.0, 10.0, "m");
-      loadParam(pnh, "colour_by_class", &params_.colour_by_class);
+      ros_conv::loadObjectMarkerParams(pnh, &params_);
       loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     } catch (const ParamError& e) {
       NODELET_FATAL("ObjectMarkers: %s; the nodelet stays idle", e.what());
@@ -38,13 +34,16 @@ class ObjectMarkers : public nodelet::Nodelet {
     c.box_alpha = params_.box_alpha;
     c.text_size_m = params_.text_size_m;
     c.min_box_size_m = params_.min_box_size_m;
-    reconfigure_ = std::make_unique<Reconfigure>(pnh, c, [this](const ObjectMarkersConfig& n) {
+    reconfigure_ = std::make_unique<Reconfigure>(pnh, c, [this, pnh](const ObjectMarkersConfig& n) {
       std::lock_guard<std::mutex> lock(params_mutex_);  // applied from the next message on
-      params_.show_ids = n.show_ids;
-      params_.box_alpha = n.box_alpha;
-      params_.text_size_m = n.text_size_m;
-      params_.min_box_size_m = n.min_box_size_m;
-      return std::string();  // every value within the cfg's ranges is valid
+      ros_conv::ObjectMarkerParams p = params_;
+      p.show_ids = n.show_ids;
+      p.box_alpha = n.box_alpha;
+      p.text_size_m = n.text_size_m;
+      p.min_box_size_m = n.min_box_size_m;
+      const std::string error = ros_conv::checkObjectMarkerParams(pnh, p);
+      if (error.empty()) params_ = p;
+      return error;
     });
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
         getNodeHandle(), getPrivateNodeHandle(), getName(), "markers");

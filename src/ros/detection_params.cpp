@@ -12,22 +12,42 @@ void throwIfInvalid(const ros::NodeHandle& nh, const std::string& error) {
   if (!error.empty()) throw ParamError("in " + nh.getNamespace() + ": " + error);
 }
 
+// The numeric ranges, shared by the loaders and by dynamic_reconfigure (check*Params).
+ParamTable hierarchicalGridTable(core::HierarchicalGridDetectorParams* p) {
+  ParamTable t;
+  t.add("coarse_cell_m", &p->coarse_cell_m, 0.05, 10.0, "m")
+      .add("xi", &p->xi, 1, 8)
+      .add("grid_half_extent_m", &p->grid_half_extent_m, 1.0, 500.0, "m")
+      .add("max_abs_z_m", &p->max_abs_z_m, 0.1, 1000.0, "m")
+      .add("psi_max_m", &p->psi_max_m, 0.0, 100.0, "m")
+      .add("min_split_height_span_m", &p->min_split_height_span_m, 0.0, 10.0, "m")
+      .add("max_split_range_m", &p->max_split_range_m, 0.0, 1000.0, "m")
+      .add("min_gap_subcells", &p->min_gap_subcells, 1, 16)
+      .add("dense_min_weighted_points", &p->dense_min_weighted_points, 0.0, 1e6)
+      .add("min_points", &p->min_points, 1, 1000000)
+      .add("max_extent_m", &p->max_extent_m, 0.1, 1000.0, "m")
+      .add("weight/full_density_distance_m", &p->weight.full_density_distance_m, 0.0, 1000.0, "m")
+      .add("weight/max_distance_m", &p->weight.max_distance_m, 0.1, 1000.0, "m")
+      .add("weight/max_weight", &p->weight.max_weight, 1.0, 1e6);
+  return t;
+}
+
+ParamTable kdTreeTable(core::KdTreeDetectorParams* p) {
+  ParamTable t;
+  t.add("cluster_tolerance_m", &p->cluster_tolerance_m, 0.01, 10.0, "m")
+      .add("min_cluster_size", &p->min_cluster_size, 1, 100000000)
+      .add("max_cluster_size", &p->max_cluster_size, 1, 100000000)
+      .add("max_extent_m", &p->max_extent_m, 0.1, 1000.0, "m")
+      .add("max_abs_coordinate_m", &p->max_abs_coordinate_m, 1.0, 1e5, "m");
+  return t;
+}
+
 }  // namespace
 
 void loadHierarchicalGridParams(const ros::NodeHandle& nh,
                                 core::HierarchicalGridDetectorParams* p) {
-  loadParam(nh, "coarse_cell_m", &p->coarse_cell_m, 0.05, 10.0, "m");
-  loadParam(nh, "xi", &p->xi, 1, 8);
-  loadParam(nh, "grid_half_extent_m", &p->grid_half_extent_m, 1.0, 500.0, "m");
-  loadParam(nh, "max_abs_z_m", &p->max_abs_z_m, 0.1, 1000.0, "m");
-  loadParam(nh, "psi_max_m", &p->psi_max_m, 0.0, 100.0, "m");
-  loadParam(nh, "min_split_height_span_m", &p->min_split_height_span_m, 0.0, 10.0, "m");
-  loadParam(nh, "max_split_range_m", &p->max_split_range_m, 0.0, 1000.0, "m");
-  loadParam(nh, "min_gap_subcells", &p->min_gap_subcells, 1, 16);
-  loadParam(nh, "dense_min_weighted_points", &p->dense_min_weighted_points, 0.0, 1e6);
+  hierarchicalGridTable(p).load(nh);
   loadParam(nh, "dense_refinement", &p->dense_refinement);
-  loadParam(nh, "min_points", &p->min_points, 1, 1000000);
-  loadParam(nh, "max_extent_m", &p->max_extent_m, 0.1, 1000.0, "m");
   const ros::NodeHandle w(nh, "weight");
   loadParam(w, "enabled", &p->weight.enabled);
   loadParam(w, "log_fit", &p->weight.log_fit);
@@ -40,19 +60,23 @@ void loadHierarchicalGridParams(const ros::NodeHandle& nh,
     for (const double v : c) checkRange(w.resolveName("coefficients"), v, -1e12, 1e12);
     p->weight.coefficients = c;
   }
-  loadParam(w, "full_density_distance_m", &p->weight.full_density_distance_m, 0.0, 1000.0, "m");
-  loadParam(w, "max_distance_m", &p->weight.max_distance_m, 0.1, 1000.0, "m");
-  loadParam(w, "max_weight", &p->weight.max_weight, 1.0, 1e6);
   throwIfInvalid(nh, core::validate(*p));
 }
 
 void loadKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorParams* p) {
-  loadParam(nh, "cluster_tolerance_m", &p->cluster_tolerance_m, 0.01, 10.0, "m");
-  loadParam(nh, "min_cluster_size", &p->min_cluster_size, 1, 100000000);
-  loadParam(nh, "max_cluster_size", &p->max_cluster_size, 1, 100000000);
-  loadParam(nh, "max_extent_m", &p->max_extent_m, 0.1, 1000.0, "m");
-  loadParam(nh, "max_abs_coordinate_m", &p->max_abs_coordinate_m, 1.0, 1e5, "m");
+  kdTreeTable(p).load(nh);
   throwIfInvalid(nh, core::validate(*p));
+}
+
+std::string checkHierarchicalGridParams(const ros::NodeHandle& nh,
+                                        core::HierarchicalGridDetectorParams p) {
+  const std::string error = hierarchicalGridTable(&p).check(nh);
+  return error.empty() ? core::validate(p) : error;
+}
+
+std::string checkKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorParams p) {
+  const std::string error = kdTreeTable(&p).check(nh);
+  return error.empty() ? core::validate(p) : error;
 }
 
 }  // namespace ros_conv

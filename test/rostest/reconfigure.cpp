@@ -3,10 +3,14 @@
 //    of a scene whose clusters are known by construction);
 //  * an invalid combination is rejected naming the parameters, the previous values stay in
 //    force and are what the service answers;
-//  * a value outside the .cfg range is clamped by dynamic_reconfigure to the range bound;
+//  * a value outside the accepted range (the start-up loader's) is not clamped but rejected,
+//    for every reconfigurable nodelet: the whole set is refused, the error names the parameter
+//    and the range (an identical error is not repeated within 5 s), the previous values stay in
+//    force and are what the service answers and ~parameter_updates publishes;
 //  * out-of-range parameters at start fail onInit naming the parameter and its range.
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
+#include <dynamic_reconfigure/Config.h>
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <gtest/gtest.h>
 #include <nodelet/loader.h>
@@ -24,36 +28,13 @@
 #include <vector>
 
 #include "urban_detection/core/segment_class.h"
+#include "rostest_util.h"
 
 namespace urban_detection {
 namespace {
 
-bool waitFor(const std::function<bool()>& done, double timeout_s) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return done();
-}
-
-struct RosoutWatcher {
-  std::mutex mutex;
-  std::vector<rosgraph_msgs::Log> logs;
-  ros::Subscriber sub;
-  RosoutWatcher() { sub = ros::NodeHandle().subscribe("/rosout", 100, &RosoutWatcher::cb, this); }
-  void cb(const rosgraph_msgs::Log::ConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(mutex);
-    logs.push_back(*msg);
-  }
-  bool contains(std::uint8_t level, const std::string& text) {
-    std::lock_guard<std::mutex> lock(mutex);
-    for (const auto& log : logs) {
-      if (log.level == level && log.msg.find(text) != std::string::npos) return true;
-    }
-    return false;
-  }
-};
+using rostest_util::RosoutWatcher;
+using rostest_util::waitFor;
 
 // Calls <ns>/set_parameters with the given values; returns the configuration it answers with.
 dynamic_reconfigure::Config setParameters(const std::string& ns,
@@ -84,6 +65,9 @@ int intOf(const dynamic_reconfigure::Config& c, const std::string& name) {
   ADD_FAILURE() << "no int " << name;
   return -1;
 }
+
+// The configuration a server is using (an empty update changes nothing and answers it).
+dynamic_reconfigure::Config current(const std::string& ns) { return setParameters(ns, {}, {}); }
 
 double doubleOf(const dynamic_reconfigure::Config& c, const std::string& name) {
   for (const auto& p : c.doubles) {
@@ -138,37 +122,123 @@ TEST(Reconfigure, HierarchicalGridMinPointsAppliesFromTheNextRevolution) {
   };
   pub.publish(twoClusters(1));
   ASSERT_TRUE(waitFor([&] { return received() == 1; }, 5.0));
-  const dynamic_reconfigure::Config c =
-      setParameters("/rc_hg/detector/hierarchical_grid", {{"min_points", 3}}, {});
-  EXPECT_EQ(intOf(c, "min_points"), 3);
+  const std::string ns = "/rc_hg/detector/hierarchical_grid";
+  // A set with a valid min_points and an out-of-range xi is refused as a whole.
+  dynamic_reconfigure::Config c = setParameters(ns, {{"min_points", 3}, {"xi", 20}}, {});
+  EXPECT_EQ(intOf(c, "min_points"), 5);
+  EXPECT_EQ(intOf(c, "xi"), 3);
   pub.publish(twoClusters(2));
   ASSERT_TRUE(waitFor([&] { return received() == 2; }, 5.0));
+  c = setParameters(ns, {{"min_points", 3}}, {});
+  EXPECT_EQ(intOf(c, "min_points"), 3);
+  pub.publish(twoClusters(3));
+  ASSERT_TRUE(waitFor([&] { return received() == 3; }, 5.0));
   std::lock_guard<std::mutex> lock(mutex);
   EXPECT_EQ(counts[0], 1u) << "min_points 5 (detection.yaml default): the 4-point cluster is dropped";
-  EXPECT_EQ(counts[1], 2u) << "min_points 3: both clusters";
+  EXPECT_EQ(counts[1], 1u) << "refused set: min_points still 5";
+  EXPECT_EQ(counts[2], 2u) << "min_points 3: both clusters";
 }
 
-TEST(Reconfigure, KdTreeRejectsAnInvalidSetAndClampsOutOfRangeValues) {
+TEST(Reconfigure, KdTreeRejectsInvalidSetsAndOutOfRangeValues) {
   RosoutWatcher rosout;
   nodelet::Loader manager(false);
   ASSERT_TRUE(manager.load("/rc_kd/detector", "urban_detection/KdTreeDetector", {}, {}));
   const std::string ns = "/rc_kd/detector/kdtree";
+  std::mutex mutex;
+  std::vector<dynamic_reconfigure::Config> updates;
+  ros::Subscriber sub = ros::NodeHandle().subscribe<dynamic_reconfigure::Config>(
+      ns + "/parameter_updates", 10, [&](const dynamic_reconfigure::Config::ConstPtr& msg) {
+        std::lock_guard<std::mutex> lock(mutex);
+        updates.push_back(*msg);
+      });
+  const dynamic_reconfigure::Config before = current(ns);
+  const double tolerance = doubleOf(before, "cluster_tolerance_m");
+  const int min_size = intOf(before, "min_cluster_size");
   // min_cluster_size > max_cluster_size: rejected, previous values answered and kept.
   dynamic_reconfigure::Config c =
       setParameters(ns, {{"min_cluster_size", 2000}, {"max_cluster_size", 1000}}, {});
-  EXPECT_EQ(intOf(c, "min_cluster_size"), 5);
-  EXPECT_EQ(intOf(c, "max_cluster_size"), 1000000);
+  EXPECT_EQ(intOf(c, "min_cluster_size"), min_size);
+  EXPECT_EQ(intOf(c, "max_cluster_size"), intOf(before, "max_cluster_size"));
   EXPECT_TRUE(waitFor([&] {
     return rosout.contains(rosgraph_msgs::Log::ERROR, "max_cluster_size must be >= "
                                                       "min_cluster_size");
   }, 5.0));
-  // 50 m is outside [0.01, 10] m: dynamic_reconfigure answers with the bound.
-  c = setParameters(ns, {}, {{"cluster_tolerance_m", 50.0}});
-  EXPECT_DOUBLE_EQ(doubleOf(c, "cluster_tolerance_m"), 10.0);
+  // 50 m is outside [0.01, 10] m: not clamped to 10 but refused with the valid value sent with
+  // it, twice; the error names parameter and range once (identical errors are throttled).
+  for (int i = 0; i < 2; ++i) {
+    c = setParameters(ns, {{"min_cluster_size", 20}}, {{"cluster_tolerance_m", 50.0}});
+    EXPECT_DOUBLE_EQ(doubleOf(c, "cluster_tolerance_m"), tolerance);
+    EXPECT_EQ(intOf(c, "min_cluster_size"), min_size);
+  }
+  const std::string error =
+      "'/rc_kd/detector/kdtree/cluster_tolerance_m' = 50 is out of range: accepted [0.01, 10] m";
+  EXPECT_TRUE(waitFor([&] { return rosout.contains(rosgraph_msgs::Log::ERROR, error); }, 5.0));
+  // rqt_reconfigure follows ~parameter_updates: it must show the values kept, not the request.
+  EXPECT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return !updates.empty() && doubleOf(updates.back(), "cluster_tolerance_m") == tolerance &&
+               intOf(updates.back(), "min_cluster_size") == min_size;
+      },
+      5.0));
   // A valid update is answered as sent.
   c = setParameters(ns, {{"min_cluster_size", 20}}, {{"cluster_tolerance_m", 0.3}});
   EXPECT_EQ(intOf(c, "min_cluster_size"), 20);
   EXPECT_DOUBLE_EQ(doubleOf(c, "cluster_tolerance_m"), 0.3);
+  EXPECT_EQ(rosout.count(rosgraph_msgs::Log::ERROR, error), 1);
+}
+
+// Every reconfigurable nodelet: an out-of-range value is refused (not clamped), the error names
+// the parameter and the accepted range, and the previous value is what the service answers.
+TEST(Reconfigure, OutOfRangeValuesAreRejectedByEveryNodelet) {
+  RosoutWatcher rosout;
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/rr_seg/segmentation", "urban_detection/GridSegmentation", {}, {}));
+  ASSERT_TRUE(manager.load("/rr_hg/detector", "urban_detection/HierarchicalGridDetector", {}, {}));
+  ASSERT_TRUE(manager.load("/rr_mk/markers", "urban_detection/ObjectMarkers", {}, {}));
+  struct Case {
+    std::string ns, name;
+    double value;
+    std::string error;  // expected in the ERROR
+  };
+  const std::vector<Case> cases = {
+      {"/rr_seg/segmentation", "sensor_height_m", 50.0,
+       "'sensor_height_m' = 50 is outside [-10, 10]"},
+      {"/rr_seg/segmentation", "hough_min_tall_fraction", -0.5,
+       "'hough/min_tall_fraction' = -0.5 is outside [0, 1]"},
+      {"/rr_hg/detector/hierarchical_grid", "psi_max_m", 500.0,
+       "'/rr_hg/detector/hierarchical_grid/psi_max_m' = 500 is out of range: accepted [0, 100] m"},
+      {"/rr_hg/detector/hierarchical_grid", "max_split_range_m", 5000.0,
+       "'/rr_hg/detector/hierarchical_grid/max_split_range_m' = 5000 is out of range: accepted "
+       "[0, 1000] m"},
+      {"/rr_mk/markers/markers", "box_alpha", 1.5,
+       "'/rr_mk/markers/markers/box_alpha' = 1.5 is out of range: accepted [0, 1]"},
+  };
+  for (const Case& k : cases) {
+    const double before = doubleOf(current(k.ns), k.name);
+    const dynamic_reconfigure::Config c = setParameters(k.ns, {}, {{k.name, k.value}});
+    EXPECT_DOUBLE_EQ(doubleOf(c, k.name), before) << k.ns << " " << k.name;
+    EXPECT_DOUBLE_EQ(doubleOf(current(k.ns), k.name), before) << k.ns << " " << k.name;
+    EXPECT_TRUE(waitFor(
+        [&] {
+          return rosout.contains(rosgraph_msgs::Log::ERROR, k.ns) &&
+                 rosout.contains(rosgraph_msgs::Log::ERROR, k.error);
+        },
+        5.0))
+        << k.error;
+  }
+  // Integers too (no clamping to an int range either).
+  const int xi = intOf(current("/rr_hg/detector/hierarchical_grid"), "xi");
+  const dynamic_reconfigure::Config c =
+      setParameters("/rr_hg/detector/hierarchical_grid", {{"xi", 0}}, {});
+  EXPECT_EQ(intOf(c, "xi"), xi);
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return rosout.contains(rosgraph_msgs::Log::ERROR,
+                               "'/rr_hg/detector/hierarchical_grid/xi' = 0 is out of range: "
+                               "accepted [1, 8]");
+      },
+      5.0));
 }
 
 TEST(Reconfigure, MarkersApplyFromTheNextMessage) {
@@ -246,12 +316,5 @@ TEST(Reconfigure, OutOfRangeParametersAtStartFailNamingParameterAndRange) {
 }  // namespace urban_detection
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_reconfigure");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
+  return urban_detection::rostest_util::runRostests(argc, argv, "test_reconfigure");
 }

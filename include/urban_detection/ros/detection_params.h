@@ -5,6 +5,8 @@
 
 #include <ros/node_handle.h>
 
+#include <string>
+
 #include "urban_detection/core/hierarchical_grid_detector.h"
 #include "urban_detection/core/kdtree_detector.h"
 #include "urban_detection/ros/param_loading.h"
@@ -20,6 +22,13 @@ void loadHierarchicalGridParams(const ros::NodeHandle& nh,
 
 /// Same for the kd-tree baseline.
 void loadKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorParams* params);
+
+/// The checks of the loaders on a complete set (dynamic_reconfigure): "" when `params` is
+/// accepted, else the reason naming the first bad parameter (resolved in `nh`) and its range,
+/// or the violated cross-field condition. The same ranges as the loaders, from one table.
+std::string checkHierarchicalGridParams(const ros::NodeHandle& nh,
+                                        core::HierarchicalGridDetectorParams params);
+std::string checkKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorParams params);
 
 }  // namespace ros_conv
 }  // namespace urban_detection

@@ -6,6 +6,7 @@
 
 #include <string>
 
+#include <ros/node_handle.h>
 #include <std_msgs/ColorRGBA.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -39,6 +40,13 @@ std_msgs::ColorRGBA colourForClass(const std::string& class_label, double alpha)
 /// "3 car 0.87"). Size: 1 + N * (1 + show_ids).
 void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerParams& params,
                         visualization_msgs::MarkerArray* markers);
+
+/// Reads the options set under `nh` (the nodelet's ~markers); throws ParamError naming the
+/// first parameter out of its accepted range.
+void loadObjectMarkerParams(const ros::NodeHandle& nh, ObjectMarkerParams* params);
+/// The loader's range checks on a complete set (dynamic_reconfigure): "" when accepted, else
+/// the reason naming the parameter (resolved in `nh`) and its range.
+std::string checkObjectMarkerParams(const ros::NodeHandle& nh, ObjectMarkerParams params);
 
 }  // namespace ros_conv
 }  // namespace urban_detection

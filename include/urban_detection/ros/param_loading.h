@@ -13,6 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace urban_detection {
 
@@ -42,5 +43,33 @@ void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value, i
                int max, const std::string& unit = "");
 void loadParam(const ros::NodeHandle& nh, const std::string& name, bool* value);
 void loadParam(const ros::NodeHandle& nh, const std::string& name, std::string* value);
+
+/// The numeric fields of one params struct with their accepted ranges: the one list that both
+/// the start-up loader (load()) and dynamic_reconfigure (check()) use, so a value is accepted
+/// through one path exactly when it is accepted through the other. Holds pointers to the fields
+/// of one struct instance; build it for the instance to load or check.
+class ParamTable {
+ public:
+  /// `name` relative to the node handle given to load() / check() ("weight/max_weight" is fine).
+  ParamTable& add(const std::string& name, double* field, double min, double max,
+                  const std::string& unit = "");
+  ParamTable& add(const std::string& name, int* field, int min, int max,
+                  const std::string& unit = "");
+  /// loadParam() of every field in order: throws ParamError on the first bad one.
+  void load(const ros::NodeHandle& nh) const;
+  /// "" when every field is within its range, else the ParamError message of the first one
+  /// that is not (naming the parameter resolved in `nh`, its value and the accepted range).
+  std::string check(const ros::NodeHandle& nh) const;
+
+ private:
+  struct Entry {
+    std::string name, unit;
+    double* d;  // exactly one of d, i is set
+    int* i;
+    double dmin, dmax;
+    int imin, imax;
+  };
+  std::vector<Entry> entries_;
+};
 
 }  // namespace urban_detection

@@ -1,12 +1,15 @@
 /// \file validated_reconfigure.h
 /// A dynamic_reconfigure server whose updates are validated before they take effect.
 ///
-/// dynamic_reconfigure clamps each value to the range declared in the .cfg file (the same range
-/// the start-up loader accepts, shown as the slider range in rqt_reconfigure) before any callback
-/// runs. Combinations that the core rejects (core::validate(), e.g. min_cluster_size >
-/// max_cluster_size) are then rejected here: the error names the parameters and the accepted
-/// range, is logged, and the previous configuration stays in force and is what the service
-/// answers (so `dynparam set` and rqt show the values actually used).
+/// dynamic_reconfigure would clamp each value to a range declared in the .cfg file before any
+/// callback runs, silently changing what the user asked for. The .cfg files therefore declare
+/// no ranges: every value reaches the `apply` function, which checks the complete set with the
+/// start-up loader's own checks (ParamTable ranges, core::validate() cross-field conditions) and
+/// refuses it as a whole when one value is out of range or a combination is invalid. A refused
+/// set is logged as an error naming the parameter and the accepted range (the same message is
+/// repeated at most every 5 s), the previous configuration stays in force, and it is what the
+/// service answers and what ~parameter_updates publishes (so `dynparam set` and rqt_reconfigure
+/// show the values actually used).
 #pragma once
 
 #include <cstdint>
@@ -17,6 +20,7 @@
 #include <dynamic_reconfigure/server.h>
 #include <ros/console.h>
 #include <ros/node_handle.h>
+#include <ros/time.h>
 
 namespace urban_detection {
 namespace ros_conv {
@@ -53,10 +57,17 @@ class ValidatedReconfigure {
       return;
     }
     ++rejected_;
-    ROS_ERROR("%s: dynamic_reconfigure update rejected, previous values kept: %s",
-              owner_.c_str(), error.c_str());
-    config = applied_;  // the server stores and answers with what is really in force
+    const ros::WallTime now = ros::WallTime::now();
+    if (error != last_error_ || (now - last_error_time_).toSec() >= kRepeatPeriodS) {
+      ROS_ERROR("%s: dynamic_reconfigure update rejected, previous values kept: %s", owner_.c_str(),
+                error.c_str());
+      last_error_ = error;
+      last_error_time_ = now;
+    }
+    config = applied_;  // the server stores, answers and publishes what is really in force
   }
+
+  static constexpr double kRepeatPeriodS = 5.0;  // [s] an identical error is logged once per
 
   boost::recursive_mutex mutex_;
   dynamic_reconfigure::Server<Config> server_;
@@ -65,6 +76,8 @@ class ValidatedReconfigure {
   std::string owner_;
   bool first_ = true;
   std::uint64_t rejected_ = 0;
+  std::string last_error_;
+  ros::WallTime last_error_time_;
 };
 
 }  // namespace ros_conv
