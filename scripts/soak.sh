@@ -11,9 +11,12 @@
 # memory after a warm-up, and writes results/soak_<minutes>min.json.
 #   scripts/run soak            30 minutes (the figure reported in the README)
 #   scripts/run soak 2          the CI version (2 minutes, 30 s warm-up)
-# Further options: --warmup S, --max-rss-growth-mb MB, --max-skipped-fraction F, --min-rate-hz
-# HZ (failure bounds, see soak_monitor.py). Exit status 1 when a bound is exceeded or a process
-# died. Run it niced on a shared machine: `nice -n 10 scripts/run soak`.
+# Further options: --warmup S, and the failure bounds of soak_monitor.py: --max-rss-growth-mb MB
+# (default 20, RSS at the end minus RSS after the warm-up), --max-skipped-fraction F (0.01),
+# --expected-rate-hz HZ (10) with --rate-tolerance F (0.05: /objects must come at 9.5..10.5 Hz),
+# --max-clock-disagreement F (0.01). A revolution received twice also fails. Exit status 1 when
+# a bound is exceeded or a process died. Run it niced on a shared machine:
+# `nice -n 10 scripts/run soak`.
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 OUT="$REPO/results"
@@ -54,6 +57,13 @@ else
 fi
 roslaunch -p "$PORT" urban_detection "${LAUNCH[@]}" rviz:=false >"$LOG" 2>&1 &
 LAUNCH_PID=$!
+# The monitor registers once the master answers (a rospy node started before its master
+# registers its subscriptions twice, through two racing paths).
+for _ in $(seq 1 60); do
+  /usr/bin/python3 -c 'import sys, rosgraph; sys.exit(0 if rosgraph.is_master_online() else 1)' \
+      2>/dev/null && break
+  sleep 0.5
+done
 set +e
 /usr/bin/python3 "$REPO/scripts/soak_monitor.py" --minutes "$MINUTES" --warmup "$WARMUP" \
     --source "$SOURCE" --out "$JSON" "$@"
