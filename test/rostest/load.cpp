@@ -37,21 +37,10 @@ namespace urban_detection {
 namespace {
 
 using rostest_util::DiagnosticsWatcher;
+using rostest_util::freeUdpPort;
 using rostest_util::waitFor;
 
 using Clock = std::chrono::steady_clock;
-
-int freeUdpPort() {
-  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
-  socklen_t len = sizeof(addr);
-  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
-  close(fd);
-  return ntohs(addr.sin_port);
-}
 
 // One revolution of a sensor spinning at 600 rpm: 347 packets (288 us each), the azimuth
 // advancing 0.1728 deg per firing, half a firing off the cut angle 0.

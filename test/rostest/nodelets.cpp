@@ -37,6 +37,7 @@ namespace {
 
 using rostest_util::Collector;
 using rostest_util::DiagnosticsWatcher;
+using rostest_util::freeUdpPort;
 using rostest_util::RosoutWatcher;
 using rostest_util::waitFor;
 
@@ -73,18 +74,6 @@ VelodyneScan::Ptr makeScan(const std::vector<core::RawPacket>& packets, ros::Tim
     stamp += ros::Duration(packet_period_s);
   }
   return scan;
-}
-
-int freeUdpPort() {
-  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
-  socklen_t len = sizeof(addr);
-  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
-  close(fd);
-  return ntohs(addr.sin_port);
 }
 
 class UdpSender {

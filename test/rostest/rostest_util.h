@@ -1,13 +1,17 @@
 /// \file rostest_util.h
 /// What the gtest rostests (nodelets loaded into the test process with nodelet::Loader) share:
-/// polling with a timeout, watchers of /rosout and /diagnostics, a message collector and the
-/// main() that spins the process's callbacks while the tests run.
+/// polling with a timeout, watchers of /rosout and /diagnostics, a message collector, a free UDP
+/// port and the main() that spins the process's callbacks while the tests run.
 #pragma once
 
+#include <arpa/inet.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <netinet/in.h>
 #include <rosgraph_msgs/Log.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdint>
@@ -114,6 +118,19 @@ struct Collector {
     return msgs.at(i);
   }
 };
+
+/// A UDP port on 127.0.0.1 that was free a moment ago (bound to port 0, then released).
+inline int freeUdpPort() {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
+  socklen_t len = sizeof(addr);
+  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  close(fd);
+  return ntohs(addr.sin_port);
+}
 
 /// main() of a rostest gtest node named `node_name`: two spinner threads serve the callbacks
 /// of the test's subscribers and of the nodelets it loads while the tests run.
