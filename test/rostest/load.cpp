@@ -280,7 +280,12 @@ TEST(Load, BurstFasterThanSegmentationNewestRevolutionWins) {
     got = seqs;
   }
   for (std::size_t i = 1; i < got.size(); ++i) EXPECT_LT(got[i - 1], got[i]) << "order";
-  EXPECT_LT(got.size(), burst / 2) << "the queue did not drop old revolutions";
+  // How many the stage processes depends on how the publishing thread and the stage's thread
+  // interleave (on a loaded machine the publisher can be descheduled between two publishes for
+  // longer than one segmentation), so the bound is only "some were dropped"; an unbounded
+  // queue processes all of them and fails here, and the count below is exact whatever the
+  // timing.
+  EXPECT_LT(got.size(), burst) << "the queue did not drop old revolutions";
   // Seen by the stage: got.front() .. burst; everything in between it never processed.
   const long skipped = static_cast<long>(burst - got.front() + 1 - got.size());
   EXPECT_GT(skipped, 0);
