@@ -33,11 +33,6 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
   ground_z_.assign(n, 0.0f);
   ground_state_.assign(n, kNoGround);
   fill_z_.assign(n, 0.0f);
-  // Per-cell lookup tables of the per-point pass, shifted by one: entry 0 is the kNoCell
-  // sentinel (no split, kUnknown) and is never overwritten. "No split" is -inf, not lowest():
-  // a point without a cell may have z = -inf, which must not compare below it.
-  split_z_.assign(n + 1, -std::numeric_limits<float>::infinity());
-  label_lut_.assign(n + 1, static_cast<std::uint8_t>(SegmentClass::kUnknown));
   hops_.assign(n, 0);
   dense_.assign(n, 0);
   // Terrain bit map of fillTerrain: a zero word of padding on both sides of each row, so
@@ -70,8 +65,11 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   stats_.cells_occupied = static_cast<std::uint32_t>(grid_.occupiedCells().size());
 
   const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
-  for (const std::int32_t c : grid_.occupiedCells()) {
-    const bool sparse = grid_.cell(c).count < min_pts;
+  const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
+  const std::vector<GridCell>& stats = grid_.occupiedStats();
+  for (std::size_t s = 0; s < occupied.size(); ++s) {
+    const std::int32_t c = occupied[s];
+    const bool sparse = stats[s].count < min_pts;
     if (sparse) cell_class_[c] = SegmentClass::kClutter;
     dense_[c] = sparse ? 0 : 1;
   }
@@ -85,26 +83,33 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   }
 
   // Per point: mixed cells are split by the height above the local ground. The split height
-  // and class are tabulated once per cell, at index cell + 1 so that kNoCell (-1) reads the
-  // sentinel entry 0 (never ground, kUnknown): the per-point loop is then two table lookups
-  // and a compare without a branch (consecutive points often change cells, at range almost
-  // always, so a branch on the cell mispredicts).
+  // and class are tabulated once per occupied cell, by slot + 1 (the grid's per-point index)
+  // so that a point without a cell reads the sentinel entry 0 (never ground, kUnknown): the
+  // per-point loop is then two lookups in small tables and a compare without a branch
+  // (consecutive points often change cells, at range almost always, so a branch on the cell
+  // mispredicts). "No split" is -inf, not lowest(): a point without a cell may have z = -inf,
+  // which must not compare below it.
   const float tol = static_cast<float>(params_.ground_tolerance_m);
   const bool sparse_ground = params_.ground_in_sparse_cells;
-  for (const std::int32_t c : grid_.occupiedCells()) {
+  split_z_.resize(occupied.size() + 1);
+  label_lut_.resize(occupied.size() + 1);
+  split_z_[0] = -std::numeric_limits<float>::infinity();
+  label_lut_[0] = static_cast<std::uint8_t>(SegmentClass::kUnknown);
+  for (std::size_t s = 0; s < occupied.size(); ++s) {
+    const std::int32_t c = occupied[s];
     const SegmentClass cls = cell_class_[c];
     const bool split = (cls == SegmentClass::kShort || cls == SegmentClass::kTall ||
                         (cls == SegmentClass::kClutter && sparse_ground)) &&
                        ground_state_[c] != kNoGround;
-    split_z_[c + 1] = split ? ground_z_[c] + tol : -std::numeric_limits<float>::infinity();
-    label_lut_[c + 1] = static_cast<std::uint8_t>(cls);
+    split_z_[s + 1] = split ? ground_z_[c] + tol : -std::numeric_limits<float>::infinity();
+    label_lut_[s + 1] = static_cast<std::uint8_t>(cls);
   }
   const std::size_t n = cloud.size();
   labels->resize(n);
-  const std::int32_t* pc = grid_.pointCells().data();
+  const std::int32_t* pc = grid_.pointSlots().data();
   const float* pz = grid_.pointHeights().data();
-  const float* split_z = split_z_.data() + 1;
-  const std::uint8_t* lut = label_lut_.data() + 1;
+  const float* split_z = split_z_.data();
+  const std::uint8_t* lut = label_lut_.data();
   static_assert(sizeof(SegmentClass) == 1, "labels are written as bytes");
   std::uint8_t* out = reinterpret_cast<std::uint8_t*>(labels->data());
   constexpr std::uint8_t kGroundByte = static_cast<std::uint8_t>(SegmentClass::kGround);
@@ -141,10 +146,14 @@ void GridSegmenter::growGround() {
   const float seed_r2 = static_cast<float>(params_.seed_radius_m * params_.seed_radius_m);
   const int rows = grid_.rows(), cols = grid_.cols();
 
+  const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
+  const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
+  const std::vector<GridCell>& stats = grid_.occupiedStats();
   queue_.clear();
-  for (const std::int32_t c : grid_.occupiedCells()) {
-    if (cell_class_[c] == SegmentClass::kClutter) continue;
-    const GridCell& cell = grid_.cell(c);
+  for (std::size_t s = 0; s < occupied.size(); ++s) {
+    const GridCell& cell = stats[s];
+    if (cell.count < min_pts) continue;  // clutter
+    const std::int32_t c = occupied[s];
     if (cell.zRange() >= flat || std::fabs(cell.zMean()) > seed_h) continue;
     float x, y;
     grid_.cellCenter(c, &x, &y);
@@ -187,7 +196,7 @@ void GridSegmenter::growGround() {
         queue_.push_back(nc);
         continue;
       }
-      const GridCell& cell = grid_.cell(nc);
+      const GridCell& cell = stats[grid_.slotOf(nc)];
       const bool is_flat = cell.zRange() < flat;
       const float e = is_flat ? cell.zMean() : cell.z_min;
       if (std::fabs(e - g) >= step) continue;
@@ -315,9 +324,12 @@ void GridSegmenter::classifyCells() {
   const float sensor_h = static_cast<float>(params_.sensor_height_m);
   const float tan_top = static_cast<float>(std::tan(params_.fov_top_elevation_deg * M_PI / 180.0));
   const float half_diag = static_cast<float>(params_.cell_size_m * M_SQRT1_2);
-  for (const std::int32_t c : grid_.occupiedCells()) {
+  const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
+  const std::vector<GridCell>& stats = grid_.occupiedStats();
+  for (std::size_t s = 0; s < occupied.size(); ++s) {
+    const std::int32_t c = occupied[s];
     if (cell_class_[c] == SegmentClass::kClutter) continue;
-    const GridCell& cell = grid_.cell(c);
+    const GridCell& cell = stats[s];
     const std::uint8_t state = ground_state_[c];
     // Without any terrain estimate the plane below the sensor is the reference.
     const float g = state != kNoGround ? ground_z_[c] : 0.0f;
