@@ -4,6 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace urban_detection {
 namespace core {
 
@@ -91,42 +95,84 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   // which must not compare below it.
   const float tol = static_cast<float>(params_.ground_tolerance_m);
   const bool sparse_ground = params_.ground_in_sparse_cells;
-  split_z_.resize(occupied.size() + 1);
-  label_lut_.resize(occupied.size() + 1);
-  split_z_[0] = -std::numeric_limits<float>::infinity();
-  label_lut_[0] = static_cast<std::uint8_t>(SegmentClass::kUnknown);
+  constexpr float kNoSplit = -std::numeric_limits<float>::infinity();
+  slot_label_.resize(occupied.size() + 1);
+  slot_label_[0] = SlotLabel{kNoSplit, static_cast<std::uint32_t>(SegmentClass::kUnknown)};
   for (std::size_t s = 0; s < occupied.size(); ++s) {
     const std::int32_t c = occupied[s];
     const SegmentClass cls = cell_class_[c];
     const bool split = (cls == SegmentClass::kShort || cls == SegmentClass::kTall ||
                         (cls == SegmentClass::kClutter && sparse_ground)) &&
                        ground_state_[c] != kNoGround;
-    split_z_[s + 1] = split ? ground_z_[c] + tol : -std::numeric_limits<float>::infinity();
-    label_lut_[s + 1] = static_cast<std::uint8_t>(cls);
+    slot_label_[s + 1] = SlotLabel{split ? ground_z_[c] + tol : kNoSplit,
+                                   static_cast<std::uint32_t>(cls)};
   }
   const std::size_t n = cloud.size();
   labels->resize(n);
   const std::int32_t* pc = grid_.pointSlots().data();
   const float* pz = grid_.pointHeights().data();
-  const float* split_z = split_z_.data();
-  const std::uint8_t* lut = label_lut_.data();
+  const SlotLabel* table = slot_label_.data();
   static_assert(sizeof(SegmentClass) == 1, "labels are written as bytes");
+  static_assert(sizeof(SlotLabel) == 8, "slot table entries are loaded as 8 bytes");
   std::uint8_t* out = reinterpret_cast<std::uint8_t*>(labels->data());
-  constexpr std::uint8_t kGroundByte = static_cast<std::uint8_t>(SegmentClass::kGround);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int32_t c = pc[i];
-    // Select by mask: a ternary here compiles to an unpredictable branch.
-    const std::uint8_t below = static_cast<std::uint8_t>(-static_cast<int>(pz[i] < split_z[c]));
-    out[i] = static_cast<std::uint8_t>((kGroundByte & below) | (lut[c] & ~below));
-  }
-  // Class counts in a separate pass over the bytes (vectorised; counting inside the loop above
-  // would chain every point through a store-to-load dependency on the counter array).
+  constexpr std::uint32_t kGroundLabel = static_cast<std::uint32_t>(SegmentClass::kGround);
+  // counts[k]: points labelled k, for k = 1..4 (kUnknown is the rest).
   std::uint32_t counts[5] = {0, 0, 0, 0, 0};
-  for (int k = 0; k < 5; ++k) {
-    std::uint32_t cnt = 0;
-    for (std::size_t i = 0; i < n; ++i) cnt += out[i] == k;
-    counts[k] = cnt;
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  // 16 points per step: each point's 8-byte table entry is loaded and transposed into four
+  // split heights and four classes; the compare and select are done four lanes at a time and
+  // the labels packed to bytes, which are counted per class with byte compares (the byte
+  // counters are folded into 64-bit sums before they can overflow).
+  const __m128i ground4 = _mm_set1_epi32(static_cast<int>(kGroundLabel));
+  __m128i acc[5], sums[5];
+  for (int k = 1; k <= 4; ++k) {
+    acc[k] = _mm_setzero_si128();
+    sums[k] = _mm_setzero_si128();
   }
+  auto four = [&](std::size_t j) {
+    const __m128i e0 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(table + pc[j]));
+    const __m128i e1 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(table + pc[j + 1]));
+    const __m128i e2 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(table + pc[j + 2]));
+    const __m128i e3 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(table + pc[j + 3]));
+    const __m128 a = _mm_castsi128_ps(_mm_unpacklo_epi64(e0, e1));  // s0 l0 s1 l1
+    const __m128 b = _mm_castsi128_ps(_mm_unpacklo_epi64(e2, e3));  // s2 l2 s3 l3
+    const __m128 split4 = _mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
+    const __m128i cls4 = _mm_castps_si128(_mm_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1)));
+    // Ordered compare, as the scalar `<`: NaN heights are never below.
+    const __m128i below = _mm_castps_si128(_mm_cmplt_ps(_mm_loadu_ps(pz + j), split4));
+    return _mm_or_si128(_mm_and_si128(below, ground4), _mm_andnot_si128(below, cls4));
+  };
+  std::size_t block = 0;
+  for (; i + 16 <= n; i += 16) {
+    const __m128i lo = _mm_packs_epi32(four(i), four(i + 4));
+    const __m128i hi = _mm_packs_epi32(four(i + 8), four(i + 12));
+    const __m128i bytes = _mm_packus_epi16(lo, hi);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), bytes);
+    for (int k = 1; k <= 4; ++k) {
+      acc[k] = _mm_sub_epi8(acc[k], _mm_cmpeq_epi8(bytes, _mm_set1_epi8(static_cast<char>(k))));
+    }
+    if (++block == 255) {
+      for (int k = 1; k <= 4; ++k) {
+        sums[k] = _mm_add_epi64(sums[k], _mm_sad_epu8(acc[k], _mm_setzero_si128()));
+        acc[k] = _mm_setzero_si128();
+      }
+      block = 0;
+    }
+  }
+  for (int k = 1; k <= 4; ++k) {
+    sums[k] = _mm_add_epi64(sums[k], _mm_sad_epu8(acc[k], _mm_setzero_si128()));
+    counts[k] = static_cast<std::uint32_t>(_mm_cvtsi128_si32(sums[k]) +
+                                           _mm_cvtsi128_si32(_mm_srli_si128(sums[k], 8)));
+  }
+#endif
+  for (; i < n; ++i) {
+    const SlotLabel& e = table[pc[i]];
+    const std::uint32_t label = pz[i] < e.split_z ? kGroundLabel : e.label;
+    out[i] = static_cast<std::uint8_t>(label);
+    ++counts[label];
+  }
+  counts[0] = static_cast<std::uint32_t>(n) - counts[1] - counts[2] - counts[3] - counts[4];
   stats_.points_unknown = counts[static_cast<int>(SegmentClass::kUnknown)];
   stats_.points_clutter = counts[static_cast<int>(SegmentClass::kClutter)];
   stats_.points_ground = counts[static_cast<int>(SegmentClass::kGround)];
