@@ -195,6 +195,14 @@ void GridSegmenter::growGround() {
   const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
   const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
   const std::vector<GridCell>& stats = grid_.occupiedStats();
+  // Every cell given a terrain here is also set in fillTerrain's bit map (bit k + 64 of its
+  // row: one zero word of padding left of each row).
+  std::uint64_t* bits = terrain_bits_.data();
+  const std::size_t bit_words = bit_words_;
+  auto markTerrain = [bits, bit_words](int r, int k) {
+    bits[static_cast<std::size_t>(r) * bit_words + ((k + 64) >> 6)] |= std::uint64_t{1}
+                                                                      << ((k + 64) & 63);
+  };
   queue_.clear();
   for (std::size_t s = 0; s < occupied.size(); ++s) {
     const GridCell& cell = stats[s];
@@ -206,6 +214,7 @@ void GridSegmenter::growGround() {
     if (x * x + y * y > seed_r2) continue;
     ground_state_[c] = kReached;
     ground_z_[c] = cell.zMean();
+    markTerrain(grid_.rowOf(c), grid_.colOf(c));
     touched_.push_back(c);
     queue_.push_back(c);
   }
@@ -237,6 +246,7 @@ void GridSegmenter::growGround() {
         if (hop >= max_hops) continue;
         ground_state_[nc] = kBridged;
         ground_z_[nc] = g;
+        markTerrain(r + kDr[d], k + kDc[d]);
         hops_[nc] = static_cast<std::uint8_t>(hop + 1);
         touched_.push_back(nc);
         queue_.push_back(nc);
@@ -247,6 +257,7 @@ void GridSegmenter::growGround() {
       const float e = is_flat ? cell.zMean() : cell.z_min;
       if (std::fabs(e - g) >= step) continue;
       ground_state_[nc] = kReached;
+      markTerrain(r + kDr[d], k + kDc[d]);
       // The lowest point of a mixed cell is its ground unless it lies clearly above the terrain
       // it was reached from: then the base was not sampled (a wall hit above its foot at range)
       // and that point belongs to the object.
@@ -290,21 +301,14 @@ void GridSegmenter::fillTerrain() {
     }
     return cnt;
   };
+  // terrain_bits_ holds the cells growGround gave a terrain (all kReached / kBridged so far).
   const bool use_bits = max_ring >= 1 && max_ring <= kMaxBitRing;
-  const std::size_t terrain_cells = touched_.size();  // all kReached / kBridged so far
-  if (use_bits) {
-    for (std::size_t i = 0; i < terrain_cells; ++i) {
-      const std::int32_t c = touched_[i];
-      const int k = grid_.colOf(c) + 64;  // one zero word of padding left of each row
-      terrain_bits_[static_cast<std::size_t>(grid_.rowOf(c)) * bit_words_ + (k >> 6)] |=
-          std::uint64_t{1} << (k & 63);
-    }
-  }
+  const bool sparse_ground = params_.ground_in_sparse_cells;
   const std::uint64_t window_mask = (std::uint64_t{1} << (2 * max_ring + 1)) - 1;
   std::uint64_t m[2 * kMaxBitRing + 1];
   for (const std::int32_t c : grid_.occupiedCells()) {
     if (ground_state_[c] != kNoGround ||
-        (cell_class_[c] == SegmentClass::kClutter && !params_.ground_in_sparse_cells)) {
+        (!sparse_ground && cell_class_[c] == SegmentClass::kClutter)) {
       continue;
     }
     const int r = grid_.rowOf(c), k = grid_.colOf(c);
@@ -346,13 +350,8 @@ void GridSegmenter::fillTerrain() {
       }
     }
   }
-  if (use_bits) {
-    for (std::size_t i = 0; i < terrain_cells; ++i) {
-      const std::int32_t c = touched_[i];
-      terrain_bits_[static_cast<std::size_t>(grid_.rowOf(c)) * bit_words_ +
-                    ((grid_.colOf(c) + 64) >> 6)] = 0;
-    }
-  }
+  // Cleared whole (a few kB): cheaper than finding the row and column of every set bit.
+  std::fill(terrain_bits_.begin(), terrain_bits_.end(), std::uint64_t{0});
   // Applied afterwards so that filled cells do not feed each other within one frame.
   for (const std::int32_t c : fill_cells_) {
     ground_z_[c] = fill_z_[c];
