@@ -125,7 +125,7 @@ TEST(Reconfigure, HierarchicalGridMinPointsAppliesFromTheNextRevolution) {
   const std::string ns = "/rc_hg/detector/hierarchical_grid";
   // A set with a valid min_points and an out-of-range xi is refused as a whole.
   dynamic_reconfigure::Config c = setParameters(ns, {{"min_points", 3}, {"xi", 20}}, {});
-  EXPECT_EQ(intOf(c, "min_points"), 5);
+  EXPECT_EQ(intOf(c, "min_points"), 10);
   EXPECT_EQ(intOf(c, "xi"), 3);
   pub.publish(twoClusters(2));
   ASSERT_TRUE(waitFor([&] { return received() == 2; }, 5.0));
@@ -134,8 +134,8 @@ TEST(Reconfigure, HierarchicalGridMinPointsAppliesFromTheNextRevolution) {
   pub.publish(twoClusters(3));
   ASSERT_TRUE(waitFor([&] { return received() == 3; }, 5.0));
   std::lock_guard<std::mutex> lock(mutex);
-  EXPECT_EQ(counts[0], 1u) << "min_points 5 (detection.yaml default): the 4-point cluster is dropped";
-  EXPECT_EQ(counts[1], 1u) << "refused set: min_points still 5";
+  EXPECT_EQ(counts[0], 1u) << "min_points 10 (the default): the 4-point cluster is dropped";
+  EXPECT_EQ(counts[1], 1u) << "refused set: min_points still 10";
   EXPECT_EQ(counts[2], 2u) << "min_points 3: both clusters";
 }
 
@@ -208,8 +208,8 @@ TEST(Reconfigure, OutOfRangeValuesAreRejectedByEveryNodelet) {
        "'hough/min_tall_fraction' = -0.5 is outside [0, 1]"},
       {"/rr_hg/detector/hierarchical_grid", "psi_max_m", 500.0,
        "'/rr_hg/detector/hierarchical_grid/psi_max_m' = 500 is out of range: accepted [0, 100] m"},
-      {"/rr_hg/detector/hierarchical_grid", "max_split_range_m", 5000.0,
-       "'/rr_hg/detector/hierarchical_grid/max_split_range_m' = 5000 is out of range: accepted "
+      {"/rr_hg/detector/hierarchical_grid", "bridge_range_m", 5000.0,
+       "'/rr_hg/detector/hierarchical_grid/bridge_range_m' = 5000 is out of range: accepted "
        "[0, 1000] m"},
       {"/rr_mk/markers/markers", "box_alpha", 1.5,
        "'/rr_mk/markers/markers/box_alpha' = 1.5 is out of range: accepted [0, 1]"},
