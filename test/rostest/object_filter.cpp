@@ -65,8 +65,8 @@ void runDetector(const std::string& ns, const std::string& type, nodelet::Loader
         std::lock_guard<std::mutex> lock(out->mutex);
         out->objects.push_back(*m);
       });
-  ros::Subscriber s2 =
-      nh.subscribe<LabeledCloud>("objects/points", 10, [out](const LabeledCloud::ConstPtr& m) {
+  ros::Subscriber s2 = nh.subscribe<LabeledCloud>(
+      "objects/points", 10, [out](const boost::shared_ptr<const LabeledCloud>& m) {
         std::lock_guard<std::mutex> lock(out->mutex);
         out->points.push_back(*m);
       });

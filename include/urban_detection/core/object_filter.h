@@ -40,7 +40,7 @@ struct ObjectFilterParams {
   double max_azimuth_gap_deg = 0.6;  // [deg] returns farther apart in azimuth: not neighbours
   double jump_m = 0.25;              // [m] |r_b - (r_a + r_c) / 2| above this is a range jump
   int min_triplets = 20;             // [-] fewer measurable triplets: porosity not judged
-  double max_jump_fraction = 0.2;    // [0..1] reject when the fraction of jumps exceeds this
+  double max_jump_fraction = 0.3;    // [0..1] reject when the fraction of jumps exceeds this
   // Bright-hedge rule (intensity, depends on the sensor's intensity scale; 0 = off):
   double hedge_min_intensity = 0.0;  // [input intensity units] reject when the mean is above
   double hedge_min_length_m = 1.5;   // [m] ... and the longer box side is at least this
