@@ -4,6 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace urban_detection {
 namespace core {
 
@@ -33,11 +37,6 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
   ground_z_.assign(n, 0.0f);
   ground_state_.assign(n, kNoGround);
   fill_z_.assign(n, 0.0f);
-  // Per-cell lookup tables of the per-point pass, shifted by one: entry 0 is the kNoCell
-  // sentinel (no split, kUnknown) and is never overwritten. "No split" is -inf, not lowest():
-  // a point without a cell may have z = -inf, which must not compare below it.
-  split_z_.assign(n + 1, -std::numeric_limits<float>::infinity());
-  label_lut_.assign(n + 1, static_cast<std::uint8_t>(SegmentClass::kUnknown));
   hops_.assign(n, 0);
   dense_.assign(n, 0);
   // Terrain bit map of fillTerrain: a zero word of padding on both sides of each row, so
@@ -70,8 +69,11 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   stats_.cells_occupied = static_cast<std::uint32_t>(grid_.occupiedCells().size());
 
   const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
-  for (const std::int32_t c : grid_.occupiedCells()) {
-    const bool sparse = grid_.cell(c).count < min_pts;
+  const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
+  const std::vector<GridCell>& stats = grid_.occupiedStats();
+  for (std::size_t s = 0; s < occupied.size(); ++s) {
+    const std::int32_t c = occupied[s];
+    const bool sparse = stats[s].count < min_pts;
     if (sparse) cell_class_[c] = SegmentClass::kClutter;
     dense_[c] = sparse ? 0 : 1;
   }
@@ -85,43 +87,92 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   }
 
   // Per point: mixed cells are split by the height above the local ground. The split height
-  // and class are tabulated once per cell, at index cell + 1 so that kNoCell (-1) reads the
-  // sentinel entry 0 (never ground, kUnknown): the per-point loop is then two table lookups
-  // and a compare without a branch (consecutive points often change cells, at range almost
-  // always, so a branch on the cell mispredicts).
+  // and class are tabulated once per occupied cell, by slot + 1 (the grid's per-point index)
+  // so that a point without a cell reads the sentinel entry 0 (never ground, kUnknown): the
+  // per-point loop is then two lookups in small tables and a compare without a branch
+  // (consecutive points often change cells, at range almost always, so a branch on the cell
+  // mispredicts). "No split" is -inf, not lowest(): a point without a cell may have z = -inf,
+  // which must not compare below it.
   const float tol = static_cast<float>(params_.ground_tolerance_m);
   const bool sparse_ground = params_.ground_in_sparse_cells;
-  for (const std::int32_t c : grid_.occupiedCells()) {
+  constexpr float kNoSplit = -std::numeric_limits<float>::infinity();
+  slot_label_.resize(occupied.size() + 1);
+  slot_label_[0] = SlotLabel{kNoSplit, static_cast<std::uint32_t>(SegmentClass::kUnknown)};
+  for (std::size_t s = 0; s < occupied.size(); ++s) {
+    const std::int32_t c = occupied[s];
     const SegmentClass cls = cell_class_[c];
     const bool split = (cls == SegmentClass::kShort || cls == SegmentClass::kTall ||
                         (cls == SegmentClass::kClutter && sparse_ground)) &&
                        ground_state_[c] != kNoGround;
-    split_z_[c + 1] = split ? ground_z_[c] + tol : -std::numeric_limits<float>::infinity();
-    label_lut_[c + 1] = static_cast<std::uint8_t>(cls);
+    slot_label_[s + 1] = SlotLabel{split ? ground_z_[c] + tol : kNoSplit,
+                                   static_cast<std::uint32_t>(cls)};
   }
   const std::size_t n = cloud.size();
   labels->resize(n);
-  const std::int32_t* pc = grid_.pointCells().data();
+  const std::int32_t* pc = grid_.pointSlots().data();
   const float* pz = grid_.pointHeights().data();
-  const float* split_z = split_z_.data() + 1;
-  const std::uint8_t* lut = label_lut_.data() + 1;
+  const SlotLabel* table = slot_label_.data();
   static_assert(sizeof(SegmentClass) == 1, "labels are written as bytes");
+  static_assert(sizeof(SlotLabel) == 8, "slot table entries are loaded as 8 bytes");
   std::uint8_t* out = reinterpret_cast<std::uint8_t*>(labels->data());
-  constexpr std::uint8_t kGroundByte = static_cast<std::uint8_t>(SegmentClass::kGround);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int32_t c = pc[i];
-    // Select by mask: a ternary here compiles to an unpredictable branch.
-    const std::uint8_t below = static_cast<std::uint8_t>(-static_cast<int>(pz[i] < split_z[c]));
-    out[i] = static_cast<std::uint8_t>((kGroundByte & below) | (lut[c] & ~below));
-  }
-  // Class counts in a separate pass over the bytes (vectorised; counting inside the loop above
-  // would chain every point through a store-to-load dependency on the counter array).
+  constexpr std::uint32_t kGroundLabel = static_cast<std::uint32_t>(SegmentClass::kGround);
+  // counts[k]: points labelled k, for k = 1..4 (kUnknown is the rest).
   std::uint32_t counts[5] = {0, 0, 0, 0, 0};
-  for (int k = 0; k < 5; ++k) {
-    std::uint32_t cnt = 0;
-    for (std::size_t i = 0; i < n; ++i) cnt += out[i] == k;
-    counts[k] = cnt;
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  // 16 points per step: each point's 8-byte table entry is loaded and transposed into four
+  // split heights and four classes; the compare and select are done four lanes at a time and
+  // the labels packed to bytes, which are counted per class with byte compares (the byte
+  // counters are folded into 64-bit sums before they can overflow).
+  const __m128i ground4 = _mm_set1_epi32(static_cast<int>(kGroundLabel));
+  __m128i acc[5], sums[5];
+  for (int k = 1; k <= 4; ++k) {
+    acc[k] = _mm_setzero_si128();
+    sums[k] = _mm_setzero_si128();
   }
+  auto four = [&](std::size_t j) {
+    const __m128i e0 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(table + pc[j]));
+    const __m128i e1 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(table + pc[j + 1]));
+    const __m128i e2 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(table + pc[j + 2]));
+    const __m128i e3 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(table + pc[j + 3]));
+    const __m128 a = _mm_castsi128_ps(_mm_unpacklo_epi64(e0, e1));  // s0 l0 s1 l1
+    const __m128 b = _mm_castsi128_ps(_mm_unpacklo_epi64(e2, e3));  // s2 l2 s3 l3
+    const __m128 split4 = _mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
+    const __m128i cls4 = _mm_castps_si128(_mm_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1)));
+    // Ordered compare, as the scalar `<`: NaN heights are never below.
+    const __m128i below = _mm_castps_si128(_mm_cmplt_ps(_mm_loadu_ps(pz + j), split4));
+    return _mm_or_si128(_mm_and_si128(below, ground4), _mm_andnot_si128(below, cls4));
+  };
+  std::size_t block = 0;
+  for (; i + 16 <= n; i += 16) {
+    const __m128i lo = _mm_packs_epi32(four(i), four(i + 4));
+    const __m128i hi = _mm_packs_epi32(four(i + 8), four(i + 12));
+    const __m128i bytes = _mm_packus_epi16(lo, hi);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), bytes);
+    for (int k = 1; k <= 4; ++k) {
+      acc[k] = _mm_sub_epi8(acc[k], _mm_cmpeq_epi8(bytes, _mm_set1_epi8(static_cast<char>(k))));
+    }
+    if (++block == 255) {
+      for (int k = 1; k <= 4; ++k) {
+        sums[k] = _mm_add_epi64(sums[k], _mm_sad_epu8(acc[k], _mm_setzero_si128()));
+        acc[k] = _mm_setzero_si128();
+      }
+      block = 0;
+    }
+  }
+  for (int k = 1; k <= 4; ++k) {
+    sums[k] = _mm_add_epi64(sums[k], _mm_sad_epu8(acc[k], _mm_setzero_si128()));
+    counts[k] = static_cast<std::uint32_t>(_mm_cvtsi128_si32(sums[k]) +
+                                           _mm_cvtsi128_si32(_mm_srli_si128(sums[k], 8)));
+  }
+#endif
+  for (; i < n; ++i) {
+    const SlotLabel& e = table[pc[i]];
+    const std::uint32_t label = pz[i] < e.split_z ? kGroundLabel : e.label;
+    out[i] = static_cast<std::uint8_t>(label);
+    ++counts[label];
+  }
+  counts[0] = static_cast<std::uint32_t>(n) - counts[1] - counts[2] - counts[3] - counts[4];
   stats_.points_unknown = counts[static_cast<int>(SegmentClass::kUnknown)];
   stats_.points_clutter = counts[static_cast<int>(SegmentClass::kClutter)];
   stats_.points_ground = counts[static_cast<int>(SegmentClass::kGround)];
@@ -141,16 +192,29 @@ void GridSegmenter::growGround() {
   const float seed_r2 = static_cast<float>(params_.seed_radius_m * params_.seed_radius_m);
   const int rows = grid_.rows(), cols = grid_.cols();
 
+  const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
+  const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
+  const std::vector<GridCell>& stats = grid_.occupiedStats();
+  // Every cell given a terrain here is also set in fillTerrain's bit map (bit k + 64 of its
+  // row: one zero word of padding left of each row).
+  std::uint64_t* bits = terrain_bits_.data();
+  const std::size_t bit_words = bit_words_;
+  auto markTerrain = [bits, bit_words](int r, int k) {
+    bits[static_cast<std::size_t>(r) * bit_words + ((k + 64) >> 6)] |= std::uint64_t{1}
+                                                                      << ((k + 64) & 63);
+  };
   queue_.clear();
-  for (const std::int32_t c : grid_.occupiedCells()) {
-    if (cell_class_[c] == SegmentClass::kClutter) continue;
-    const GridCell& cell = grid_.cell(c);
+  for (std::size_t s = 0; s < occupied.size(); ++s) {
+    const GridCell& cell = stats[s];
+    if (cell.count < min_pts) continue;  // clutter
+    const std::int32_t c = occupied[s];
     if (cell.zRange() >= flat || std::fabs(cell.zMean()) > seed_h) continue;
     float x, y;
     grid_.cellCenter(c, &x, &y);
     if (x * x + y * y > seed_r2) continue;
     ground_state_[c] = kReached;
     ground_z_[c] = cell.zMean();
+    markTerrain(grid_.rowOf(c), grid_.colOf(c));
     touched_.push_back(c);
     queue_.push_back(c);
   }
@@ -182,16 +246,18 @@ void GridSegmenter::growGround() {
         if (hop >= max_hops) continue;
         ground_state_[nc] = kBridged;
         ground_z_[nc] = g;
+        markTerrain(r + kDr[d], k + kDc[d]);
         hops_[nc] = static_cast<std::uint8_t>(hop + 1);
         touched_.push_back(nc);
         queue_.push_back(nc);
         continue;
       }
-      const GridCell& cell = grid_.cell(nc);
+      const GridCell& cell = stats[grid_.slotOf(nc)];
       const bool is_flat = cell.zRange() < flat;
       const float e = is_flat ? cell.zMean() : cell.z_min;
       if (std::fabs(e - g) >= step) continue;
       ground_state_[nc] = kReached;
+      markTerrain(r + kDr[d], k + kDc[d]);
       // The lowest point of a mixed cell is its ground unless it lies clearly above the terrain
       // it was reached from: then the base was not sampled (a wall hit above its foot at range)
       // and that point belongs to the object.
@@ -235,21 +301,14 @@ void GridSegmenter::fillTerrain() {
     }
     return cnt;
   };
+  // terrain_bits_ holds the cells growGround gave a terrain (all kReached / kBridged so far).
   const bool use_bits = max_ring >= 1 && max_ring <= kMaxBitRing;
-  const std::size_t terrain_cells = touched_.size();  // all kReached / kBridged so far
-  if (use_bits) {
-    for (std::size_t i = 0; i < terrain_cells; ++i) {
-      const std::int32_t c = touched_[i];
-      const int k = grid_.colOf(c) + 64;  // one zero word of padding left of each row
-      terrain_bits_[static_cast<std::size_t>(grid_.rowOf(c)) * bit_words_ + (k >> 6)] |=
-          std::uint64_t{1} << (k & 63);
-    }
-  }
+  const bool sparse_ground = params_.ground_in_sparse_cells;
   const std::uint64_t window_mask = (std::uint64_t{1} << (2 * max_ring + 1)) - 1;
   std::uint64_t m[2 * kMaxBitRing + 1];
   for (const std::int32_t c : grid_.occupiedCells()) {
     if (ground_state_[c] != kNoGround ||
-        (cell_class_[c] == SegmentClass::kClutter && !params_.ground_in_sparse_cells)) {
+        (!sparse_ground && cell_class_[c] == SegmentClass::kClutter)) {
       continue;
     }
     const int r = grid_.rowOf(c), k = grid_.colOf(c);
@@ -291,13 +350,8 @@ void GridSegmenter::fillTerrain() {
       }
     }
   }
-  if (use_bits) {
-    for (std::size_t i = 0; i < terrain_cells; ++i) {
-      const std::int32_t c = touched_[i];
-      terrain_bits_[static_cast<std::size_t>(grid_.rowOf(c)) * bit_words_ +
-                    ((grid_.colOf(c) + 64) >> 6)] = 0;
-    }
-  }
+  // Cleared whole (a few kB): cheaper than finding the row and column of every set bit.
+  std::fill(terrain_bits_.begin(), terrain_bits_.end(), std::uint64_t{0});
   // Applied afterwards so that filled cells do not feed each other within one frame.
   for (const std::int32_t c : fill_cells_) {
     ground_z_[c] = fill_z_[c];
@@ -315,9 +369,12 @@ void GridSegmenter::classifyCells() {
   const float sensor_h = static_cast<float>(params_.sensor_height_m);
   const float tan_top = static_cast<float>(std::tan(params_.fov_top_elevation_deg * M_PI / 180.0));
   const float half_diag = static_cast<float>(params_.cell_size_m * M_SQRT1_2);
-  for (const std::int32_t c : grid_.occupiedCells()) {
+  const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
+  const std::vector<GridCell>& stats = grid_.occupiedStats();
+  for (std::size_t s = 0; s < occupied.size(); ++s) {
+    const std::int32_t c = occupied[s];
     if (cell_class_[c] == SegmentClass::kClutter) continue;
-    const GridCell& cell = grid_.cell(c);
+    const GridCell& cell = stats[s];
     const std::uint8_t state = ground_state_[c];
     // Without any terrain estimate the plane below the sensor is the reference.
     const float g = state != kNoGround ? ground_z_[c] : 0.0f;

@@ -119,9 +119,10 @@ bool applyHierarchical(const YAML::Node& node, const std::string& where,
   t.bind("max_abs_z_m", &p->max_abs_z_m);
   t.bind("psi_max_m", &p->psi_max_m);
   t.bind("dense_min_weighted_points", &p->dense_min_weighted_points);
-  t.bind("min_split_height_span_m", &p->min_split_height_span_m);
-  t.bind("max_split_range_m", &p->max_split_range_m);
-  t.bind("min_gap_subcells", &p->min_gap_subcells);
+  t.bind("radial_bridge_subcells", &p->radial_bridge_subcells);
+  t.bind("far_radial_bridge_subcells", &p->far_radial_bridge_subcells);
+  t.bind("bridge_range_m", &p->bridge_range_m);
+  t.bind("gap_bridge_range_m", &p->gap_bridge_range_m);
   t.bind("dense_refinement", &p->dense_refinement);
   t.bind("min_points", &p->min_points);
   t.bind("max_extent_m", &p->max_extent_m);

@@ -11,6 +11,8 @@
 namespace urban_detection {
 namespace core {
 
+const GridCell SimpleGrid::kEmptyCell = GridCell();
+
 SimpleGrid::SimpleGrid(const SimpleGridParams& params) : params_(params) {
   // Guard against nonsense here too: callers validate, but a core class must not allocate
   // a multi-gigabyte grid or divide by zero on a bad value.
@@ -22,7 +24,7 @@ SimpleGrid::SimpleGrid(const SimpleGridParams& params) : params_(params) {
   inv_cell_ = static_cast<float>(1.0 / cell);
   inv_side_ = 1.0 / side_;
   origin_m_ = static_cast<float>(-0.5 * side_ * cell);
-  cells_.assign(static_cast<std::size_t>(side_) * side_, GridCell());
+  slot_.assign(static_cast<std::size_t>(side_) * side_, -1);
 }
 
 std::int32_t SimpleGrid::cellAt(float x_m, float y_m) const {
@@ -43,33 +45,37 @@ void SimpleGrid::cellCenter(std::int32_t index, float* x_m, float* y_m) const {
 }
 
 void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs_height_m) {
-  for (const std::int32_t c : occupied_) cells_[c] = GridCell();
+  for (const std::int32_t c : occupied_) slot_[c] = -1;
   occupied_.clear();
+  occupied_cells_.clear();
   const std::size_t n = cloud.size();
-  point_cell_.resize(n);
+  point_slot_.resize(n);
   point_z_.resize(n);
   // Two passes per chunk of points, so the chunk's cell indices stay in L1 between them:
   //  1. cell index and height of every point, without branches (SSE2, four points at a time:
   //     the points are 32-byte records, read as four 16-byte x y z _ rows and transposed). A
   //     single bounds test per point also rejects NaN (ordered comparisons with NaN are false)
   //     and inf/1e30 (outside the grid), exactly as the scalar expression does.
-  //  2. statistics: consecutive returns of a laser mostly fall in the same cell (~1 cm apart at
-  //     10 m; about 6 points per run on KITTI sweeps), so they are accumulated in registers
-  //     over such runs and written once per run. The per-cell sum is the sum of the run sums,
-  //     in point order: this defines the float result of the mean.
+  //  2. slots and statistics: consecutive returns of a laser mostly fall in the same cell
+  //     (~1 cm apart at 10 m; about 6 points per run on KITTI sweeps), so they are accumulated
+  //     in registers over such runs and written once per run. The per-cell sum is the sum of
+  //     the run sums, in point order: this defines the float result of the mean. A cell gets
+  //     its slot when its first run starts, so slots follow the order of first touch.
   const float org = origin_m_, inv = inv_cell_, side_f = static_cast<float>(side_);
   const int side = side_;
-  GridCell* cells = cells_.data();
-  std::int32_t* pc = point_cell_.data();
+  constexpr std::size_t kChunk = 1024;
+  chunk_cell_.resize(kChunk);
+  std::int32_t* cc = chunk_cell_.data();
+  std::int32_t* slot_of = slot_.data();
+  std::int32_t* ps = point_slot_.data();
   float* pz = point_z_.data();
   const PointXYZIRT* pts = cloud.points.data();
-  std::int32_t run_cell = kNoCell;
+  std::int32_t run_cell = kNoCell, run_slot = -1;
   std::uint32_t run_count = 0;
   float run_min = 0.0f, run_max = 0.0f, run_sum = 0.0f;
   auto flush = [&]() {
     if (run_cell == kNoCell) return;
-    GridCell& cell = cells[run_cell];
-    if (cell.count == 0) occupied_.push_back(run_cell);
+    GridCell& cell = occupied_cells_[run_slot];
     cell.count += run_count;
     cell.z_min = std::min(cell.z_min, run_min);
     cell.z_max = std::max(cell.z_max, run_max);
@@ -86,7 +92,6 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
     }
     return static_cast<std::int32_t>(fr) * side + static_cast<std::int32_t>(fc);
   };
-  constexpr std::size_t kChunk = 1024;
   for (std::size_t begin = 0; begin < n; begin += kChunk) {
     const std::size_t end = std::min(n, begin + kChunk);
     std::size_t i = begin;
@@ -115,14 +120,17 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
       const __m128i prod = _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
                                               _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
       const __m128i cell = _mm_add_epi32(prod, k);
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(pc + i),
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(cc + (i - begin)),
                        _mm_or_si128(_mm_and_si128(valid, cell), _mm_xor_si128(valid, ones)));
     }
 #endif
-    for (; i < end; ++i) pc[i] = cellOf(pts[i], &pz[i]);
+    for (; i < end; ++i) cc[i - begin] = cellOf(pts[i], &pz[i]);
     for (std::size_t j = begin; j < end; ++j) {
-      const std::int32_t c = pc[j];
-      if (c == kNoCell) continue;
+      const std::int32_t c = cc[j - begin];
+      if (c == kNoCell) {
+        ps[j] = 0;
+        continue;
+      }
       const float z = pz[j];
       if (c == run_cell) {
         ++run_count;
@@ -132,9 +140,17 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
       } else {
         flush();
         run_cell = c;
+        run_slot = slot_of[c];
+        if (run_slot < 0) {
+          run_slot = static_cast<std::int32_t>(occupied_.size());
+          slot_of[c] = run_slot;
+          occupied_.push_back(c);
+          occupied_cells_.emplace_back();
+        }
         run_count = 1;
         run_min = run_max = run_sum = z;
       }
+      ps[j] = run_slot + 1;
     }
   }
   flush();

@@ -21,9 +21,10 @@ void loadHierarchicalGridParams(const ros::NodeHandle& nh,
   loadParam(nh, "grid_half_extent_m", &p->grid_half_extent_m, 1.0, 500.0, "m");
   loadParam(nh, "max_abs_z_m", &p->max_abs_z_m, 0.1, 1000.0, "m");
   loadParam(nh, "psi_max_m", &p->psi_max_m, 0.0, 100.0, "m");
-  loadParam(nh, "min_split_height_span_m", &p->min_split_height_span_m, 0.0, 10.0, "m");
-  loadParam(nh, "max_split_range_m", &p->max_split_range_m, 0.0, 1000.0, "m");
-  loadParam(nh, "min_gap_subcells", &p->min_gap_subcells, 1, 16);
+  loadParam(nh, "radial_bridge_subcells", &p->radial_bridge_subcells, 0, 8);
+  loadParam(nh, "far_radial_bridge_subcells", &p->far_radial_bridge_subcells, 0, 8);
+  loadParam(nh, "bridge_range_m", &p->bridge_range_m, 0.0, 1000.0, "m");
+  loadParam(nh, "gap_bridge_range_m", &p->gap_bridge_range_m, 0.0, 1000.0, "m");
   loadParam(nh, "dense_min_weighted_points", &p->dense_min_weighted_points, 0.0, 1e6);
   loadParam(nh, "dense_refinement", &p->dense_refinement);
   loadParam(nh, "min_points", &p->min_points, 1, 1000000);

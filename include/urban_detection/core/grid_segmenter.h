@@ -125,8 +125,13 @@ class GridSegmenter {
   static constexpr int kMaxBitRing = 28;   // fillTerrain's bit windows: 2 * 28 + 1 bits
   std::vector<std::uint64_t> terrain_bits_;  // per row: bit k+64 = cell k has terrain (cleared)
   std::size_t bit_words_ = 0;                // 64-bit words per row of terrain_bits_
-  std::vector<float> split_z_;            // [m] per cell + 1: points below are ground
-  std::vector<std::uint8_t> label_lut_;   // per cell + 1: SegmentClass of the other points
+  // Per slot + 1 (entry 0: points without a cell) for the per-point pass: points below
+  // split_z [m] are ground, the others get `label` (a SegmentClass).
+  struct SlotLabel {
+    float split_z;
+    std::uint32_t label;
+  };
+  std::vector<SlotLabel> slot_label_;
 };
 
 /// Builds the foreground cloud of the detectors: only the finite kShort points, label =

@@ -35,6 +35,12 @@ struct GridCell {
 /// within range goes to the cell containing its projection on the z = 0 plane. Buffers are
 /// kept between frames; build() only resets the cells the previous frame touched, so its cost
 /// is proportional to the number of points, not to the grid area.
+///
+/// Storage: the statistics of the occupied cells are kept compactly, in first-touch order
+/// (a frame occupies a few thousand of the 100k+ cells: 16-byte records spread over the whole
+/// grid would mostly miss the caches), and a per-cell slot map gives each occupied cell's
+/// position in that order. Every point keeps its slot, so later per-point passes read small
+/// per-slot tables instead of grid-sized ones.
 class SimpleGrid {
  public:
   /// Marks a point that has no cell (non-finite, beyond max_range_m or absurdly high/low).
@@ -50,19 +56,33 @@ class SimpleGrid {
   const SimpleGridParams& params() const { return params_; }
   int rows() const { return side_; }  ///< cells along y
   int cols() const { return side_; }  ///< cells along x
-  std::size_t numCells() const { return cells_.size(); }
+  std::size_t numCells() const { return slot_.size(); }
 
   /// Linear cell index (row * cols + col) of point i of the last cloud, or kNoCell.
-  std::int32_t pointCell(std::size_t i) const { return point_cell_[i]; }
-  const std::vector<std::int32_t>& pointCells() const { return point_cell_; }
+  std::int32_t pointCell(std::size_t i) const {
+    const std::int32_t s = point_slot_[i];
+    return s == 0 ? kNoCell : occupied_[s - 1];
+  }
+  /// Per point of the last cloud: 1 + the slot (position in occupiedCells()) of its cell, or 0
+  /// for a point without a cell.
+  const std::vector<std::int32_t>& pointSlots() const { return point_slot_; }
   /// Height of point i above the ground below the sensor [m] (valid when pointCell != kNoCell).
   float pointHeight(std::size_t i) const { return point_z_[i]; }
   const std::vector<float>& pointHeights() const { return point_z_; }
 
-  const GridCell& cell(std::int32_t index) const { return cells_[index]; }
-  const GridCell& cell(int row, int col) const { return cells_[row * side_ + col]; }
-  /// Linear indices of the cells holding at least one point, in first-touch order.
+  /// Statistics of a cell (all-default for an empty cell).
+  const GridCell& cell(std::int32_t index) const {
+    const std::int32_t s = slot_[index];
+    return s < 0 ? kEmptyCell : occupied_cells_[s];
+  }
+  const GridCell& cell(int row, int col) const { return cell(row * side_ + col); }
+  /// Linear indices of the cells holding at least one point, in first-touch order; a cell's
+  /// position in this list is its slot.
   const std::vector<std::int32_t>& occupiedCells() const { return occupied_; }
+  /// Statistics of the occupied cells, by slot (same order as occupiedCells()).
+  const std::vector<GridCell>& occupiedStats() const { return occupied_cells_; }
+  /// Slot of a cell, or -1 when it holds no point.
+  std::int32_t slotOf(std::int32_t index) const { return slot_[index]; }
 
   /// Row and column of a linear cell index. A division by a runtime divisor costs tens of
   /// cycles and the terrain growing does it per visited cell: the quotient is taken from a
@@ -81,15 +101,18 @@ class SimpleGrid {
   void cellCenter(std::int32_t index, float* x_m, float* y_m) const;
 
  private:
+  static const GridCell kEmptyCell;
   SimpleGridParams params_;
   int side_ = 0;
   float inv_cell_ = 1.0f;
   double inv_side_ = 1.0;  // [1/cells] 1 / side_, for rowOf
   float origin_m_ = 0.0f;  // [m] coordinate of the grid's lower-left corner (both axes)
-  std::vector<GridCell> cells_;
-  std::vector<std::int32_t> occupied_;
-  std::vector<std::int32_t> point_cell_;
+  std::vector<std::int32_t> slot_;        // per cell: slot, or -1 (reset on occupied_ only)
+  std::vector<std::int32_t> occupied_;    // per slot: cell index
+  std::vector<GridCell> occupied_cells_;  // per slot: statistics
+  std::vector<std::int32_t> point_slot_;  // per point: 1 + slot, 0 = no cell
   std::vector<float> point_z_;
+  std::vector<std::int32_t> chunk_cell_;  // scratch: cell indices of one chunk of points
 };
 
 }  // namespace core
