@@ -10,6 +10,9 @@ namespace urban_detection {
 namespace core {
 namespace {
 
+// Forward half of the 8-neighbourhood: each neighbouring pair is visited once.
+constexpr int kForward[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
+
 // The grid -> slot maps are the only arrays that scale with the grid area; this bounds them
 // to 64 Mi sub-cells (256 MB) so a typo in the extent cannot exhaust memory.
 constexpr double kMaxDenseCells = 64.0 * 1024 * 1024;
@@ -38,12 +41,14 @@ std::string validate(const HierarchicalGridDetectorParams& p) {
     err << "max_abs_z_m must be > 0 m, got " << p.max_abs_z_m;
   } else if (!(p.psi_max_m >= 0.0 && p.psi_max_m <= 100.0)) {
     err << "psi_max_m must be in [0, 100] m, got " << p.psi_max_m;
-  } else if (!(p.min_split_height_span_m >= 0.0 && p.min_split_height_span_m <= 10.0)) {
-    err << "min_split_height_span_m must be in [0, 10] m, got " << p.min_split_height_span_m;
-  } else if (p.min_gap_subcells < 1) {
-    err << "min_gap_subcells must be >= 1, got " << p.min_gap_subcells;
-  } else if (!(p.max_split_range_m >= 0.0)) {
-    err << "max_split_range_m must be >= 0 m, got " << p.max_split_range_m;
+  } else if (p.radial_bridge_subcells < 0 || p.radial_bridge_subcells > 8) {
+    err << "radial_bridge_subcells must be in [0, 8], got " << p.radial_bridge_subcells;
+  } else if (p.far_radial_bridge_subcells < 0 || p.far_radial_bridge_subcells > 8) {
+    err << "far_radial_bridge_subcells must be in [0, 8], got " << p.far_radial_bridge_subcells;
+  } else if (!(p.bridge_range_m >= 0.0 && p.bridge_range_m <= 1000.0)) {
+    err << "bridge_range_m must be in [0, 1000] m, got " << p.bridge_range_m;
+  } else if (!(p.gap_bridge_range_m >= 0.0 && p.gap_bridge_range_m <= 1000.0)) {
+    err << "gap_bridge_range_m must be in [0, 1000] m, got " << p.gap_bridge_range_m;
   } else if (!(p.dense_min_weighted_points >= 0.0 && p.dense_min_weighted_points <= 1e6)) {
     err << "dense_min_weighted_points must be in [0, 1e6], got " << p.dense_min_weighted_points;
   } else if (p.min_points < 1) {
@@ -76,59 +81,52 @@ HierarchicalGridDetector::HierarchicalGridDetector(const HierarchicalGridDetecto
   nc_ = 2 * half;
   nd_ = nc_ * params_.xi;
   origin_m_ = -half * params_.coarse_cell_m;
-  buildMasks();
   dense_slot_.assign(static_cast<std::size_t>(nd_) * nd_, -1);
   coarse_slot_.assign(static_cast<std::size_t>(nc_) * nc_, -1);
+  buildBridgeTables();
 }
 
-void HierarchicalGridDetector::buildMasks() {
-  // Sub-cell (lx, ly) of a super-cell is bit ly * xi + lx.
-  const int xi = params_.xi;
-  auto bit = [xi](int lx, int ly) { return std::uint64_t{1} << (ly * xi + lx); };
-  full_mask_ = 0;
-  for (int ly = 0; ly < xi; ++ly) {
-    for (int lx = 0; lx < xi; ++lx) full_mask_ |= bit(lx, ly);
-  }
-  for (int k = 0; k < xi; ++k) {
-    column_mask_[k] = row_mask_[k] = 0;
-    for (int j = 0; j < xi; ++j) {
-      column_mask_[k] |= bit(k, j);
-      row_mask_[k] |= bit(j, k);
-    }
-  }
-  // facing_[(dy + 1) * 3 + dx + 1]: sub-cells on the side facing the neighbour (dx, dy): a
-  // column or row for edge neighbours, the corner sub-cell for diagonal ones.
-  for (int dy = -1; dy <= 1; ++dy) {
-    for (int dx = -1; dx <= 1; ++dx) {
-      std::uint64_t m = 0;
-      for (int ly = 0; ly < xi; ++ly) {
-        for (int lx = 0; lx < xi; ++lx) {
-          const bool okx = dx == 0 || (dx > 0 ? lx == xi - 1 : lx == 0);
-          const bool oky = dy == 0 || (dy > 0 ? ly == xi - 1 : ly == 0);
-          if (okx && oky) m |= bit(lx, ly);
+int HierarchicalGridDetector::directionBin(float x, float y) {
+  // Pseudo-angle in [0, 4), monotonic in the true angle, without a trigonometric call.
+  const float t = x / (std::fabs(x) + std::fabs(y));
+  const float a = y >= 0.0f ? 1.0f - t : 3.0f + t;
+  return std::min(kDirectionBins - 1, static_cast<int>(a * (kDirectionBins / 4)));
+}
+
+void HierarchicalGridDetector::buildBridgeTables() {
+  // Per table (near, far, farthest), per direction bin (its centre direction u): the offsets
+  // o beyond the 8-neighbourhood (which links anyway) that step 3 bridges: for the near and
+  // far tables, 2 <= max(|o.x|, |o.y|) <= B + 1, o.u > 0 and |o x u| <= 1 sub-cell (ahead on
+  // the line of sight, beside it by at most one sub-cell); the farthest table adds the ring
+  // max(|o.x|, |o.y|) = 2 in all directions, half of it (the other half is the same pairs
+  // seen from their other end).
+  bridge_offsets_.clear();
+  bridge_begin_.clear();
+  const int reach[3] = {params_.radial_bridge_subcells + 1, params_.far_radial_bridge_subcells + 1,
+                        params_.far_radial_bridge_subcells + 1};
+  for (int table = 0; table < 3; ++table) {
+    for (int bin = 0; bin < kDirectionBins; ++bin) {
+      bridge_begin_.push_back(static_cast<std::int32_t>(bridge_offsets_.size()));
+      const double a = (bin + 0.5) * 4.0 / kDirectionBins;  // inverse of directionBin()
+      const double t = a < 2.0 ? 1.0 - a : a - 3.0;
+      double ux = t, uy = (a < 2.0 ? 1.0 : -1.0) * (1.0 - std::fabs(t));
+      const double norm = std::hypot(ux, uy);
+      ux /= norm;
+      uy /= norm;
+      const int r = std::max(reach[table], table == 2 ? 2 : 0);
+      for (int oy = -r; oy <= r; ++oy) {
+        for (int ox = -r; ox <= r; ++ox) {
+          const int cheb = std::max(std::abs(ox), std::abs(oy));
+          if (cheb < 2) continue;
+          const double along = ox * ux + oy * uy, across = ox * uy - oy * ux;
+          const bool radial =
+              cheb <= reach[table] && along > 1e-9 && std::fabs(across) <= 1.0 + 1e-9;
+          const bool ring = table == 2 && cheb == 2 && (oy > 0 || (oy == 0 && ox > 0));
+          if (radial || ring) bridge_offsets_.push_back(CellXY{ox, oy});
         }
       }
-      facing_[(dy + 1) * 3 + dx + 1] = m;
     }
-  }
-  // Interior separating lines, columns first, each ordered from the centre outwards.
-  separators_.clear();
-  for (int axis = 0; axis < 2; ++axis) {
-    std::vector<int> ks;
-    for (int k = 1; k + 1 < xi; ++k) ks.push_back(k);
-    std::stable_sort(ks.begin(), ks.end(), [xi](int a, int b) {
-      return std::abs(2 * a - (xi - 1)) < std::abs(2 * b - (xi - 1));
-    });
-    for (const int k : ks) {
-      Separator sep{0, 0, 0};
-      for (int ly = 0; ly < xi; ++ly) {
-        for (int lx = 0; lx < xi; ++lx) {
-          const int v = axis == 0 ? lx : ly;
-          (v < k ? sep.side_a : v > k ? sep.side_b : sep.line) |= bit(lx, ly);
-        }
-      }
-      separators_.push_back(sep);
-    }
+    bridge_begin_.push_back(static_cast<std::int32_t>(bridge_offsets_.size()));
   }
 }
 
@@ -143,45 +141,6 @@ int HierarchicalGridDetector::find(std::vector<std::int32_t>* parent, std::int32
 
 bool HierarchicalGridDetector::linked(std::int32_t a, std::int32_t b) const {
   return a == b || std::fabs(coarse_zmax_[a] - coarse_zmax_[b]) <= params_.psi_max_m;
-}
-
-bool HierarchicalGridDetector::spansTouch(std::uint64_t a, std::uint64_t b, int dx,
-                                          int dy) const {
-  if (dx != 0 && dy != 0) return true;  // diagonal: reaching the shared corner is enough
-  if ((a == full_mask_) || (b == full_mask_)) return true;
-  // Columns (for a neighbour above/below) or rows (left/right) each part occupies, as bits.
-  const int xi = params_.xi;
-  std::uint32_t sa = 0, sb = 0;
-  for (int k = 0; k < xi; ++k) {
-    const std::uint64_t line = dy != 0 ? column_mask_[k] : row_mask_[k];
-    if (a & line) sa |= 1u << k;
-    if (b & line) sb |= 1u << k;
-  }
-  return ((sa | (sa << 1) | (sa >> 1)) & sb) != 0;
-}
-
-int HierarchicalGridDetector::gapBetween(std::int32_t node_a, std::int32_t node_b, int dx,
-                                         int dy) const {
-  // Empty sub-cell columns (rows) between the dense boxes of part a and of part b, b lying in
-  // the super-cell at offset (dx, dy) of a's. A lower bound of the Chebyshev gap between any
-  // dense sub-cell of a and any of b, so a cut is never made where the exact gap is smaller.
-  const PartBox& a = part_box_[node_a];
-  const PartBox& b = part_box_[node_b];
-  const int xi = params_.xi;
-  int gap = -1;
-  if (dx > 0) gap = std::max(gap, xi + b.min_x - a.max_x - 1);
-  if (dx < 0) gap = std::max(gap, xi + a.min_x - b.max_x - 1);
-  if (dy > 0) gap = std::max(gap, xi + b.min_y - a.max_y - 1);
-  if (dy < 0) gap = std::max(gap, xi + a.min_y - b.max_y - 1);
-  return gap;
-}
-
-bool HierarchicalGridDetector::computeUnsplittable(std::int32_t c) const {
-  if (coarse_zmax_[c] - coarse_zmin_[c] < params_.min_split_height_span_m) return true;  // thin
-  const int cx = coarse_cell_[c] % nc_, cy = coarse_cell_[c] / nc_;
-  const double x = (cx + 0.5) * params_.coarse_cell_m + origin_m_;
-  const double y = (cy + 0.5) * params_.coarse_cell_m + origin_m_;
-  return x * x + y * y > params_.max_split_range_m * params_.max_split_range_m;  // far
 }
 
 void HierarchicalGridDetector::resetGrid() {
@@ -199,11 +158,9 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   resetGrid();
   dense_count_.clear();
   dense_xy_.clear();
-  dense_zmin_.clear();
   dense_zmax_.clear();
   dense_coarse_.clear();
   coarse_zmax_.clear();
-  coarse_zmin_.clear();
   point_slot_.resize(n);
 
   // --- Binning: every point goes to its sub-cell and, through it, to its super-cell. -------
@@ -242,15 +199,12 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
         coarse_slot_[ccell] = cslot;
         coarse_cell_.push_back(ccell);
         coarse_zmax_.push_back(-std::numeric_limits<float>::infinity());
-        coarse_zmin_.push_back(std::numeric_limits<float>::infinity());
       }
       dense_coarse_.push_back(cslot);
-      dense_zmin_.push_back(p.z);
       dense_zmax_.push_back(p.z);
     }
     ++dense_count_[slot];
     dense_zmax_[slot] = std::max(dense_zmax_[slot], p.z);
-    dense_zmin_[slot] = std::min(dense_zmin_[slot], p.z);
     point_slot_[i] = slot;
   }
   const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
@@ -259,7 +213,6 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   for (std::int32_t t = 0; t < nds; ++t) {
     const std::int32_t c = dense_coarse_[t];
     coarse_zmax_[c] = std::max(coarse_zmax_[c], dense_zmax_[t]);
-    coarse_zmin_[c] = std::min(coarse_zmin_[c], dense_zmin_[t]);
   }
   stats_.dense_cells = nds;
   stats_.coarse_cells = ncs;
@@ -267,7 +220,6 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   // --- Coarse level: psi links between 8-neighbouring super-cells -> blobs. -----------------
   coarse_parent_.resize(ncs);
   for (std::int32_t s = 0; s < ncs; ++s) coarse_parent_[s] = s;
-  static constexpr int kForward[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};  // each pair once
   for (std::int32_t s = 0; s < ncs; ++s) {
     const int cx = coarse_cell_[s] % nc_, cy = coarse_cell_[s] / nc_;
     for (const auto& o : kForward) {
@@ -283,92 +235,60 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     if (find(&coarse_parent_, s) == s) ++stats_.coarse_blobs;
   }
 
-  // --- Dense level: weighted densities and, per super-cell, the mask of its dense sub-cells.
+  // --- Dense level: weighted densities; dense sub-cells are the nodes of the components. ----
   dense_occupied_.assign(nds, 0);
   dense_rho_.resize(nds);
-  coarse_dense_mask_.assign(ncs, 0);
+  dense_parent_.resize(nds);
   const float thr = static_cast<float>(params_.dense_min_weighted_points);
   const float dcell = static_cast<float>(dense_cell_m_);
   for (std::int32_t s = 0; s < nds; ++s) {
     const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
     const float x = (ix + 0.5f) * dcell + origin, y = (iy + 0.5f) * dcell + origin;
     dense_rho_[s] = static_cast<float>(dense_count_[s]) * weight_(std::sqrt(x * x + y * y));
+    dense_parent_[s] = s;
     if (dense_rho_[s] >= thr) {
       dense_occupied_[s] = 1;
       ++stats_.dense_occupied;
-      coarse_dense_mask_[dense_coarse_[s]] |= std::uint64_t{1} << ((iy % xi) * xi + ix % xi);
     }
   }
 
-  coarse_unsplittable_.resize(ncs);
-  for (std::int32_t c = 0; c < ncs; ++c) coarse_unsplittable_[c] = computeUnsplittable(c);
-
-  // Super-cell parts: a super-cell whose interior line (column or row) of sub-cells is all
-  // near-empty, with dense sub-cells on both sides, is split in two (Fig. 4c).
-  coarse_part_mask_.resize(2 * static_cast<std::size_t>(ncs));
-  for (std::int32_t c = 0; c < ncs; ++c) {
-    const std::uint64_t dense = coarse_dense_mask_[c];
-    coarse_part_mask_[2 * c] = full_mask_;
-    coarse_part_mask_[2 * c + 1] = 0;
-    if (!params_.dense_refinement || unsplittable(c)) continue;
-    for (const Separator& sep : separators_) {
-      if ((dense & sep.line) == 0 && (dense & sep.side_a) != 0 && (dense & sep.side_b) != 0) {
-        coarse_part_mask_[2 * c] = sep.side_a;
-        coarse_part_mask_[2 * c + 1] = sep.side_b;
-        ++stats_.split_cells;
-        break;
-      }
-    }
-  }
-
-  // Bounding box (in sub-cells) of the dense sub-cells of every part.
-  part_box_.resize(2 * static_cast<std::size_t>(ncs));
-  for (std::int32_t k = 0; k < 2 * ncs; ++k) {
-    PartBox& box = part_box_[k];
-    box = PartBox{127, -1, 127, -1};
-    std::uint64_t m = coarse_dense_mask_[k / 2] & coarse_part_mask_[k];
-    while (m) {
-      const int b = __builtin_ctzll(m);
-      m &= m - 1;
-      const int lx = b % xi, ly = b / xi;
-      box.min_x = std::min<int>(box.min_x, lx);
-      box.max_x = std::max<int>(box.max_x, lx);
-      box.min_y = std::min<int>(box.min_y, ly);
-      box.max_y = std::max<int>(box.max_y, ly);
-    }
-  }
-
-  // Links between parts of neighbouring super-cells (Fig. 4a, 4b); the rule is in the header.
-  node_parent_.resize(2 * static_cast<std::size_t>(ncs));
-  for (std::size_t k = 0; k < node_parent_.size(); ++k) {
-    node_parent_[k] = static_cast<std::int32_t>(k);
-  }
   if (params_.dense_refinement) {
-    for (std::int32_t c = 0; c < ncs; ++c) {
-      if (coarse_dense_mask_[c] == 0) continue;
-      const int cx = coarse_cell_[c] % nc_, cy = coarse_cell_[c] / nc_;
+    // Connected components of the dense sub-cells (8-neighbourhood) whose super-cells are
+    // psi-linked, plus the radial bridges of step 3 (header).
+    const float bridge_range2 = static_cast<float>(params_.bridge_range_m * params_.bridge_range_m);
+    const float gap_range2 =
+        static_cast<float>(params_.gap_bridge_range_m * params_.gap_bridge_range_m);
+    auto unite = [this](std::int32_t a, std::int32_t b) {
+      a = find(&dense_parent_, a);
+      b = find(&dense_parent_, b);
+      if (a == b) return false;
+      dense_parent_[std::max(a, b)] = std::min(a, b);
+      return true;
+    };
+    for (std::int32_t s = 0; s < nds; ++s) {
+      if (!dense_occupied_[s]) continue;
+      const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
+      const std::int32_t cs = dense_coarse_[s];
       for (const auto& o : kForward) {
-        const int x = cx + o[0], y = cy + o[1];
-        if (x < 0 || x >= nc_ || y >= nc_) continue;
-        const std::int32_t r = coarse_slot_[y * nc_ + x];
-        if (r < 0 || coarse_dense_mask_[r] == 0 || !linked(c, r)) continue;
-        const std::uint64_t facing_c = facing_[(o[1] + 1) * 3 + o[0] + 1];
-        const std::uint64_t facing_r = facing_[(1 - o[1]) * 3 + 1 - o[0]];
-        const bool coarse_only = unsplittable(c) || unsplittable(r);
-        for (int pc = 0; pc < 2; ++pc) {
-          const std::uint64_t part_c = coarse_part_mask_[2 * c + pc];
-          if ((part_c & facing_c) == 0 || (part_c & coarse_dense_mask_[c]) == 0) continue;
-          for (int pr = 0; pr < 2; ++pr) {
-            const std::uint64_t part_r = coarse_part_mask_[2 * r + pr];
-            if ((part_r & facing_r) == 0 || (part_r & coarse_dense_mask_[r]) == 0) continue;
-            if (!spansTouch(part_c, part_r, o[0], o[1])) continue;
-            if (!coarse_only && gapBetween(2 * c + pc, 2 * r + pr, o[0], o[1]) >=
-                                    params_.min_gap_subcells) {
-              continue;  // a near-empty strip at least min_gap_subcells wide separates them
-            }
-            const int a = find(&node_parent_, 2 * c + pc), b = find(&node_parent_, 2 * r + pr);
-            if (a != b) node_parent_[std::max(a, b)] = std::min(a, b);
-          }
+        const int x = ix + o[0], y = iy + o[1];
+        if (x < 0 || x >= nd_ || y >= nd_) continue;
+        const std::int32_t r = dense_slot_[y * nd_ + x];
+        if (r >= 0 && dense_occupied_[r] && linked(cs, dense_coarse_[r])) unite(s, r);
+      }
+      // Outwards along the line of sight (step 3): the precomputed offsets of the ray's
+      // direction bin, every dense sub-cell there.
+      const float cx = (ix + 0.5f) * dcell + origin, cy = (iy + 0.5f) * dcell + origin;
+      const float d2 = cx * cx + cy * cy;
+      if (d2 < dcell * dcell) continue;  // the sensor's own sub-cells have no direction
+      const int table = d2 > gap_range2 ? 2 : d2 > bridge_range2 ? 1 : 0;
+      const int bin = directionBin(cx, cy);
+      const std::int32_t* begin = &bridge_begin_[table * (kDirectionBins + 1) + bin];
+      for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
+        const int x = ix + bridge_offsets_[k].x, y = iy + bridge_offsets_[k].y;
+        if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
+        const std::int32_t r = dense_slot_[y * nd_ + x];
+        if (r >= 0 && dense_occupied_[r] && linked(cs, dense_coarse_[r]) && unite(s, r)) {
+          ++stats_.bridges;
         }
       }
     }
@@ -378,18 +298,11 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   // Components are numbered in the order of first appearance of their sub-cells, which is the
   // order of the first point in the input, so ids do not depend on the grid layout.
   dense_object_.assign(nds, -1);
-  root_object_.assign(2 * static_cast<std::size_t>(ncs), -1);
+  root_object_.assign(params_.dense_refinement ? nds : ncs, -1);
   std::int32_t ncomp = 0;
   auto componentOf = [&](std::int32_t s) -> std::int32_t {
-    const std::int32_t c = dense_coarse_[s];
-    std::int32_t root;
-    if (params_.dense_refinement) {
-      const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
-      const std::uint64_t bit = std::uint64_t{1} << ((iy % xi) * xi + ix % xi);
-      root = find(&node_parent_, 2 * c + ((coarse_part_mask_[2 * c + 1] & bit) ? 1 : 0));
-    } else {
-      root = find(&coarse_parent_, c);
-    }
+    const std::int32_t root = params_.dense_refinement ? find(&dense_parent_, s)
+                                                       : find(&coarse_parent_, dense_coarse_[s]);
     if (root_object_[root] < 0) root_object_[root] = ncomp++;
     return root_object_[root];
   };

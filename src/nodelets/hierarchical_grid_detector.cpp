@@ -28,9 +28,10 @@ class HierarchicalGridDetector : public DetectorNodelet {
     c.dense_refinement = params_.dense_refinement;
     c.dense_min_weighted_points = params_.dense_min_weighted_points;
     c.weight_enabled = params_.weight.enabled;
-    c.min_split_height_span_m = params_.min_split_height_span_m;
-    c.max_split_range_m = params_.max_split_range_m;
-    c.min_gap_subcells = params_.min_gap_subcells;
+    c.radial_bridge_subcells = params_.radial_bridge_subcells;
+    c.far_radial_bridge_subcells = params_.far_radial_bridge_subcells;
+    c.bridge_range_m = params_.bridge_range_m;
+    c.gap_bridge_range_m = params_.gap_bridge_range_m;
     c.min_points = params_.min_points;
     c.max_extent_m = params_.max_extent_m;
     reconfigure_ = std::make_unique<Reconfigure>(
@@ -48,9 +49,10 @@ class HierarchicalGridDetector : public DetectorNodelet {
     p.dense_refinement = c.dense_refinement;
     p.dense_min_weighted_points = c.dense_min_weighted_points;
     p.weight.enabled = c.weight_enabled;
-    p.min_split_height_span_m = c.min_split_height_span_m;
-    p.max_split_range_m = c.max_split_range_m;
-    p.min_gap_subcells = c.min_gap_subcells;
+    p.radial_bridge_subcells = c.radial_bridge_subcells;
+    p.far_radial_bridge_subcells = c.far_radial_bridge_subcells;
+    p.bridge_range_m = c.bridge_range_m;
+    p.gap_bridge_range_m = c.gap_bridge_range_m;
     p.min_points = c.min_points;
     p.max_extent_m = c.max_extent_m;
     const std::string error = core::validate(p);

@@ -21,9 +21,10 @@ void loadHierarchicalGridParams(const ros::NodeHandle& nh,
   loadParam(nh, "grid_half_extent_m", &p->grid_half_extent_m, 1.0, 500.0, "m");
   loadParam(nh, "max_abs_z_m", &p->max_abs_z_m, 0.1, 1000.0, "m");
   loadParam(nh, "psi_max_m", &p->psi_max_m, 0.0, 100.0, "m");
-  loadParam(nh, "min_split_height_span_m", &p->min_split_height_span_m, 0.0, 10.0, "m");
-  loadParam(nh, "max_split_range_m", &p->max_split_range_m, 0.0, 1000.0, "m");
-  loadParam(nh, "min_gap_subcells", &p->min_gap_subcells, 1, 16);
+  loadParam(nh, "radial_bridge_subcells", &p->radial_bridge_subcells, 0, 8);
+  loadParam(nh, "far_radial_bridge_subcells", &p->far_radial_bridge_subcells, 0, 8);
+  loadParam(nh, "bridge_range_m", &p->bridge_range_m, 0.0, 1000.0, "m");
+  loadParam(nh, "gap_bridge_range_m", &p->gap_bridge_range_m, 0.0, 1000.0, "m");
   loadParam(nh, "dense_min_weighted_points", &p->dense_min_weighted_points, 0.0, 1e6);
   loadParam(nh, "dense_refinement", &p->dense_refinement);
   loadParam(nh, "min_points", &p->min_points, 1, 1000000);
@@ -52,6 +53,20 @@ void loadKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorParams* p) 
   loadParam(nh, "max_cluster_size", &p->max_cluster_size, 1, 100000000);
   loadParam(nh, "max_extent_m", &p->max_extent_m, 0.1, 1000.0, "m");
   loadParam(nh, "max_abs_coordinate_m", &p->max_abs_coordinate_m, 1.0, 1e5, "m");
+  throwIfInvalid(nh, core::validate(*p));
+}
+
+void loadObjectFilterParams(const ros::NodeHandle& nh, core::ObjectFilterParams* p) {
+  loadParam(nh, "enabled", &p->enabled);
+  loadParam(nh, "min_points", &p->min_points, 3, 1000000);
+  loadParam(nh, "max_range_m", &p->max_range_m, 0.001, 1000.0, "m");
+  loadParam(nh, "row_gap_deg", &p->row_gap_deg, 0.001, 5.0, "deg");
+  loadParam(nh, "max_azimuth_gap_deg", &p->max_azimuth_gap_deg, 0.001, 10.0, "deg");
+  loadParam(nh, "jump_m", &p->jump_m, 0.001, 10.0, "m");
+  loadParam(nh, "min_triplets", &p->min_triplets, 1, 1000000);
+  loadParam(nh, "max_jump_fraction", &p->max_jump_fraction, 0.0, 1.0);
+  loadParam(nh, "hedge_min_intensity", &p->hedge_min_intensity, 0.0, 1e6);
+  loadParam(nh, "hedge_min_length_m", &p->hedge_min_length_m, 0.0, 100.0, "m");
   throwIfInvalid(nh, core::validate(*p));
 }
 

@@ -1,7 +1,7 @@
 // Hierarchical grid detector (paper Sec. 3.2): the three separation cases of Fig. 4 as ASCII
 // art, LiDAR-like cars near and far, the distance weight, agreement with the kd-tree baseline,
 // and bad input.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
@@ -10,11 +10,10 @@
 #include <set>
 #include <stdexcept>
 
-#include <gtest/gtest.h>
-
 #include "detection_test_utils.h"
 #include "urban_detection/core/hierarchical_grid_detector.h"
 #include "urban_detection/core/kdtree_detector.h"
+#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 namespace urban_detection {
 namespace {
@@ -46,19 +45,25 @@ std::vector<DetectedObject> run(const LabeledCloud& cloud, const HierarchicalGri
   return objects;
 }
 
+// The Fig. 4 scenes lie across the line of sight: columns run along x, rows along y, and the
+// art starts at (-1.8, 4.8), so the sensor looks along +y (rows) through it and a gap between
+// columns is a gap across the line of sight. Both corners are on super-cell borders.
+constexpr float kAcrossX0 = -1.8f, kAcrossY0 = 4.8f;
+
+LabeledCloud acrossArt(const std::vector<std::string>& art, const std::map<char, float>& heights) {
+  return fromAsciiArt(art, heights, kAcrossX0, kAcrossY0);
+}
+
 // Fig. 4a: two cars whose super-cells touch and have similar Zmax (psi = 0.1 m): one coarse
-// blob. Columns 8 and 9, the facing border lines of super-cells 2 and 3, are empty: a
-// separating strip on the border of two super-cells, so the dense level splits the blob.
+// blob. Columns 8 and 9, the facing border lines of super-cells 2 and 3, are empty, so the
+// dense level splits the blob.
 //                        super-cells: |0 ||1 ||2 ||3 ||4 ||5 |
-const std::vector<std::string> kTwoCars = {"AAAAAAAA..BBBBBBBB",
-                                           "AAAAAAAA..BBBBBBBB",
-                                           "AAAAAAAA..BBBBBBBB",
-                                           "AAAAAAAA..BBBBBBBB",
-                                           "AAAAAAAA..BBBBBBBB",
-                                           "AAAAAAAA..BBBBBBBB"};
+const std::vector<std::string> kTwoCars = {"AAAAAAAA..BBBBBBBB", "AAAAAAAA..BBBBBBBB",
+                                           "AAAAAAAA..BBBBBBBB", "AAAAAAAA..BBBBBBBB",
+                                           "AAAAAAAA..BBBBBBBB", "AAAAAAAA..BBBBBBBB"};
 
 TEST(HierarchicalGridFig4, TwoCarsTouchingAtCoarseLevelAreSplitOnTheSuperCellBorder) {
-  const LabeledCloud cloud = fromAsciiArt(kTwoCars, {{'A', 1.5f}, {'B', 1.4f}});
+  const LabeledCloud cloud = acrossArt(kTwoCars, {{'A', 1.5f}, {'B', 1.4f}});
   core::HierarchicalGridStats coarse_stats, stats;
   const auto coarse = run(cloud, asciiParams(false), &coarse_stats);
   EXPECT_EQ(coarse_stats.coarse_blobs, 1u);
@@ -69,30 +74,30 @@ TEST(HierarchicalGridFig4, TwoCarsTouchingAtCoarseLevelAreSplitOnTheSuperCellBor
   EXPECT_EQ(objects.size(), 2u);
 }
 
-TEST(HierarchicalGridFig4, AnIncompleteOrOneSidedLineDoesNotSplit) {
-  // One dense sub-cell in the strip: the line is broken, the cars stay connected.
+TEST(HierarchicalGridFig4, OneEmptySubCellAcrossTheLineOfSightSeparatesADenseOneJoins) {
+  // B reaches column 9: a single near-empty column across the line of sight still separates.
   std::vector<std::string> art = kTwoCars;
-  art[3][8] = 'A';
-  const LabeledCloud cloud = fromAsciiArt(art, {{'A', 1.5f}, {'B', 1.4f}});
-  EXPECT_EQ(run(cloud, asciiParams(true)).size(), 1u);
-  // A one sub-cell wide line (B reaches column 9) is not a separating strip.
-  art = kTwoCars;
   for (std::string& row : art) row[9] = 'B';
-  const LabeledCloud cloud2 = fromAsciiArt(art, {{'A', 1.5f}, {'B', 1.4f}});
-  EXPECT_EQ(run(cloud2, asciiParams(true)).size(), 1u);
+  EXPECT_EQ(partitionOf(run(acrossArt(art, {{'A', 1.5f}, {'B', 1.4f}}), asciiParams(true))),
+            truthPartition(acrossArt(art, {{'A', 1.5f}, {'B', 1.4f}})));
+  // One dense sub-cell in that column (row 3) touches both: the line is broken, one object.
+  art[3][8] = 'A';
+  EXPECT_EQ(run(acrossArt(art, {{'A', 1.5f}, {'B', 1.4f}}), asciiParams(true)).size(), 1u);
+  // Two near-empty points in the strip do not connect them, and join the nearer car.
+  art = kTwoCars;
+  art[2][8] = 'a';
+  art[2][9] = 'b';
+  const LabeledCloud cloud = acrossArt(art, {{'A', 1.5f}, {'B', 1.4f}});
+  EXPECT_EQ(partitionOf(run(cloud, asciiParams(true))), truthPartition(cloud));
 }
 
 TEST(HierarchicalGridFig4, PedestrianBesideACarIsSplitOnTheSuperCellBorder) {
   // Fig. 4b: car C (1.5 m) in super-cells 0-2, pedestrian P (1.8 m, psi = 0.3 m: linked) in
   // super-cell 3. Columns 8 and 9 are near-empty: one stray return of the car (lower-case
   // 'c'), which joins the car's object.
-  const std::vector<std::string> art = {"CCCCCCCCc.....",
-                                         "CCCCCCCC......",
-                                         "CCCCCCCC..PP..",
-                                         "CCCCCCCC..PP..",
-                                         "CCCCCCCC......",
-                                         "CCCCCCCC......"};
-  const LabeledCloud cloud = fromAsciiArt(art, {{'C', 1.5f}, {'P', 1.8f}});
+  const std::vector<std::string> art = {"CCCCCCCCc.....", "CCCCCCCC......", "CCCCCCCC..PP..",
+                                        "CCCCCCCC..PP..", "CCCCCCCC......", "CCCCCCCC......"};
+  const LabeledCloud cloud = acrossArt(art, {{'C', 1.5f}, {'P', 1.8f}});
   core::HierarchicalGridStats stats;
   EXPECT_EQ(run(cloud, asciiParams(false), &stats).size(), 1u);
   const auto objects = run(cloud, asciiParams(true));
@@ -100,32 +105,105 @@ TEST(HierarchicalGridFig4, PedestrianBesideACarIsSplitOnTheSuperCellBorder) {
   EXPECT_EQ(objects.size(), 2u);
 }
 
-TEST(HierarchicalGridFig4, SuperCellStraddlingTwoObjectsIsSplitThroughItsCentre) {
-  // Fig. 4c: super-cells in columns 3-5 hold the end of A and the start of B; their centre
-  // sub-column (4) is the separating line. No border strip exists anywhere.
-  const std::vector<std::string> art = {"AAAA.BBBB",
-                                         "AAAA.BBBB",
-                                         "AAAA.BBBB",
-                                         "AAAA.BBBB",
-                                         "AAAA.BBBB",
-                                         "AAAA.BBBB"};
-  const LabeledCloud cloud = fromAsciiArt(art, {{'A', 1.2f}, {'B', 1.3f}});
-  EXPECT_EQ(run(cloud, asciiParams(false)).size(), 1u);
+TEST(HierarchicalGridFig4, SuperCellStraddlingTwoObjectsIsSplitWhereverTheLineRuns) {
+  // Fig. 4c: one near-empty column of sub-cells between A and B runs through a super-cell
+  // (its centre column, or either border column); the super-cell's sub-cells go to the
+  // object on their side.
+  for (int gap = 1; gap <= 7; ++gap) {
+    std::string row(9, 'B');
+    for (int c = 0; c < gap; ++c) row[c] = 'A';
+    row[gap] = '.';
+    const std::vector<std::string> art(6, row);
+    const LabeledCloud cloud = acrossArt(art, {{'A', 1.2f}, {'B', 1.3f}});
+    core::HierarchicalGridStats stats;
+    EXPECT_EQ(run(cloud, asciiParams(false), &stats).size(), 1u) << row;
+    EXPECT_EQ(stats.coarse_blobs, 1u);
+    EXPECT_EQ(partitionOf(run(cloud, asciiParams(true))), truthPartition(cloud)) << row;
+  }
+}
+
+// ------------------------------------------------------------------------------------------
+// Radial bridges (step 3): holes along the line of sight are sampling holes.
+
+// Art with rows along the line of sight: the sensor looks along +x through it (columns), so
+// a gap between columns is a gap along the line of sight; y0 centres the rows on the x axis.
+LabeledCloud alongArt(const std::vector<std::string>& art, float x0) {
+  return fromAsciiArt(art, {{'A', 1.0f}, {'B', 1.1f}}, x0, -0.6f);
+}
+
+TEST(HierarchicalGridBridges, HolesAlongTheLineOfSightAreBridgedUpToTheReach) {
   core::HierarchicalGridStats stats;
-  const auto objects = run(cloud, asciiParams(true), &stats);
-  EXPECT_EQ(partitionOf(objects), truthPartition(cloud));
-  EXPECT_EQ(stats.split_cells, 2u);
-  // Shifted by one column the line is a border column of one side only: no split.
-  std::vector<std::string> shifted = art;
-  for (std::string& row : shifted) row = "AAAAA.BBB";
-  const LabeledCloud cloud2 = fromAsciiArt(shifted, {{'A', 1.2f}, {'B', 1.3f}});
-  EXPECT_EQ(run(cloud2, asciiParams(true)).size(), 1u);
+  // Near (x from 6 m): one near-empty sub-cell is bridged, two are not.
+  const std::vector<std::string> one(6, "AAA.BBB"), two(6, "AAA..BBB"), four(6, "AAA....BBB");
+  auto near_one = run(alongArt(one, 6.0f), asciiParams(true), &stats);
+  EXPECT_EQ(near_one.size(), 1u);
+  EXPECT_GT(stats.bridges, 0u);
+  EXPECT_EQ(partitionOf(run(alongArt(two, 6.0f), asciiParams(true))),
+            truthPartition(alongArt(two, 6.0f)));
+  // Without bridges the one-sub-cell hole separates, as it does across the line of sight.
+  HierarchicalGridDetectorParams no_bridge = asciiParams(true);
+  no_bridge.radial_bridge_subcells = 0;
+  EXPECT_EQ(run(alongArt(one, 6.0f), no_bridge).size(), 2u);
+  // Far (x from 30 m, beyond bridge_range_m): up to three are bridged, four are not.
+  const std::vector<std::string> three(6, "AAA...BBB");
+  EXPECT_EQ(run(alongArt(three, 30.0f), asciiParams(true)).size(), 1u);
+  EXPECT_EQ(run(alongArt(three, 6.0f), asciiParams(true)).size(), 2u) << "near: too wide";
+  EXPECT_EQ(partitionOf(run(alongArt(four, 30.0f), asciiParams(true))),
+            truthPartition(alongArt(four, 30.0f)));
+  // The coarse level still decides: a bridge never joins super-cells psi apart.
+  const LabeledCloud high = fromAsciiArt(one, {{'A', 1.0f}, {'B', 2.5f}}, 6.0f, -0.6f);
+  EXPECT_EQ(run(high, asciiParams(true)).size(), 2u);
+}
+
+TEST(HierarchicalGridBridges, ObjectsOneSubCellApartAcrossTheLineOfSightStaySeparateFarAway) {
+  // At 30 m, where three sub-cells are bridged along the line of sight, a single near-empty
+  // column across it still separates two objects; beyond gap_bridge_range_m (35 m) it is a
+  // sampling hole and is bridged, two columns are not.
+  const std::vector<std::string> art(6, "AAAA.BBBB"), two(6, "AAAA..BBBB");
+  const std::map<char, float> h = {{'A', 1.0f}, {'B', 1.1f}};
+  const LabeledCloud at30 = fromAsciiArt(art, h, -0.6f, 30.0f);
+  EXPECT_EQ(partitionOf(run(at30, asciiParams(true))), truthPartition(at30));
+  EXPECT_EQ(run(fromAsciiArt(art, h, -0.6f, 40.2f), asciiParams(true)).size(), 1u);
+  const LabeledCloud two40 = fromAsciiArt(two, h, -0.6f, 40.2f);
+  EXPECT_EQ(partitionOf(run(two40, asciiParams(true))), truthPartition(two40));
+}
+
+TEST(HierarchicalGridBridges, FarSparseCarsStayOneObjectOnlyThanksToTheBridges) {
+  // LiDAR-like cars at 25-55 m, yaws in steps of 0.3 rad keeping every visible side at least
+  // 0.4 rad from grazing (as ASingleCarStaysOneObjectAtAnyYawAndRange): with the shipped
+  // bridges each car is one object; without them (no radial bridge, no far gap bridge) the
+  // scan-line holes of oblique faces shred at least a quarter of them.
+  HierarchicalGridDetectorParams none;
+  none.radial_bridge_subcells = 0;
+  none.far_radial_bridge_subcells = 0;
+  none.gap_bridge_range_m = 1000.0;
+  int cases = 0, shredded_without = 0;
+  for (const float range : {25.0f, 32.0f, 45.0f, 55.0f}) {
+    for (float yaw = 0.0f; yaw < 3.1f; yaw += 0.3f) {
+      const float rel = yaw + 0.3f;  // relative to the line of sight (azimuth -0.3 rad)
+      if (std::min(std::fabs(std::sin(rel)), std::fabs(std::cos(rel))) < std::sin(0.4f)) continue;
+      LabeledCloud cloud;
+      test::addLidarCar(&cloud, range * std::cos(-0.3f), range * std::sin(-0.3f), yaw, 1);
+      const auto with = run(cloud, HierarchicalGridDetectorParams());
+      ++cases;
+      ASSERT_FALSE(with.empty()) << "range " << range << " yaw " << yaw;
+      std::size_t largest = 0;
+      for (const auto& o : with) largest = std::max(largest, o.indices.size());
+      EXPECT_GE(largest, cloud.size() * 9 / 10) << "range " << range << " yaw " << yaw;
+      std::size_t largest_without = 0;
+      for (const auto& o : run(cloud, none)) {
+        largest_without = std::max(largest_without, o.indices.size());
+      }
+      shredded_without += largest_without < cloud.size() * 9 / 10;
+    }
+  }
+  EXPECT_GE(shredded_without * 4, cases) << shredded_without << " of " << cases;
 }
 
 TEST(HierarchicalGridCoarse, NeighboursWithDifferentZmaxAreNotMerged) {
-  // No gap at all, but the super-cells of L (0.4 m) and T (1.6 m) differ by psi = 1.2 m > 0.8.
+  // No gap at all, but the super-cells of L (0.4 m) and T (1.8 m) differ by psi = 1.4 m > 1.2.
   const std::vector<std::string> art = {"LLLTTT", "LLLTTT", "LLLTTT"};
-  const LabeledCloud cloud = fromAsciiArt(art, {{'L', 0.4f}, {'T', 1.6f}});
+  const LabeledCloud cloud = fromAsciiArt(art, {{'L', 0.4f}, {'T', 1.8f}});
   core::HierarchicalGridStats stats;
   const auto objects = run(cloud, asciiParams(false), &stats);
   EXPECT_EQ(stats.coarse_blobs, 2u);
@@ -263,8 +341,7 @@ TEST(HierarchicalGridWeights, FarSparseCarSurvivesOnlyThanksToTheDistanceWeight)
   p.weight.enabled = false;
   const auto without = run(cloud, p, &without_stats);
   // Unweighted, the sub-cells are near-empty: the car is dropped as noise or shredded.
-  EXPECT_TRUE(without.empty() || without.size() > 1 ||
-              without[0].indices.size() < cloud.size() / 2)
+  EXPECT_TRUE(without.empty() || without.size() > 1 || without[0].indices.size() < cloud.size() / 2)
       << without.size() << " objects";
   EXPECT_LT(without_stats.dense_occupied, with_stats.dense_occupied / 2);
 }
@@ -314,7 +391,7 @@ TEST(HierarchicalGridInput, EmptyAndOnePoint) {
   LabeledCloud one;
   test::addPoint(&one, 5.0f, 5.0f, -1.0f, 1);
   det.detect(one, &objects);
-  EXPECT_TRUE(objects.empty());  // min_points = 5
+  EXPECT_TRUE(objects.empty());  // min_points = 10
   HierarchicalGridDetectorParams p;
   p.min_points = 1;
   p.dense_min_weighted_points = 1.0;
@@ -332,7 +409,10 @@ TEST(HierarchicalGridInput, NonFiniteAndHugePointsAreIgnored) {
   LabeledCloud dirty;
   const float bad[] = {std::numeric_limits<float>::quiet_NaN(),
                        std::numeric_limits<float>::infinity(),
-                       -std::numeric_limits<float>::infinity(), 1e30f, -1e30f, 3e38f};
+                       -std::numeric_limits<float>::infinity(),
+                       1e30f,
+                       -1e30f,
+                       3e38f};
   std::size_t k = 0;
   for (const LabeledPoint& p : clean.points) {
     dirty.push_back(p);  // keeps its index

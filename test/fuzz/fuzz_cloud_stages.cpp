@@ -94,8 +94,10 @@ Stages& stages(int variant) {
         s.hough.theta_resolution_deg = 45.0;
         h.grid_half_extent_m = 1.0;
         h.psi_max_m = 0.0;
-        h.min_gap_subcells = 1;
-        h.max_split_range_m = 0.0;
+        h.radial_bridge_subcells = 8;
+        h.far_radial_bridge_subcells = 0;
+        h.bridge_range_m = 0.0;
+        h.gap_bridge_range_m = 0.0;
         h.dense_min_weighted_points = 0.0;
         k.cluster_tolerance_m = 0.01;
         k.max_abs_coordinate_m = 1e5;

@@ -152,9 +152,10 @@ TEST(DetectionConfig, YamlMirrorsTheParamsStructs) {
   EXPECT_DOUBLE_EQ(g["grid_half_extent_m"].as<double>(), h.grid_half_extent_m);
   EXPECT_DOUBLE_EQ(g["max_abs_z_m"].as<double>(), h.max_abs_z_m);
   EXPECT_DOUBLE_EQ(g["psi_max_m"].as<double>(), h.psi_max_m);
-  EXPECT_DOUBLE_EQ(g["min_split_height_span_m"].as<double>(), h.min_split_height_span_m);
-  EXPECT_DOUBLE_EQ(g["max_split_range_m"].as<double>(), h.max_split_range_m);
-  EXPECT_EQ(g["min_gap_subcells"].as<int>(), h.min_gap_subcells);
+  EXPECT_EQ(g["radial_bridge_subcells"].as<int>(), h.radial_bridge_subcells);
+  EXPECT_EQ(g["far_radial_bridge_subcells"].as<int>(), h.far_radial_bridge_subcells);
+  EXPECT_DOUBLE_EQ(g["bridge_range_m"].as<double>(), h.bridge_range_m);
+  EXPECT_DOUBLE_EQ(g["gap_bridge_range_m"].as<double>(), h.gap_bridge_range_m);
   EXPECT_DOUBLE_EQ(g["dense_min_weighted_points"].as<double>(), h.dense_min_weighted_points);
   EXPECT_EQ(g["dense_refinement"].as<bool>(), h.dense_refinement);
   EXPECT_EQ(g["min_points"].as<int>(), h.min_points);

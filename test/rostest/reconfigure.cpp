@@ -144,7 +144,7 @@ TEST(Reconfigure, HierarchicalGridMinPointsAppliesFromTheNextRevolution) {
   pub.publish(twoClusters(2));
   ASSERT_TRUE(waitFor([&] { return received() == 2; }, 5.0));
   std::lock_guard<std::mutex> lock(mutex);
-  EXPECT_EQ(counts[0], 1u) << "min_points 5 (detection.yaml default): the 4-point cluster is dropped";
+  EXPECT_EQ(counts[0], 1u) << "min_points 10 (the default): the 4-point cluster is dropped";
   EXPECT_EQ(counts[1], 2u) << "min_points 3: both clusters";
 }
 

@@ -7,6 +7,7 @@
 
 #include "urban_detection/core/hierarchical_grid_detector.h"
 #include "urban_detection/core/kdtree_detector.h"
+#include "urban_detection/core/object_filter.h"
 #include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {
@@ -20,6 +21,9 @@ void loadHierarchicalGridParams(const ros::NodeHandle& nh,
 
 /// Same for the kd-tree baseline.
 void loadKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorParams* params);
+
+/// Same for the object filter run after either detector (`object_filter:` section).
+void loadObjectFilterParams(const ros::NodeHandle& nh, core::ObjectFilterParams* params);
 
 }  // namespace ros_conv
 }  // namespace urban_detection
