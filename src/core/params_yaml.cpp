@@ -162,7 +162,36 @@ bool applyDetection(const YAML::Node& root, const std::string& where,
   return true;
 }
 
+bool applyObjectFilter(const YAML::Node& node, const std::string& where, ObjectFilterParams* p,
+                       std::string* error) {
+  FieldTable t;
+  t.bind("enabled", &p->enabled);
+  t.bind("min_points", &p->min_points);
+  t.bind("max_range_m", &p->max_range_m);
+  t.bind("row_gap_deg", &p->row_gap_deg);
+  t.bind("max_azimuth_gap_deg", &p->max_azimuth_gap_deg);
+  t.bind("jump_m", &p->jump_m);
+  t.bind("min_triplets", &p->min_triplets);
+  t.bind("max_jump_fraction", &p->max_jump_fraction);
+  t.bind("hedge_min_intensity", &p->hedge_min_intensity);
+  t.bind("hedge_min_length_m", &p->hedge_min_length_m);
+  return t.apply(node, where, error);
+}
+
 }  // namespace
+
+bool loadObjectFilterParamsYaml(const std::string& path, ObjectFilterParams* params,
+                                std::string* error) {
+  YAML::Node root;
+  if (!loadRoot(path, "", &root, error)) return false;
+  std::string where = path + ": ";
+  if (root.IsMap() && root["detection"]) {
+    root = root["detection"];
+    where += "detection/";
+  }
+  if (!root.IsMap() || !root["object_filter"]) return true;
+  return applyObjectFilter(root["object_filter"], where + "object_filter/", params, error);
+}
 
 bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& section,
                                  GridSegmenterParams* p, std::string* error) {
@@ -203,7 +232,7 @@ bool loadPipelineParamsYaml(const std::string& path, GridSegmenterParams* segmen
     return !root["detection"] ||
            applyDetection(root["detection"], where + "detection/", hierarchical, kdtree, error);
   }
-  if (root["hierarchical_grid"] || root["kdtree"]) {
+  if (root["hierarchical_grid"] || root["kdtree"] || root["object_filter"]) {
     return applyDetection(root, where, hierarchical, kdtree, error);
   }
   return !segmentation || applySegmentation(root, where, segmentation, error);

@@ -92,8 +92,38 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
     }
     return static_cast<std::int32_t>(fr) * side + static_cast<std::int32_t>(fc);
   };
+  // One point of pass 2 (cc holds the cell indices of the current chunk).
+  std::size_t chunk_begin = 0;
+  auto step = [&](std::size_t j) {
+    const std::int32_t c = cc[j - chunk_begin];
+    if (c == kNoCell) {
+      ps[j] = 0;
+      return;
+    }
+    const float z = pz[j];
+    if (c == run_cell) {
+      ++run_count;
+      run_min = std::min(run_min, z);
+      run_max = std::max(run_max, z);
+      run_sum += z;
+    } else {
+      flush();
+      run_cell = c;
+      run_slot = slot_of[c];
+      if (run_slot < 0) {
+        run_slot = static_cast<std::int32_t>(occupied_.size());
+        slot_of[c] = run_slot;
+        occupied_.push_back(c);
+        occupied_cells_.emplace_back();
+      }
+      run_count = 1;
+      run_min = run_max = run_sum = z;
+    }
+    ps[j] = run_slot + 1;
+  };
   for (std::size_t begin = 0; begin < n; begin += kChunk) {
     const std::size_t end = std::min(n, begin + kChunk);
+    chunk_begin = begin;
     std::size_t i = begin;
 #if defined(__SSE2__)
     const __m128 org4 = _mm_set1_ps(org), inv4 = _mm_set1_ps(inv), side4 = _mm_set1_ps(side_f);
@@ -125,33 +155,34 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
     }
 #endif
     for (; i < end; ++i) cc[i - begin] = cellOf(pts[i], &pz[i]);
-    for (std::size_t j = begin; j < end; ++j) {
-      const std::int32_t c = cc[j - begin];
-      if (c == kNoCell) {
-        ps[j] = 0;
+    std::size_t j = begin;
+#if defined(__SSE2__)
+    // Four points at a time while they all continue the current run (near the sensor runs
+    // are tens of points long): min and max over the four, the sum still point by point.
+    // Valid heights are finite, so the order of min / max does not matter.
+    for (; j + 4 <= end; j += 4) {
+      const __m128i c4 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(cc + (j - begin)));
+      if (run_cell == kNoCell ||
+          _mm_movemask_epi8(_mm_cmpeq_epi32(c4, _mm_set1_epi32(run_cell))) != 0xFFFF) {
+        for (std::size_t k = j; k < j + 4; ++k) step(k);
         continue;
       }
-      const float z = pz[j];
-      if (c == run_cell) {
-        ++run_count;
-        run_min = std::min(run_min, z);
-        run_max = std::max(run_max, z);
-        run_sum += z;
-      } else {
-        flush();
-        run_cell = c;
-        run_slot = slot_of[c];
-        if (run_slot < 0) {
-          run_slot = static_cast<std::int32_t>(occupied_.size());
-          slot_of[c] = run_slot;
-          occupied_.push_back(c);
-          occupied_cells_.emplace_back();
-        }
-        run_count = 1;
-        run_min = run_max = run_sum = z;
-      }
-      ps[j] = run_slot + 1;
+      const __m128 z4 = _mm_loadu_ps(pz + j);
+      __m128 lo = _mm_min_ps(z4, _mm_shuffle_ps(z4, z4, _MM_SHUFFLE(1, 0, 3, 2)));
+      __m128 hi = _mm_max_ps(z4, _mm_shuffle_ps(z4, z4, _MM_SHUFFLE(1, 0, 3, 2)));
+      lo = _mm_min_ps(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(2, 3, 0, 1)));
+      hi = _mm_max_ps(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(2, 3, 0, 1)));
+      run_min = std::min(run_min, _mm_cvtss_f32(lo));
+      run_max = std::max(run_max, _mm_cvtss_f32(hi));
+      run_sum += pz[j];
+      run_sum += pz[j + 1];
+      run_sum += pz[j + 2];
+      run_sum += pz[j + 3];
+      run_count += 4;
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(ps + j), _mm_set1_epi32(run_slot + 1));
     }
+#endif
+    for (; j < end; ++j) step(j);
   }
   flush();
 }

@@ -80,5 +80,19 @@ std::string checkKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorPar
   return error.empty() ? core::validate(p) : error;
 }
 
+void loadObjectFilterParams(const ros::NodeHandle& nh, core::ObjectFilterParams* p) {
+  loadParam(nh, "enabled", &p->enabled);
+  loadParam(nh, "min_points", &p->min_points, 3, 1000000);
+  loadParam(nh, "max_range_m", &p->max_range_m, 0.001, 1000.0, "m");
+  loadParam(nh, "row_gap_deg", &p->row_gap_deg, 0.001, 5.0, "deg");
+  loadParam(nh, "max_azimuth_gap_deg", &p->max_azimuth_gap_deg, 0.001, 10.0, "deg");
+  loadParam(nh, "jump_m", &p->jump_m, 0.001, 10.0, "m");
+  loadParam(nh, "min_triplets", &p->min_triplets, 1, 1000000);
+  loadParam(nh, "max_jump_fraction", &p->max_jump_fraction, 0.0, 1.0);
+  loadParam(nh, "hedge_min_intensity", &p->hedge_min_intensity, 0.0, 1e6);
+  loadParam(nh, "hedge_min_length_m", &p->hedge_min_length_m, 0.0, 100.0, "m");
+  throwIfInvalid(nh, core::validate(*p));
+}
+
 }  // namespace ros_conv
 }  // namespace urban_detection

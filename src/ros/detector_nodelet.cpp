@@ -5,6 +5,7 @@
 #include <pcl_ros/point_cloud.h>
 
 #include "urban_detection/DetectedObjectArray.h"
+#include "urban_detection/ros/detection_params.h"
 #include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/param_loading.h"
 
@@ -15,6 +16,10 @@ void DetectorNodelet::onInit() {
   try {
     loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     detector_ = createDetector(getPrivateNodeHandle());
+    core::ObjectFilterParams filter_params;
+    ros_conv::loadObjectFilterParams(ros::NodeHandle(getPrivateNodeHandle(), "object_filter"),
+                                     &filter_params);
+    filter_ = std::make_unique<core::ObjectFilter>(filter_params);
   } catch (const std::exception& e) {
     NODELET_FATAL("%s: %s; the nodelet stays idle", getName().c_str(), e.what());
     return;
@@ -54,6 +59,9 @@ void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& 
   diagnostics_->input(foreground->header.seq);
   std::lock_guard<std::mutex> lock(detector_mutex_);  // one parameter set per revolution
   detector_->detect(*foreground, &objects_);
+  const core::ObjectFilterStats filtered = filter_->apply(*foreground, &objects_);
+  diagnostics_->count("rejected objects (porous)", filtered.porous, false);
+  diagnostics_->count("rejected objects (bright hedge)", filtered.bright_hedge, false);
   std_msgs::Header header;
   pcl_conversions::fromPCL(foreground->header, header);
   if (objects_pub_.getNumSubscribers() > 0) {

@@ -12,7 +12,8 @@
 // packets is its "packet_decode" stage.
 //
 // "pipeline" = packet_decode (pcap input only) + segmentation (Hough refinement included) +
-// foreground_extraction + hierarchical_detection, i.e. packets -> objects on a pcap (the
+// foreground_extraction + hierarchical_detection + object_filter (when enabled in the
+// config's object_filter section), i.e. packets -> objects on a pcap (the
 // simulated drive of scripts/run bench) and cloud -> objects on PCD / .bin sweeps (KITTI raw
 // comes as motion-compensated clouds, not packets); the JSON says which
 // (pipeline_includes_packet_decode). markers, kdtree_detection and the standalone
@@ -42,6 +43,7 @@
 #include "urban_detection/core/hough_wall_refiner.h"
 #include "urban_detection/core/kdtree_detector.h"
 #include "urban_detection/core/kitti_io.h"
+#include "urban_detection/core/object_filter.h"
 #include "urban_detection/core/params_yaml.h"
 #include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/object_markers.h"
@@ -272,9 +274,11 @@ int main(int argc, char** argv) {
   core::GridSegmenterParams seg_params;
   core::HierarchicalGridDetectorParams hier_params;
   core::KdTreeDetectorParams kd_params;
+  core::ObjectFilterParams filter_params;
   for (const std::string& c : configs) {
     std::string err;
-    if (!core::loadPipelineParamsYaml(c, &seg_params, &hier_params, &kd_params, &err)) {
+    if (!core::loadPipelineParamsYaml(c, &seg_params, &hier_params, &kd_params, &err) ||
+        !core::loadObjectFilterParamsYaml(c, &filter_params, &err)) {
       std::fprintf(stderr, "error: %s\n", err.c_str());
       return 2;
     }
@@ -313,7 +317,9 @@ int main(int argc, char** argv) {
   std::unique_ptr<core::GridSegmenter> segmenter, segmenter_no_hough;
   std::unique_ptr<core::HierarchicalGridDetector> hier;
   std::unique_ptr<core::KdTreeDetector> kdtree;
+  std::unique_ptr<core::ObjectFilter> object_filter;
   try {
+    object_filter.reset(new core::ObjectFilter(filter_params));
     segmenter.reset(new core::GridSegmenter(seg_params));
     core::GridSegmenterParams no_hough = seg_params;
     no_hough.hough.enabled = false;
@@ -328,7 +334,7 @@ int main(int argc, char** argv) {
 
   std::map<std::string, std::vector<double>> stage, cpu_stage;  // wall and thread-CPU ms
   std::vector<double> pipeline, pipeline_cpu;
-  double points_sum = 0, fg_sum = 0, hier_obj_sum = 0, kd_obj_sum = 0;
+  double points_sum = 0, fg_sum = 0, hier_obj_sum = 0, kd_obj_sum = 0, rejected_sum = 0;
   CloudXYZIRT cloud;
   std::vector<core::SegmentClass> labels, labels_no_hough;
   urban_detection::LabeledCloud foreground;
@@ -366,6 +372,12 @@ int main(int argc, char** argv) {
         StageTimer hier_t;
         hier->detect(foreground, &objects);
         hier_t.stop("hierarchical_detection", &stage, &cpu_stage, &total, &total_cpu);
+        if (filter_params.enabled) {
+          StageTimer filter_t;
+          const core::ObjectFilterStats fs = object_filter->apply(foreground, &objects);
+          filter_t.stop("object_filter", &stage, &cpu_stage, &total, &total_cpu);
+          rejected_sum += fs.vegetation;
+        }
         hier_obj_sum += objects.size();
         pipeline.push_back(total);
         pipeline_cpu.push_back(total_cpu);
@@ -385,6 +397,7 @@ int main(int argc, char** argv) {
         StageTimer kd_t;
         kdtree->detect(foreground, &objects);
         kd_t.stop("kdtree_detection", &stage, &cpu_stage);
+        object_filter->apply(foreground, &objects);  // same output as the kd-tree nodelet
         kd_obj_sum += objects.size();
 
         segmenter_no_hough->segment(cloud, &labels_no_hough);
@@ -423,7 +436,8 @@ int main(int argc, char** argv) {
                          median(stage["hierarchical_detection"]);
 
   const char* order[] = {"packet_decode", "segmentation", "hough_refinement",
-                         "foreground_extraction", "hierarchical_detection", "markers",
+                         "foreground_extraction", "hierarchical_detection", "object_filter",
+                         "markers",
                          "kdtree_detection"};
   std::printf("%s: %zu revolutions (%ld pass%s over", label.c_str(), frames, repeat,
               repeat > 1 ? "es" : "");
@@ -446,6 +460,8 @@ int main(int argc, char** argv) {
   std::printf("  %-24s %10.3f %10.3f %14.3f  (%s-> hierarchical objects)\n", "pipeline",
               pipeline_median, percentile(pipeline, 0.95), median(pipeline_cpu),
               any_packets ? "packets " : "cloud ");
+  std::printf("  object_filter %s: %.1f hierarchical objects rejected per revolution\n",
+              filter_params.enabled ? "on" : "off", rejected_sum / frames);
   std::printf("  pipeline_fps %.1f (cpu-time fps %.1f)   hier_vs_kdtree_speedup %.1fx   "
               "peak_rss %.1f MB\n", pipeline_fps, pipeline_cpu_fps, speedup, peak_mb);
 
@@ -461,6 +477,8 @@ int main(int argc, char** argv) {
         << ",\n  \"mean_foreground_points\": " << num(fg_sum / frames)
         << ",\n  \"mean_objects_hierarchical\": " << num(hier_obj_sum / frames)
         << ",\n  \"mean_objects_kdtree\": " << num(kd_obj_sum / frames)
+        << ",\n  \"object_filter\": " << (filter_params.enabled ? "true" : "false")
+        << ",\n  \"mean_rejected_objects_hierarchical\": " << num(rejected_sum / frames)
         << ",\n  \"pipeline_includes_packet_decode\": " << (any_packets ? "true" : "false")
         << ",\n  \"stages\": {";
     bool first = true;

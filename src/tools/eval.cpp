@@ -27,6 +27,7 @@
 #include "urban_detection/core/kdtree_detector.h"
 #include "urban_detection/core/kitti_io.h"
 #include "urban_detection/core/object_class.h"
+#include "urban_detection/core/object_filter.h"
 #include "urban_detection/core/params_yaml.h"
 #include "urban_detection/ros/segmentation_params.h"
 
@@ -345,6 +346,26 @@ void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::Segment
   }
 }
 
+// The dataset class most of a detection's points carry ("part_of_<label>" for GT points).
+std::string detectionContent(const Frame& f, const Dataset& ds, const core::DetectedObject& d) {
+  const std::size_t n = f.cloud.size();
+  std::map<std::string, std::size_t> content;
+  for (std::uint32_t i : d.indices) {
+    if (i >= n) continue;
+    const std::int32_t og = f.gt.object_of_point[i];
+    content[og >= 0 ? "part_of_" + f.gt.objects[og].label : ds.className(f.point_class[i])]++;
+  }
+  std::string what = "?";
+  std::size_t most = 0;
+  for (const auto& kv : content) {
+    if (kv.second > most) {
+      most = kv.second;
+      what = kv.first;
+    }
+  }
+  return what;
+}
+
 // ------------------------------------------------------------------------------------------
 // Debug pictures (--png DIR): top view of one frame, ground truth left, detections right.
 
@@ -484,6 +505,7 @@ void usage() {
       "                             [--cut-angle DEG])\n"
       "         [--detector hierarchical|kdtree|both] [--config FILE]... [--json FILE]\n"
       "         [--max-frames N] [--min-gt-points N] [--details]\n"
+      "         [--object-filter on|off] [--features CSV]\n"
       "  --sim GTFILE    ground-truth file of urban_detection_simulate (--gt), with the pcap it\n"
       "                  wrote (--pcap); --calibration is the one the drive was simulated with\n"
       "                  (default: nominal HDL-64E S2), --cut-angle the revolution cut [deg]\n"
@@ -491,6 +513,10 @@ void usage() {
       "                  keys), or a combined file with `segmentation:` / `detection:` maps;\n"
       "                  later files override earlier ones. Without it the in-class defaults\n"
       "                  (mirrored by config/*.yaml) are used.\n"
+      "  --object-filter on|off  the vegetation rejection stage after the detector (default:\n"
+      "                  object_filter/enabled of the config, else on)\n"
+      "  --features CSV  write the object filter's features of every detection (before the\n"
+      "                  filter) with its verdict and content, to measure their separation\n"
       "  --details       print every missed object and false detection with its cause\n"
       "  --png DIR       write a top view per frame (first detector): ground truth left,\n"
       "                  detections right; yellow boxes missed objects, red false detections\n"
@@ -507,7 +533,7 @@ int main(int argc, char** argv) {
   long max_frames = -1;
   long min_gt_points = 10;
   bool details = false;
-  std::string png_dir;
+  std::string png_dir, features_path, filter_arg;
   PngView png_view;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -534,6 +560,8 @@ int main(int argc, char** argv) {
     else if (a == "--max-frames") max_frames = integer("--max-frames");
     else if (a == "--min-gt-points") min_gt_points = integer("--min-gt-points");
     else if (a == "--details") details = true;
+    else if (a == "--object-filter") filter_arg = value("--object-filter");
+    else if (a == "--features") features_path = value("--features");
     else if (a == "--png") png_dir = value("--png");
     else if (a == "--png-view") {
       const std::string v = value("--png-view");
@@ -572,12 +600,41 @@ int main(int argc, char** argv) {
   core::GridSegmenterParams seg_params;
   core::HierarchicalGridDetectorParams hier_params;
   core::KdTreeDetectorParams kd_params;
+  core::ObjectFilterParams filter_params;
   for (const std::string& c : configs) {
     std::string err;
     if (!core::loadPipelineParamsYaml(c, &seg_params, &hier_params, &kd_params, &err)) {
       std::fprintf(stderr, "error: %s\n", err.c_str());
       return 2;
     }
+    if (!core::loadObjectFilterParamsYaml(c, &filter_params, &err)) {
+      std::fprintf(stderr, "error: %s\n", err.c_str());
+      return 2;
+    }
+  }
+  if (filter_arg == "on" || filter_arg == "off") {
+    filter_params.enabled = filter_arg == "on";
+  } else if (!filter_arg.empty()) {
+    std::fprintf(stderr, "error: --object-filter must be on or off\n");
+    return 2;
+  }
+  std::unique_ptr<core::ObjectFilter> object_filter;
+  try {
+    object_filter.reset(new core::ObjectFilter(filter_params));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: invalid object filter parameters: %s\n", e.what());
+    return 2;
+  }
+  std::FILE* features_out = nullptr;
+  if (!features_path.empty()) {
+    features_out = std::fopen(features_path.c_str(), "w");
+    if (!features_out) {
+      std::fprintf(stderr, "error: cannot write %s\n", features_path.c_str());
+      return 1;
+    }
+    std::fprintf(features_out,
+                 "dataset,frame,detector,verdict,content,points,range_m,length_m,width_m,"
+                 "height_m,triplets,jumps,jump_fraction,mean_intensity,std_intensity\n");
   }
 
   std::vector<std::unique_ptr<core::ObjectDetector>> detectors;
@@ -632,6 +689,9 @@ int main(int argc, char** argv) {
 
   std::vector<core::DetectionEvaluator> evaluators(detectors.size());
   std::vector<Diagnostics> diags(detectors.size());
+  std::vector<core::DetectionEvaluator> unfiltered(detectors.size());  // --features verdicts
+  std::vector<std::map<std::string, std::size_t>> rejected_by_content(detectors.size());
+  std::vector<core::DetectedObject> rejected;
   std::map<std::string, std::size_t> fg_composition;  // foreground points by dataset class
   std::ostringstream rows;
   bool first_row = true;
@@ -663,6 +723,22 @@ int main(int argc, char** argv) {
     }
     for (std::size_t k = 0; k < detectors.size(); ++k) {
       detectors[k]->detect(foreground, &objects);
+      if (features_out) {
+        unfiltered[k].evaluate(f.gt, objects, &match);
+        object_filter->indexForeground(foreground);
+        for (std::size_t d = 0; d < objects.size(); ++d) {
+          const core::DetectedObject& o = objects[d];
+          const core::ObjectFeatures ft = object_filter->features(foreground, o);
+          std::fprintf(features_out, "%s,%s,%s,%s,%s,%zu,%.2f,%.2f,%.2f,%.2f,%zu,%zu,%.4f,%.4f,%.4f\n",
+                       dataset->name().c_str(), f.id.c_str(), detectors[k]->name().c_str(),
+                       core::toString(match.verdict[d]), detectionContent(f, *dataset, o).c_str(),
+                       ft.points, std::hypot(o.centroid.x(), o.centroid.y()), o.obb_size.x(),
+                       o.obb_size.y(), ft.height_m, ft.triplets, ft.jumps, ft.jump_fraction,
+                       ft.mean_intensity, ft.std_intensity);
+        }
+      }
+      object_filter->apply(foreground, &objects, &rejected);
+      for (const auto& o : rejected) ++rejected_by_content[k][detectionContent(f, *dataset, o)];
       evaluators[k].evaluate(f.gt, objects, &match);
       diagnose(f, *dataset, seg, objects, match, detectors[k]->name(), &diags[k],
                details ? stdout : nullptr);
@@ -679,6 +755,7 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (features_out) std::fclose(features_out);
   if (frames == 0) {
     std::fprintf(stderr, "error: no frames found in %s\n", dataset_path.c_str());
     return 1;
@@ -696,6 +773,9 @@ int main(int argc, char** argv) {
     std::printf("%s: missed by cause %s; false by content %s\n", detectors[k]->name().c_str(),
                 countsJson(diags[k].missed_by_cause).c_str(),
                 countsJson(diags[k].false_by_class).c_str());
+    std::printf("%s: object filter %s, rejected by content %s\n", detectors[k]->name().c_str(),
+                filter_params.enabled ? "on" : "off",
+                countsJson(rejected_by_content[k]).c_str());
   }
 
   if (!json_path.empty()) {
@@ -723,7 +803,9 @@ int main(int argc, char** argv) {
       out << (k ? ",\n" : "\n") << "    \"" << detectors[k]->name() << "\": {"
           << scoreJson(evaluators[k].total())
           << ", \"missed_by_cause\": " << countsJson(diags[k].missed_by_cause)
-          << ", \"false_by_content\": " << countsJson(diags[k].false_by_class) << "}";
+          << ", \"false_by_content\": " << countsJson(diags[k].false_by_class)
+          << ", \"object_filter\": " << (filter_params.enabled ? "true" : "false")
+          << ", \"rejected_by_content\": " << countsJson(rejected_by_content[k]) << "}";
     }
     out << "\n  },\n  \"foreground_points_by_class\": " << countsJson(fg_composition) << "\n}\n";
     if (!out) {

@@ -9,6 +9,7 @@
 #include "urban_detection/core/grid_segmenter.h"
 #include "urban_detection/core/hierarchical_grid_detector.h"
 #include "urban_detection/core/kdtree_detector.h"
+#include "urban_detection/core/object_filter.h"
 
 namespace urban_detection {
 namespace core {
@@ -31,11 +32,17 @@ bool loadKdTreeParamsYaml(const std::string& path, KdTreeDetectorParams* params,
                           std::string* error);
 
 /// Loads any of the pipeline's config files, recognised by their top-level keys: a combined
-/// file (`segmentation:` and/or `detection:` maps), a detection.yaml (`hierarchical_grid:`
-/// and/or `kdtree:` maps) or otherwise a segmentation.yaml. Null pointers skip that part.
+/// file (`segmentation:` and/or `detection:` maps), a detection.yaml (`hierarchical_grid:`,
+/// `kdtree:` and/or `object_filter:` maps; the latter is read by loadObjectFilterParamsYaml)
+/// or otherwise a segmentation.yaml. Null pointers skip that part.
 bool loadPipelineParamsYaml(const std::string& path, GridSegmenterParams* segmentation,
                             HierarchicalGridDetectorParams* hierarchical,
                             KdTreeDetectorParams* kdtree, std::string* error);
+
+/// Overrides the fields of `params` from the `object_filter:` map of a detection.yaml style
+/// file (top level, or under `detection:` in a combined file). A file without it changes nothing.
+bool loadObjectFilterParamsYaml(const std::string& path, ObjectFilterParams* params,
+                                std::string* error);
 
 }  // namespace core
 }  // namespace urban_detection

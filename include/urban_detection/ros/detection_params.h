@@ -9,6 +9,7 @@
 
 #include "urban_detection/core/hierarchical_grid_detector.h"
 #include "urban_detection/core/kdtree_detector.h"
+#include "urban_detection/core/object_filter.h"
 #include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {
@@ -29,6 +30,9 @@ void loadKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorParams* par
 std::string checkHierarchicalGridParams(const ros::NodeHandle& nh,
                                         core::HierarchicalGridDetectorParams params);
 std::string checkKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorParams params);
+
+/// Same for the object filter run after either detector (`object_filter:` section).
+void loadObjectFilterParams(const ros::NodeHandle& nh, core::ObjectFilterParams* params);
 
 }  // namespace ros_conv
 }  // namespace urban_detection

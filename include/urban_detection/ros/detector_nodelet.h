@@ -5,7 +5,10 @@
 /// zero copy (fresh boost::shared_ptr per frame, never touched after publishing), input queue
 /// of ~queue_size revolutions (the newest win), StageDiagnostics on /diagnostics. A derived
 /// nodelet builds its core::ObjectDetector from its parameters and may serve
-/// dynamic_reconfigure, swapping in a new detector between two revolutions.
+/// dynamic_reconfigure, swapping in a new detector between two revolutions. After the detector,
+/// core::ObjectFilter (params ~object_filter/*, `enabled: false` switches it off) removes
+/// vegetation objects: they are not published, and counted on /diagnostics
+/// ("rejected objects (porous)", "rejected objects (bright hedge)").
 #pragma once
 
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
@@ -21,6 +24,7 @@
 #include <ros/ros.h>
 
 #include "urban_detection/core/object_detector.h"
+#include "urban_detection/core/object_filter.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
@@ -43,6 +47,7 @@ class DetectorNodelet : public nodelet::Nodelet {
 
   std::mutex detector_mutex_;  // detector_ between revolutions and reconfigure
   std::unique_ptr<core::ObjectDetector> detector_;
+  std::unique_ptr<core::ObjectFilter> filter_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   int queue_size_ = 2;
   std::vector<core::DetectedObject> objects_;  // reused between frames
