@@ -514,7 +514,7 @@ void usage() {
       "                  later files override earlier ones. Without it the in-class defaults\n"
       "                  (mirrored by config/*.yaml) are used.\n"
       "  --object-filter on|off  the vegetation rejection stage after the detector (default:\n"
-      "                  object_filter/enabled of the config, else on)\n"
+      "                  object_filter/enabled of the config, else off)\n"
       "  --features CSV  write the object filter's features of every detection (before the\n"
       "                  filter) with its verdict and content, to measure their separation\n"
       "  --details       print every missed object and false detection with its cause\n"

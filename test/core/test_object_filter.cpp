@@ -31,6 +31,13 @@ struct Scene {
   std::vector<core::DetectedObject> objects;
 };
 
+// The stage is off by default (config/detection.yaml explains why); these tests switch it on.
+core::ObjectFilterParams on() {
+  core::ObjectFilterParams p;
+  p.enabled = true;
+  return p;
+}
+
 }  // namespace
 
 TEST(ObjectFilter, RejectsPorousBushKeepsCarPedestrianPole) {
@@ -49,7 +56,7 @@ TEST(ObjectFilter, RejectsPorousBushKeepsCarPedestrianPole) {
     ASSERT_GE(s.objects[k].indices.size(), 60u) << "object " << k;
   }
 
-  core::ObjectFilter filter;
+  core::ObjectFilter filter(on());
   filter.indexForeground(s.fg);
   const core::ObjectFeatures car = filter.features(s.fg, s.objects[0]);
   const core::ObjectFeatures ped = filter.features(s.fg, s.objects[1]);
@@ -83,7 +90,7 @@ TEST(ObjectFilter, RenumbersIdsAndKeepsOrderWhenTheFirstObjectIsRejected) {
   s.objects.push_back(scan(box({8.0, 4.0, -1.6}, {12.2, 5.8, -0.3}), 15, 40, -14, 0, &s.fg));
   s.objects[0].id = 1;
   s.objects[1].id = 2;
-  core::ObjectFilter filter;
+  core::ObjectFilter filter(on());
   filter.apply(s.fg, &s.objects);
   ASSERT_EQ(s.objects.size(), 1u);
   EXPECT_EQ(s.objects[0].id, 1u);
@@ -94,7 +101,7 @@ TEST(ObjectFilter, CarBehindTheSensorAcrossTheAzimuthWrapIsKept) {
   Scene s;
   // Box straddling azimuth +-180 deg.
   s.objects.push_back(scan(box({-12.2, -1.0, -1.6}, {-8.0, 1.0, -0.3}), 170, 190, -14, 0, &s.fg));
-  core::ObjectFilter filter;
+  core::ObjectFilter filter(on());
   filter.indexForeground(s.fg);
   const core::ObjectFeatures f = filter.features(s.fg, s.objects[0]);
   EXPECT_GT(f.triplets, 100u);
@@ -110,7 +117,7 @@ TEST(ObjectFilter, SmallAndUnmeasurableObjectsAreKept) {
   s.objects.push_back(scan(bush({12.0, 0.0, -1.0}, 0.1, &rng), -2, 2, -8, -2, &s.fg));
   ASSERT_LT(s.objects[0].indices.size(), 30u);
   ASSERT_GT(s.objects[0].indices.size(), 3u);
-  core::ObjectFilter filter;
+  core::ObjectFilter filter(on());
   const core::ObjectFilterStats st = filter.apply(s.fg, &s.objects);
   EXPECT_EQ(s.objects.size(), 1u);
   EXPECT_EQ(st.not_judged, 1u);
@@ -118,7 +125,7 @@ TEST(ObjectFilter, SmallAndUnmeasurableObjectsAreKept) {
 }
 
 TEST(ObjectFilter, DegenerateInputs) {
-  core::ObjectFilter filter;
+  core::ObjectFilter filter(on());
   LabeledCloud fg;
   std::vector<core::DetectedObject> objects;
   EXPECT_EQ(filter.apply(fg, &objects).kept, 0u);  // nothing at all
@@ -169,8 +176,8 @@ TEST(ObjectFilter, DisabledKeepsEverythingAndBadParamsThrow) {
   core::ObjectFilter off(p);
   off.apply(s.fg, &s.objects);
   EXPECT_EQ(s.objects.size(), 1u);
-  core::ObjectFilter on;
-  on.apply(s.fg, &s.objects);
+  core::ObjectFilter enabled(on());
+  enabled.apply(s.fg, &s.objects);
   EXPECT_EQ(s.objects.size(), 0u);
 
   core::ObjectFilterParams bad;
@@ -189,7 +196,7 @@ TEST(ObjectFilter, FarObjectsAreNotJudged) {
   // The same porous bush, 12 m and 40 m away.
   s.objects.push_back(scan(bush({12.0, 0.0, -1.0}, 1.2, &rng), -10, 10, -10, 2, &s.fg));
   s.objects.push_back(scan(bush({0.0, 40.0, -1.0}, 1.2, &rng), 80, 100, -4, 1, &s.fg, 0.05));
-  core::ObjectFilter filter;
+  core::ObjectFilter filter(on());
   filter.indexForeground(s.fg);
   ASSERT_GT(filter.features(s.fg, s.objects[1]).jump_fraction, 0.3);
   ASSERT_GT(filter.features(s.fg, s.objects[1]).triplets, 20u);
@@ -209,16 +216,16 @@ TEST(ObjectFilter, BrightHedgeRuleIsOffByDefaultAndSparesPeople) {
   s.objects.push_back(
       scan(box({8.0, 5.0, -1.6}, {12.2, 6.8, -0.3}), 25, 45, -14, 0, &s.fg, 0.09, 0.4, 40.0f));
   const std::vector<core::DetectedObject> all = s.objects;
-  core::ObjectFilter off;
+  core::ObjectFilter off(on());
   off.apply(s.fg, &s.objects);
   EXPECT_EQ(s.objects.size(), 3u) << "hedge_min_intensity 0: rule off";
 
-  core::ObjectFilterParams p;
+  core::ObjectFilterParams p = on();
   p.hedge_min_intensity = 85.0;
-  core::ObjectFilter on(p);
+  core::ObjectFilter bright(p);
   s.objects = all;
   std::vector<core::DetectedObject> rejected;
-  const core::ObjectFilterStats st = on.apply(s.fg, &s.objects, &rejected);
+  const core::ObjectFilterStats st = bright.apply(s.fg, &s.objects, &rejected);
   EXPECT_EQ(st.bright_hedge, 1u);
   EXPECT_EQ(st.porous, 0u);
   ASSERT_EQ(rejected.size(), 1u);
@@ -228,7 +235,7 @@ TEST(ObjectFilter, BrightHedgeRuleIsOffByDefaultAndSparesPeople) {
 
 TEST(ObjectFilter, DetectionYamlMirrorsTheParamsAndTyposAreErrors) {
   core::ObjectFilterParams p;
-  p.enabled = false;
+  p.enabled = true;  // the shipped value is false: loading must overwrite this
   p.jump_m = 9.0;
   std::string error;
   ASSERT_TRUE(core::loadObjectFilterParamsYaml(

@@ -92,6 +92,7 @@ TEST(ObjectFilterNodelets, VegetationIsNotPublishedByEitherDetector) {
                                   std::string("urban_detection/KdTreeDetector")}) {
     SCOPED_TRACE(type);
     const std::string ns = type.find("Kd") != std::string::npos ? "/of_kd" : "/of_hg";
+    ros::param::set(ns + "/detector/object_filter/enabled", true);  // off by default
     nodelet::Loader manager(false);
     Outputs out;
     runDetector(ns, type, &manager, &out);
