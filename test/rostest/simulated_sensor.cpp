@@ -53,11 +53,17 @@ TEST(SimulatedSensorNodelet, PublishesScansGroundTruthAndTf) {
   spinner.stop();
   std::lock_guard<std::mutex> lock(m);
   ASSERT_GE(scan_wall_times.size(), 20u);
-  // Real time: 10 scans per second (600 rpm); slower only if the machine is overloaded, never
-  // faster.
-  const double rate = (scan_wall_times.size() - 1) / (scan_wall_times.back() - scan_wall_times.front());
-  EXPECT_GT(rate, 5.0);
-  EXPECT_LT(rate, 11.0);
+  // Simulated time: one revolution per 0.1 s (600 rpm), exactly, whatever the load.
+  const double stamp_rate =
+      (decoded.size() - 1) / (std::prev(decoded.end())->first - decoded.begin()->first);
+  EXPECT_NEAR(stamp_rate, 10.0, 0.05);
+  // Wall time: paced to real time. Over 20 scans a loaded machine delays some and the pacing
+  // catches up (5-11 Hz was flaky both ways at load 4-5), so the bounds only tell paced from
+  // unpaced: unpaced, the simulator publishes at 17-30 Hz on this hardware.
+  const double rate =
+      (scan_wall_times.size() - 1) / (scan_wall_times.back() - scan_wall_times.front());
+  EXPECT_GT(rate, 4.0);
+  EXPECT_LT(rate, 13.0);
   // Every scan whose ground truth arrived has exactly as many labels as decoded points.
   int matched = 0;
   for (const auto& kv : decoded) {
