@@ -19,18 +19,12 @@
 #include <vector>
 
 #include "../core/synthetic_scans.h"
+#include "rostest_util.h"
 
 namespace urban_detection {
 namespace {
 
-bool waitFor(const std::function<bool()>& done, double timeout_s) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return done();
-}
+using rostest_util::waitFor;
 
 // A car-like box and a porous bush 10 m apart; `car` and `bush` get their point indices.
 boost::shared_ptr<LabeledCloud> carAndBush(std::set<std::uint32_t>* car,
@@ -144,12 +138,5 @@ TEST(ObjectFilterNodelets, BadParameterFailsInitNamingIt) {
 }  // namespace urban_detection
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_object_filter");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
+  return urban_detection::rostest_util::runRostests(argc, argv, "test_object_filter");
 }
