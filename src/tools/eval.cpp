@@ -224,6 +224,26 @@ struct Diagnostics {
 
 const char* segName(core::SegmentClass c) { return core::toString(c); }
 
+// The dataset class most of a detection's points carry ("part_of_<label>" for GT points).
+std::string detectionContent(const Frame& f, const Dataset& ds, const core::DetectedObject& d) {
+  const std::size_t n = f.cloud.size();
+  std::map<std::string, std::size_t> content;
+  for (std::uint32_t i : d.indices) {
+    if (i >= n) continue;
+    const std::int32_t og = f.gt.object_of_point[i];
+    content[og >= 0 ? "part_of_" + f.gt.objects[og].label : ds.className(f.point_class[i])]++;
+  }
+  std::string what = "?";
+  std::size_t most = 0;
+  for (const auto& kv : content) {
+    if (kv.second > most) {
+      most = kv.second;
+      what = kv.first;
+    }
+  }
+  return what;
+}
+
 // Explains each missed GT object and each false detection of one frame; appends to `diag`
 // and, when `out` is not null, prints one line per object.
 void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::SegmentClass>& seg,
@@ -322,20 +342,7 @@ void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::Segment
   }
   for (std::size_t d = 0; d < dets.size(); ++d) {
     if (m.verdict[d] != core::DetectionVerdict::kFalse) continue;
-    std::map<std::string, std::size_t> content;
-    for (std::uint32_t i : dets[d].indices) {
-      if (i >= n) continue;
-      const std::int32_t og = f.gt.object_of_point[i];
-      content[og >= 0 ? "part_of_" + f.gt.objects[og].label : ds.className(f.point_class[i])]++;
-    }
-    std::string what = "?";
-    std::size_t most = 0;
-    for (const auto& kv : content) {
-      if (kv.second > most) {
-        most = kv.second;
-        what = kv.first;
-      }
-    }
+    const std::string what = detectionContent(f, ds, dets[d]);
     ++diag->false_by_class[what];
     if (out) {
       const auto& c = dets[d].centroid;
@@ -344,26 +351,6 @@ void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::Segment
                    std::hypot(c.x(), c.y()), c.x(), c.y());
     }
   }
-}
-
-// The dataset class most of a detection's points carry ("part_of_<label>" for GT points).
-std::string detectionContent(const Frame& f, const Dataset& ds, const core::DetectedObject& d) {
-  const std::size_t n = f.cloud.size();
-  std::map<std::string, std::size_t> content;
-  for (std::uint32_t i : d.indices) {
-    if (i >= n) continue;
-    const std::int32_t og = f.gt.object_of_point[i];
-    content[og >= 0 ? "part_of_" + f.gt.objects[og].label : ds.className(f.point_class[i])]++;
-  }
-  std::string what = "?";
-  std::size_t most = 0;
-  for (const auto& kv : content) {
-    if (kv.second > most) {
-      most = kv.second;
-      what = kv.first;
-    }
-  }
-  return what;
 }
 
 // ------------------------------------------------------------------------------------------
