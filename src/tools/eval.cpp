@@ -224,6 +224,19 @@ struct Diagnostics {
 
 const char* segName(core::SegmentClass c) { return core::toString(c); }
 
+// The key with the largest count ("?" when empty; the first such key on ties).
+std::string mostCommon(const std::map<std::string, std::size_t>& counts) {
+  std::string what = "?";
+  std::size_t most = 0;
+  for (const auto& kv : counts) {
+    if (kv.second > most) {
+      most = kv.second;
+      what = kv.first;
+    }
+  }
+  return what;
+}
+
 // The dataset class most of a detection's points carry ("part_of_<label>" for GT points).
 std::string detectionContent(const Frame& f, const Dataset& ds, const core::DetectedObject& d) {
   const std::size_t n = f.cloud.size();
@@ -233,15 +246,7 @@ std::string detectionContent(const Frame& f, const Dataset& ds, const core::Dete
     const std::int32_t og = f.gt.object_of_point[i];
     content[og >= 0 ? "part_of_" + f.gt.objects[og].label : ds.className(f.point_class[i])]++;
   }
-  std::string what = "?";
-  std::size_t most = 0;
-  for (const auto& kv : content) {
-    if (kv.second > most) {
-      most = kv.second;
-      what = kv.first;
-    }
-  }
-  return what;
+  return mostCommon(content);
 }
 
 // Explains each missed GT object and each false detection of one frame; appends to `diag`
@@ -312,15 +317,7 @@ void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::Segment
           if (og == static_cast<std::int32_t>(g)) continue;
           content[og >= 0 ? "other_object" : ds.className(f.point_class[i])]++;
         }
-        std::string what = "?";
-        std::size_t most = 0;
-        for (const auto& kv : content) {
-          if (kv.second > most) {
-            most = kv.second;
-            what = kv.first;
-          }
-        }
-        cause = "detector:merged_with(" + what + ")";
+        cause = "detector:merged_with(" + mostCommon(content) + ")";
       } else if (det_count.size() >= 2) {
         cause = "detector:split";
       } else {
