@@ -5,7 +5,7 @@
 //
 //   urban_detection_bench [--pcd-dir DIR]... [--bin-dir DIR]... [--pcap FILE
 //                         [--calibration FILE]] [--config FILE]... [--repeat N]
-//                         [--max-frames N] [--label NAME] [--json FILE]
+//                         [--max-frames N] [--label NAME] [--json FILE] [--no-kdtree]
 //
 // Inputs are streamed from disk (file reading is not timed); packets are decoded as they
 // come, cut into revolutions as the driver does, and the decode time of a revolution's
@@ -17,7 +17,9 @@
 // simulated drive of scripts/run bench) and cloud -> objects on PCD / .bin sweeps (KITTI raw
 // comes as motion-compensated clouds, not packets); the JSON says which
 // (pipeline_includes_packet_decode). markers, kdtree_detection and the standalone
-// hough_refinement are timed beside it, not in it. A Debug build (no NDEBUG) refuses to run.
+// hough_refinement are timed beside it, not in it. --no-kdtree skips the baseline (on the
+// simulated drive's dense near-range blobs it takes seconds per revolution); the speed-up is then
+// not measured (null in the JSON). A Debug build (no NDEBUG) refuses to run.
 #include <sched.h>
 #include <sys/resource.h>
 #include <time.h>
@@ -232,7 +234,7 @@ void usage() {
   std::fprintf(stderr,
       "usage: urban_detection_bench [--pcd-dir DIR]... [--bin-dir DIR]...\n"
       "         [--pcap FILE [--calibration FILE]] [--config FILE]... [--repeat N]\n"
-      "         [--max-frames N] [--label NAME] [--json FILE]\n"
+      "         [--max-frames N] [--label NAME] [--json FILE] [--no-kdtree]\n"
       "Run it pinned to one core (taskset -c 0) from a Release build.\n");
 }
 
@@ -250,6 +252,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> pcd_dirs, bin_dirs, configs;
   std::string pcap, calib_path, label = "bench", json_path;
   long repeat = 3, max_frames = -1;
+  bool run_kdtree = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* what) { return urban_detection::tools::optionValue(argc, argv, &i, what); };
@@ -263,6 +266,7 @@ int main(int argc, char** argv) {
     else if (a == "--max-frames") max_frames = integer("--max-frames");
     else if (a == "--label") label = value("--label");
     else if (a == "--json") json_path = value("--json");
+    else if (a == "--no-kdtree") run_kdtree = false;
     else if (a == "-h" || a == "--help") { usage(); return 0; }
     else {
       std::fprintf(stderr, "error: unknown argument '%s'\n", a.c_str());
@@ -394,11 +398,13 @@ int main(int argc, char** argv) {
         // Not part of the pipeline: the baseline on the same foreground, and the Hough
         // refinement alone (it runs inside segment(); timed here on the same frame's cell
         // classes before refinement).
-        StageTimer kd_t;
-        kdtree->detect(foreground, &objects);
-        kd_t.stop("kdtree_detection", &stage, &cpu_stage);
-        object_filter->apply(foreground, &objects);  // same output as the kd-tree nodelet
-        kd_obj_sum += objects.size();
+        if (run_kdtree) {
+          StageTimer kd_t;
+          kdtree->detect(foreground, &objects);
+          kd_t.stop("kdtree_detection", &stage, &cpu_stage);
+          object_filter->apply(foreground, &objects);  // same output as the kd-tree nodelet
+          kd_obj_sum += objects.size();
+        }
 
         segmenter_no_hough->segment(cloud, &labels_no_hough);
         cells = segmenter_no_hough->cellClasses();
@@ -432,8 +438,9 @@ int main(int argc, char** argv) {
   for (double v : pipeline_cpu) pipeline_cpu_sum += v;
   const double pipeline_cpu_fps =
       1000.0 * static_cast<double>(pipeline_cpu.size()) / pipeline_cpu_sum;
-  const double speedup = median(stage["kdtree_detection"]) /
-                         median(stage["hierarchical_detection"]);
+  const double speedup = run_kdtree ? median(stage["kdtree_detection"]) /
+                                         median(stage["hierarchical_detection"])
+                                   : std::nan("");
 
   const char* order[] = {"packet_decode", "segmentation", "hough_refinement",
                          "foreground_extraction", "hierarchical_detection", "object_filter",
@@ -442,10 +449,10 @@ int main(int argc, char** argv) {
   std::printf("%s: %zu revolutions (%ld pass%s over", label.c_str(), frames, repeat,
               repeat > 1 ? "es" : "");
   for (const auto& s : sources) std::printf(" [%s]", s->describe().c_str());
-  std::printf("), %.0f points, %.0f foreground points, %.1f hierarchical / %.1f kd-tree objects "
-              "per revolution; %d CPU(s) allowed\n",
-              points_sum / frames, fg_sum / frames, hier_obj_sum / frames, kd_obj_sum / frames,
-              cpus);
+  std::printf("), %.0f points, %.0f foreground points, %.1f hierarchical objects",
+              points_sum / frames, fg_sum / frames, hier_obj_sum / frames);
+  if (run_kdtree) std::printf(" / %.1f kd-tree objects", kd_obj_sum / frames);
+  std::printf(" per revolution; %d CPU(s) allowed\n", cpus);
   std::printf("  %-24s %10s %10s %14s\n", "stage", "median_ms", "p95_ms", "cpu_median_ms");
   for (const char* name : order) {
     auto it = stage.find(name);
@@ -462,8 +469,10 @@ int main(int argc, char** argv) {
               any_packets ? "packets " : "cloud ");
   std::printf("  object_filter %s: %.1f hierarchical objects rejected per revolution\n",
               filter_params.enabled ? "on" : "off", rejected_sum / frames);
-  std::printf("  pipeline_fps %.1f (cpu-time fps %.1f)   hier_vs_kdtree_speedup %.1fx   "
-              "peak_rss %.1f MB\n", pipeline_fps, pipeline_cpu_fps, speedup, peak_mb);
+  char speedup_text[64] = "not measured (--no-kdtree)";
+  if (run_kdtree) std::snprintf(speedup_text, sizeof(speedup_text), "%.1fx", speedup);
+  std::printf("  pipeline_fps %.1f (cpu-time fps %.1f)   hier_vs_kdtree_speedup %s   "
+              "peak_rss %.1f MB\n", pipeline_fps, pipeline_cpu_fps, speedup_text, peak_mb);
 
   if (!json_path.empty()) {
     std::ofstream out(json_path);
@@ -476,7 +485,7 @@ int main(int argc, char** argv) {
         << ",\n  \"mean_points\": " << num(points_sum / frames)
         << ",\n  \"mean_foreground_points\": " << num(fg_sum / frames)
         << ",\n  \"mean_objects_hierarchical\": " << num(hier_obj_sum / frames)
-        << ",\n  \"mean_objects_kdtree\": " << num(kd_obj_sum / frames)
+        << ",\n  \"mean_objects_kdtree\": " << num(run_kdtree ? kd_obj_sum / frames : std::nan(""))
         << ",\n  \"object_filter\": " << (filter_params.enabled ? "true" : "false")
         << ",\n  \"mean_rejected_objects_hierarchical\": " << num(rejected_sum / frames)
         << ",\n  \"pipeline_includes_packet_decode\": " << (any_packets ? "true" : "false")
