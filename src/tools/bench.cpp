@@ -58,6 +58,11 @@ namespace core = urban_detection::core;
 using urban_detection::CloudXYZIRT;
 using Clock = std::chrono::steady_clock;
 
+using urban_detection::tools::median;
+using urban_detection::tools::percentile;
+using urban_detection::tools::jsonEscape;
+using urban_detection::tools::jsonNumber;
+
 namespace {
 
 double msSince(Clock::time_point t0) {
@@ -89,40 +94,6 @@ class StageTimer {
   Clock::time_point wall_;
   double cpu_;
 };
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  // Nearest-rank percentile.
-  const std::size_t rank =
-      static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-  return v[std::min(v.size() - 1, rank == 0 ? 0 : rank - 1)];
-}
-
-double median(const std::vector<double>& v) {
-  if (v.empty()) return std::nan("");
-  std::vector<double> s(v);
-  std::sort(s.begin(), s.end());
-  const std::size_t n = s.size();
-  return n % 2 ? s[n / 2] : 0.5 * (s[n / 2 - 1] + s[n / 2]);
-}
-
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char b[32];
-  std::snprintf(b, sizeof(b), "%.6g", v);
-  return b;
-}
-
-std::string jsonEscape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    o += c;
-  }
-  return o;
-}
 
 // A source of revolutions: clouds from files, or packets decoded into clouds.
 class Source {
@@ -482,12 +453,12 @@ int main(int argc, char** argv) {
     }
     out << "],\n  \"revolutions\": " << frames << ",\n  \"repeat\": " << repeat
         << ",\n  \"cpus_allowed\": " << cpus
-        << ",\n  \"mean_points\": " << num(points_sum / frames)
-        << ",\n  \"mean_foreground_points\": " << num(fg_sum / frames)
-        << ",\n  \"mean_objects_hierarchical\": " << num(hier_obj_sum / frames)
-        << ",\n  \"mean_objects_kdtree\": " << num(run_kdtree ? kd_obj_sum / frames : std::nan(""))
+        << ",\n  \"mean_points\": " << jsonNumber(points_sum / frames)
+        << ",\n  \"mean_foreground_points\": " << jsonNumber(fg_sum / frames)
+        << ",\n  \"mean_objects_hierarchical\": " << jsonNumber(hier_obj_sum / frames)
+        << ",\n  \"mean_objects_kdtree\": " << jsonNumber(run_kdtree ? kd_obj_sum / frames : std::nan(""))
         << ",\n  \"object_filter\": " << (filter_params.enabled ? "true" : "false")
-        << ",\n  \"mean_rejected_objects_hierarchical\": " << num(rejected_sum / frames)
+        << ",\n  \"mean_rejected_objects_hierarchical\": " << jsonNumber(rejected_sum / frames)
         << ",\n  \"pipeline_includes_packet_decode\": " << (any_packets ? "true" : "false")
         << ",\n  \"stages\": {";
     bool first = true;
@@ -495,18 +466,18 @@ int main(int argc, char** argv) {
       auto it = stage.find(name);
       if (it == stage.end()) continue;
       out << (first ? "\n" : ",\n") << "    \"" << name << "\": {\"median_ms\": "
-          << num(median(it->second)) << ", \"p95_ms\": " << num(percentile(it->second, 0.95))
-          << ", \"cpu_median_ms\": " << num(median(cpu_stage[name]))
-          << ", \"cpu_p95_ms\": " << num(percentile(cpu_stage[name], 0.95)) << "}";
+          << jsonNumber(median(it->second)) << ", \"p95_ms\": " << jsonNumber(percentile(it->second, 0.95))
+          << ", \"cpu_median_ms\": " << jsonNumber(median(cpu_stage[name]))
+          << ", \"cpu_p95_ms\": " << jsonNumber(percentile(cpu_stage[name], 0.95)) << "}";
       first = false;
     }
-    out << "\n  },\n  \"pipeline_median_ms\": " << num(pipeline_median)
-        << ",\n  \"pipeline_p95_ms\": " << num(percentile(pipeline, 0.95))
-        << ",\n  \"pipeline_cpu_median_ms\": " << num(median(pipeline_cpu))
-        << ",\n  \"pipeline_fps\": " << num(pipeline_fps)
-        << ",\n  \"pipeline_cpu_fps\": " << num(pipeline_cpu_fps)
-        << ",\n  \"hier_vs_kdtree_speedup\": " << num(speedup)
-        << ",\n  \"peak_rss_mb\": " << num(peak_mb) << "\n}\n";
+    out << "\n  },\n  \"pipeline_median_ms\": " << jsonNumber(pipeline_median)
+        << ",\n  \"pipeline_p95_ms\": " << jsonNumber(percentile(pipeline, 0.95))
+        << ",\n  \"pipeline_cpu_median_ms\": " << jsonNumber(median(pipeline_cpu))
+        << ",\n  \"pipeline_fps\": " << jsonNumber(pipeline_fps)
+        << ",\n  \"pipeline_cpu_fps\": " << jsonNumber(pipeline_cpu_fps)
+        << ",\n  \"hier_vs_kdtree_speedup\": " << jsonNumber(speedup)
+        << ",\n  \"peak_rss_mb\": " << jsonNumber(peak_mb) << "\n}\n";
     if (!out) {
       std::fprintf(stderr, "error: cannot write %s\n", json_path.c_str());
       return 1;
