@@ -250,13 +250,9 @@ int main(int argc, char** argv) {
   core::HierarchicalGridDetectorParams hier_params;
   core::KdTreeDetectorParams kd_params;
   core::ObjectFilterParams filter_params;
-  for (const std::string& c : configs) {
-    std::string err;
-    if (!core::loadPipelineParamsYaml(c, &seg_params, &hier_params, &kd_params, &err) ||
-        !core::loadObjectFilterParamsYaml(c, &filter_params, &err)) {
-      std::fprintf(stderr, "error: %s\n", err.c_str());
-      return 2;
-    }
+  if (!urban_detection::tools::loadConfigs(configs, &seg_params, &hier_params, &kd_params,
+                                           &filter_params)) {
+    return 2;
   }
 
   std::vector<std::unique_ptr<Source>> sources;

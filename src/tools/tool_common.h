@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "urban_detection/core/kitti_io.h"
+#include "urban_detection/core/params_yaml.h"
 #include "urban_detection/core/point_types.h"
 
 namespace urban_detection {
@@ -40,6 +41,35 @@ inline long optionCount(int argc, char** argv, int* i, const char* option) {
     std::exit(2);
   }
   return x;
+}
+
+/// A finite number option value; exits with status 2 naming the option otherwise.
+inline double optionNumber(int argc, char** argv, int* i, const char* option) {
+  const std::string v = optionValue(argc, argv, i, option);
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (end == v.c_str() || *end != '\0' || !std::isfinite(x)) {
+    std::fprintf(stderr, "error: %s needs a number, got '%s'\n", option, v.c_str());
+    std::exit(2);
+  }
+  return x;
+}
+
+/// Applies the pipeline config files in order over the in-class defaults: segmentation,
+/// detectors and object filter (null pointers skip that part). Prints the first error and
+/// returns false.
+inline bool loadConfigs(const std::vector<std::string>& paths, core::GridSegmenterParams* seg,
+                        core::HierarchicalGridDetectorParams* hier,
+                        core::KdTreeDetectorParams* kd, core::ObjectFilterParams* filter) {
+  for (const std::string& path : paths) {
+    std::string err;
+    if (!core::loadPipelineParamsYaml(path, seg, hier, kd, &err) ||
+        (filter != nullptr && !core::loadObjectFilterParamsYaml(path, filter, &err))) {
+      std::fprintf(stderr, "error: %s\n", err.c_str());
+      return false;
+    }
+  }
+  return true;
 }
 
 /// Nearest-rank percentile (q in [0, 1]) of `v`; NaN when `v` is empty.
