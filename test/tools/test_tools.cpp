@@ -53,6 +53,14 @@ class ToolsTest : public ::testing::Test {
     pt::read_json(path, tree);
     return tree;
   }
+  // Runs the bench on the simulated drive with `options`; its JSON output is in *json.
+  static void bench(const std::string& name, const std::string& options, pt::ptree* json) {
+    const std::string path = dir_ + "/" + name + ".json";
+    ASSERT_EQ(0, run(kTools + "/urban_detection_bench --pcap " + dir_ + "/drive.pcap" +
+                         configs() + " " + options + " --json " + path,
+                     dir_ + "/" + name + ".log"));
+    *json = readJson(path);
+  }
   static std::string dir_;
 };
 std::string ToolsTest::dir_;
@@ -67,11 +75,8 @@ void expectStage(const pt::ptree& json, const std::string& stage) {
 }
 
 TEST_F(ToolsTest, BenchWritesStagesPipelineAndNoSpeedupWithoutKdTree) {
-  const std::string json = dir_ + "/bench.json";
-  ASSERT_EQ(0, run(kTools + "/urban_detection_bench --pcap " + dir_ + "/drive.pcap" + configs() +
-                       " --repeat 1 --no-kdtree --json " + json,
-                   dir_ + "/bench.log"));
-  const pt::ptree b = readJson(json);
+  pt::ptree b;
+  ASSERT_NO_FATAL_FAILURE(bench("bench", "--repeat 1 --no-kdtree", &b));
   EXPECT_GE(b.get<int>("revolutions"), 1);
   EXPECT_EQ("true", b.get<std::string>("pipeline_includes_packet_decode"));
   for (const char* s : {"packet_decode", "segmentation", "hough_refinement",
@@ -87,11 +92,8 @@ TEST_F(ToolsTest, BenchWritesStagesPipelineAndNoSpeedupWithoutKdTree) {
 }
 
 TEST_F(ToolsTest, BenchMeasuresTheKdTreeOnTheSameRevolutions) {
-  const std::string json = dir_ + "/bench_kd.json";
-  ASSERT_EQ(0, run(kTools + "/urban_detection_bench --pcap " + dir_ + "/drive.pcap" + configs() +
-                       " --repeat 1 --max-frames 1 --json " + json,
-                   dir_ + "/bench_kd.log"));
-  const pt::ptree b = readJson(json);
+  pt::ptree b;
+  ASSERT_NO_FATAL_FAILURE(bench("bench_kd", "--repeat 1 --max-frames 1", &b));
   EXPECT_EQ(1, b.get<int>("revolutions"));
   expectStage(b, "kdtree_detection");
   const double ratio = b.get<double>("stages.kdtree_detection.median_ms") /
