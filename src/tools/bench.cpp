@@ -364,7 +364,7 @@ int main(int argc, char** argv) {
 
         // Not part of the pipeline: the baseline on the same foreground, and the Hough
         // refinement alone (it runs inside segment(); timed here on the same frame's cell
-        // classes before refinement).
+        // classes before refinement and wall evidence, as segment() passes them).
         if (run_kdtree) {
           StageTimer kd_t;
           kdtree->detect(foreground, &objects);
@@ -377,7 +377,8 @@ int main(int argc, char** argv) {
         cells = segmenter_no_hough->cellClasses();
         const auto& g = segmenter_no_hough->grid();
         StageTimer hough_t;
-        hough.refine(g.rows(), g.cols(), seg_params.cell_size_m, &cells);
+        hough.refine(g.rows(), g.cols(), seg_params.cell_size_m, &cells,
+                     &segmenter_no_hough->wallSupport());
         hough_t.stop("hough_refinement", &stage, &cpu_stage);
 
         points_sum += cloud.size();
