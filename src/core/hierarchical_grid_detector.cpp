@@ -61,6 +61,8 @@ std::string validate(const HierarchicalGridDetectorParams& p) {
     err << "dense_min_weighted_points must be in [0, 1e6], got " << p.dense_min_weighted_points;
   } else if (p.min_points < 1) {
     err << "min_points must be >= 1, got " << p.min_points;
+  } else if (!(p.min_weighted_points >= 0.0 && p.min_weighted_points <= 1e6)) {
+    err << "min_weighted_points must be in [0, 1e6], got " << p.min_weighted_points;
   } else if (!(p.max_extent_m > 0.0)) {
     err << "max_extent_m must be > 0 m, got " << p.max_extent_m;
   } else if (p.weight.coefficients.empty() || p.weight.coefficients.size() > 16) {
@@ -410,6 +412,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
 
   // --- Per component: size and extent (on the sub-cells it covers) for the filters. --------
   comp_count_.assign(ncomp, 0);
+  comp_rho_.assign(ncomp, 0.0f);
   comp_box_.resize(4 * static_cast<std::size_t>(ncomp));
   for (std::int32_t c = 0; c < ncomp; ++c) {
     comp_box_[4 * c] = comp_box_[4 * c + 1] = std::numeric_limits<std::int32_t>::max();
@@ -422,6 +425,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       continue;
     }
     comp_count_[c] += dense_count_[s];
+    comp_rho_[c] += dense_rho_[s];
     const std::int32_t ix = dense_xy_[s].x, iy = dense_xy_[s].y;
     std::int32_t* box = &comp_box_[4 * static_cast<std::size_t>(c)];
     box[0] = std::min(box[0], ix);
@@ -432,9 +436,11 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   comp_final_.assign(ncomp, -1);
   std::size_t nobj = 0;
   const double max_extent_cells = params_.max_extent_m / dense_cell_m_;
+  const float min_rho = static_cast<float>(params_.min_weighted_points);
   for (std::int32_t c = 0; c < ncomp; ++c) {
     const std::int32_t* box = &comp_box_[4 * static_cast<std::size_t>(c)];
-    if (comp_count_[c] < static_cast<std::uint32_t>(params_.min_points)) {
+    if (comp_count_[c] < static_cast<std::uint32_t>(params_.min_points) ||
+        comp_rho_[c] < min_rho) {
       ++stats_.dropped_small;
     } else if (box[2] - box[0] + 1 > max_extent_cells || box[3] - box[1] + 1 > max_extent_cells) {
       ++stats_.dropped_large;

@@ -129,6 +129,7 @@ bool applyHierarchical(const YAML::Node& node, const std::string& where,
   t.bind("ring_spacing_deg", &p->ring_spacing_deg);
   t.bind("dense_refinement", &p->dense_refinement);
   t.bind("min_points", &p->min_points);
+  t.bind("min_weighted_points", &p->min_weighted_points);
   t.bind("max_extent_m", &p->max_extent_m);
   t.bindMap("weight", [&weight, where](const YAML::Node& n, std::string* err) {
     return weight.apply(n, where + "weight/", err);

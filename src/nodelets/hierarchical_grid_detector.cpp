@@ -37,6 +37,7 @@ class HierarchicalGridDetector : public DetectorNodelet {
     c.roof_bridge_range_m = params_.roof_bridge_range_m;
     c.ring_spacing_deg = params_.ring_spacing_deg;
     c.min_points = params_.min_points;
+    c.min_weighted_points = params_.min_weighted_points;
     c.max_extent_m = params_.max_extent_m;
     reconfigure_nh_ = ros::NodeHandle(pnh, "hierarchical_grid");
     reconfigure_ = std::make_unique<Reconfigure>(
@@ -62,6 +63,7 @@ class HierarchicalGridDetector : public DetectorNodelet {
     p.roof_bridge_range_m = c.roof_bridge_range_m;
     p.ring_spacing_deg = c.ring_spacing_deg;
     p.min_points = c.min_points;
+    p.min_weighted_points = c.min_weighted_points;
     p.max_extent_m = c.max_extent_m;
     const std::string error = ros_conv::checkHierarchicalGridParams(reconfigure_nh_, p);
     if (!error.empty()) return error;

@@ -30,6 +30,7 @@ ParamTable hierarchicalGridTable(core::HierarchicalGridDetectorParams* p) {
       .add("ring_spacing_deg", &p->ring_spacing_deg, 0.01, 10.0, "deg")
       .add("dense_min_weighted_points", &p->dense_min_weighted_points, 0.0, 1e6)
       .add("min_points", &p->min_points, 1, 1000000)
+      .add("min_weighted_points", &p->min_weighted_points, 0.0, 1e6)
       .add("max_extent_m", &p->max_extent_m, 0.1, 1000.0, "m")
       .add("weight/full_density_distance_m", &p->weight.full_density_distance_m, 0.0, 1000.0, "m")
       .add("weight/max_distance_m", &p->weight.max_distance_m, 0.1, 1000.0, "m")

@@ -33,6 +33,7 @@ HierarchicalGridDetectorParams asciiParams(bool refine = true) {
   p.weight.enabled = false;
   p.dense_refinement = refine;
   p.min_points = 1;
+  p.min_weighted_points = 0.0;
   return p;
 }
 
@@ -243,6 +244,38 @@ TEST(HierarchicalGridFilters, MinPointsAndMaxExtent) {
   EXPECT_EQ(stats.dropped_large, 1u);
 }
 
+TEST(HierarchicalGridFilters, WeightedPointCountDropsNearFragmentsKeepsSparseFarObjects) {
+  // Shipped weights: w = 1 near the sensor, > 3 at 40 m. A 40-point fragment at 5 m weighs 40
+  // (< 60: dropped); a 24-point object at 40 m weighs > 72 (kept). min_points (10) passes both.
+  const HierarchicalGridDetectorParams shipped;
+  const core::DistanceWeight w(shipped.weight);
+  ASSERT_NEAR(w(5.0f), 1.0f, 1e-6f);
+  ASSERT_GT(w(40.0f), 3.0f);
+  ASSERT_DOUBLE_EQ(shipped.min_weighted_points, 60.0);
+  LabeledCloud cloud;
+  for (int i = 0; i < 40; ++i) {  // 2 x 2 sub-cells around (5.1, 0.1), 10 points each
+    test::addPoint(&cloud, 5.05f + 0.1f * (i % 4), 0.05f + 0.1f * ((i / 4) % 4),
+                   -1.0f + 0.01f * i, 1);
+  }
+  for (int i = 0; i < 24; ++i) {  // 2 x 1 sub-cells around (40.1, 0.1), 12 points each
+    test::addPoint(&cloud, 40.05f + 0.1f * (i % 4), 0.05f + 0.05f * ((i / 4) % 3),
+                   -1.0f + 0.02f * i, 2);
+  }
+  core::HierarchicalGridStats stats;
+  auto objects = run(cloud, shipped, &stats);
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].indices.size(), 24u);
+  EXPECT_GT(objects[0].centroid.x(), 39.0f);
+  EXPECT_EQ(stats.dropped_small, 1u);
+  HierarchicalGridDetectorParams off = shipped;
+  off.min_weighted_points = 0.0;
+  objects = run(cloud, off, &stats);
+  EXPECT_EQ(objects.size(), 2u);
+  EXPECT_EQ(stats.dropped_small, 0u);
+  off.min_weighted_points = -1.0;
+  EXPECT_NE(core::validate(off).find("min_weighted_points"), std::string::npos);
+}
+
 // ------------------------------------------------------------------------------------------
 // LiDAR-like cars.
 
@@ -394,6 +427,7 @@ TEST(HierarchicalGridInput, EmptyAndOnePoint) {
   EXPECT_TRUE(objects.empty());  // min_points = 10
   HierarchicalGridDetectorParams p;
   p.min_points = 1;
+  p.min_weighted_points = 0.0;
   p.dense_min_weighted_points = 1.0;
   HierarchicalGridDetector det1(p);
   det1.detect(one, &objects);

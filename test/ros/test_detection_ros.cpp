@@ -163,6 +163,7 @@ TEST(DetectionConfig, YamlMirrorsTheParamsStructs) {
   EXPECT_DOUBLE_EQ(g["dense_min_weighted_points"].as<double>(), h.dense_min_weighted_points);
   EXPECT_EQ(g["dense_refinement"].as<bool>(), h.dense_refinement);
   EXPECT_EQ(g["min_points"].as<int>(), h.min_points);
+  EXPECT_DOUBLE_EQ(g["min_weighted_points"].as<double>(), h.min_weighted_points);
   EXPECT_DOUBLE_EQ(g["max_extent_m"].as<double>(), h.max_extent_m);
   const YAML::Node w = g["weight"];
   EXPECT_EQ(w["enabled"].as<bool>(), h.weight.enabled);

@@ -58,9 +58,13 @@
 ///  4. The points of a near-empty sub-cell join the object of the densest dense 8-neighbour
 ///     sub-cell whose super-cell is linked to its own; near-empty sub-cells with no such
 ///     neighbour are noise and their points are in no object.
-///  5. Objects with fewer than `min_points` points or whose sub-cells span more than
-///     `max_extent_m` along x or y are dropped. Ids are 1..N in the order of the objects' first
-///     point in the input cloud.
+///  5. Objects with fewer than `min_points` points, with a distance-weighted point count
+///     sum(rho(c)) over their sub-cells below `min_weighted_points`, or whose sub-cells span
+///     more than `max_extent_m` along x or y are dropped. The weighted count is the number of
+///     points the object would have at full density (w = 1 up to the fitted density maximum,
+///     ~7 m): a fixed point count is too strict far away and too lax near the sensor, where
+///     fragments of bushes and leftovers of cars have tens of points. Ids are 1..N in the
+///     order of the objects' first point in the input cloud.
 ///
 /// Non-finite points, points outside the grid and points with |z| > max_abs_z_m are ignored
 /// (counted in the stats).
@@ -105,6 +109,9 @@ struct HierarchicalGridDetectorParams {
                                            //     a horizontal surface at that height
   bool dense_refinement = true;            // [-] false: objects are the coarse blobs (simple grid)
   int min_points = 10;                     // [-] objects with fewer points are dropped
+  double min_weighted_points = 60.0;       // [-] objects whose distance-weighted point count
+                                           //     (sum of n * w(d) over their sub-cells) is
+                                           //     lower are dropped (step 5); 0 = off
   double max_extent_m = 20.0;              // [m] objects with a longer xy box side are dropped
   DistanceWeightParams weight;             // distance weight of sub-cell densities (paper Sec. 4)
 };
@@ -196,6 +203,7 @@ class HierarchicalGridDetector : public ObjectDetector {
   // Per component.
   std::vector<std::int32_t> root_object_;  // union-find root -> component index
   std::vector<std::uint32_t> comp_count_;
+  std::vector<float> comp_rho_;              // distance-weighted point count per component
   std::vector<std::int32_t> comp_box_;       // sub-cell min x, min y, max x, max y per component
   std::vector<std::int32_t> comp_final_;     // component -> output object index or -1
   std::vector<std::uint32_t> positions_;     // cloud positions, grouped by output object
