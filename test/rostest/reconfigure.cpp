@@ -102,6 +102,7 @@ boost::shared_ptr<LabeledCloud> twoClusters(std::uint32_t seq) {
 TEST(Reconfigure, HierarchicalGridMinPointsAppliesFromTheNextRevolution) {
   ros::param::set("/rc_hg/detector/hierarchical_grid/weight/enabled", false);  // plain counts
   ros::param::set("/rc_hg/detector/hierarchical_grid/dense_min_weighted_points", 1.0);
+  ros::param::set("/rc_hg/detector/hierarchical_grid/min_weighted_points", 0.0);  // min_points only
   nodelet::Loader manager(false);
   ASSERT_TRUE(manager.load("/rc_hg/detector", "urban_detection/HierarchicalGridDetector", {}, {}));
   ros::NodeHandle nh("/rc_hg");
