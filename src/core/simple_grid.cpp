@@ -24,6 +24,7 @@ SimpleGrid::SimpleGrid(const SimpleGridParams& params) : params_(params) {
   inv_cell_ = static_cast<float>(1.0 / cell);
   inv_side_ = 1.0 / side_;
   origin_m_ = static_cast<float>(-0.5 * side_ * cell);
+  cell_m_ = static_cast<float>(cell);
   slot_.assign(static_cast<std::size_t>(side_) * side_, -1);
 }
 
@@ -36,12 +37,6 @@ std::int32_t SimpleGrid::cellAt(float x_m, float y_m) const {
     return kNoCell;
   }
   return static_cast<std::int32_t>(fr) * side_ + static_cast<std::int32_t>(fc);
-}
-
-void SimpleGrid::cellCenter(std::int32_t index, float* x_m, float* y_m) const {
-  const float cell = static_cast<float>(params_.cell_size_m);
-  *x_m = origin_m_ + (static_cast<float>(colOf(index)) + 0.5f) * cell;
-  *y_m = origin_m_ + (static_cast<float>(rowOf(index)) + 0.5f) * cell;
 }
 
 void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs_height_m) {
