@@ -44,6 +44,7 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
   // windows reaching past the grid's left and right edges read zeros.
   bit_words_ = static_cast<std::size_t>((grid_.cols() + 63) / 64 + 2);
   terrain_bits_.assign(bit_words_ * static_cast<std::size_t>(grid_.rows()), 0);
+  terrain_near_.assign(terrain_bits_.size(), 0);
 }
 
 void GridSegmenter::setParams(const GridSegmenterParams& params) {
@@ -304,7 +305,10 @@ void GridSegmenter::growGround() {
 // than dilating the whole terrain map. Most of these cells (facades, far vegetation) have no
 // terrain within the search radius at all, so the nearest non-empty ring is found first on a
 // bit map of the terrain cells (one 64-bit window per row), and only that ring is then summed,
-// in the same row-major order as a plain ring scan.
+// in the same row-major order as a plain ring scan. A second bit map, the terrain bits ORed
+// over the 2 * terrain_fill_iterations + 1 rows around each row, answers "no terrain within
+// the search radius" with one window per cell (the cell's own bit is clear: it has no
+// terrain), and only the other cells look for their nearest ring, row pair by row pair.
 void GridSegmenter::fillTerrain() {
   const int rows = grid_.rows(), cols = grid_.cols();
   const int max_ring = params_.terrain_fill_iterations;
@@ -333,7 +337,27 @@ void GridSegmenter::fillTerrain() {
   const bool use_bits = max_ring >= 1 && max_ring <= kMaxBitRing;
   const bool sparse_ground = params_.ground_in_sparse_cells;
   const std::uint64_t window_mask = (std::uint64_t{1} << (2 * max_ring + 1)) - 1;
-  std::uint64_t m[2 * kMaxBitRing + 1];
+  const std::size_t bw = bit_words_;
+  if (use_bits) {
+    for (int r = 0; r < rows; ++r) {
+      std::uint64_t* near = terrain_near_.data() + static_cast<std::size_t>(r) * bw;
+      std::fill(near, near + bw, std::uint64_t{0});
+      for (int rr = std::max(0, r - max_ring); rr <= std::min(rows - 1, r + max_ring); ++rr) {
+        const std::uint64_t* w = terrain_bits_.data() + static_cast<std::size_t>(rr) * bw;
+        for (std::size_t i = 0; i < bw; ++i) near[i] |= w[i];
+      }
+    }
+  }
+  // Terrain bits of columns k - max_ring .. k + max_ring of row rr of `map`.
+  auto window = [&](const std::vector<std::uint64_t>& map, int rr, int k) -> std::uint64_t {
+    if (rr < 0 || rr >= rows) return 0;
+    const int start = k - max_ring + 64;
+    const int word = start >> 6, shift = start & 63;
+    const std::uint64_t* w = map.data() + static_cast<std::size_t>(rr) * bw;
+    std::uint64_t v = w[word] >> shift;
+    if (shift != 0) v |= w[word + 1] << (64 - shift);
+    return v & window_mask;
+  };
   for (const std::int32_t c : grid_.occupiedCells()) {
     if (ground_state_[c] != kNoGround ||
         (!sparse_ground && cell_class_[c] == SegmentClass::kClutter)) {
@@ -342,28 +366,17 @@ void GridSegmenter::fillTerrain() {
     const int r = grid_.rowOf(c), k = grid_.colOf(c);
     int first_ring = 1, last_ring = max_ring;
     if (use_bits) {
-      // m[j]: terrain bits of columns k - max_ring .. k + max_ring of row r - max_ring + j.
-      const int start = k - max_ring + 64;
-      const int word = start >> 6, shift = start & 63;
-      for (int j = 0; j <= 2 * max_ring; ++j) {
-        const int rr = r - max_ring + j;
-        if (rr < 0 || rr >= rows) {
-          m[j] = 0;
-          continue;
-        }
-        const std::uint64_t* w = terrain_bits_.data() + static_cast<std::size_t>(rr) * bit_words_;
-        std::uint64_t v = w[word] >> shift;
-        if (shift != 0) v |= w[word + 1] << (64 - shift);
-        m[j] = v & window_mask;
-      }
-      std::uint64_t inner = m[max_ring];  // rows strictly inside the current ring
+      if (window(terrain_near_, r, k) == 0) continue;     // no terrain within max_ring
+      std::uint64_t inner = window(terrain_bits_, r, k);  // rows strictly inside the ring
       int found = 0;
       for (int ring = 1; ring <= max_ring && found == 0; ++ring) {
         const std::uint64_t full = ((std::uint64_t{1} << (2 * ring + 1)) - 1) << (max_ring - ring);
         const std::uint64_t sides =
             (std::uint64_t{1} << (max_ring - ring)) | (std::uint64_t{1} << (max_ring + ring));
-        if (((m[max_ring - ring] | m[max_ring + ring]) & full) | (inner & sides)) found = ring;
-        inner |= m[max_ring - ring] | m[max_ring + ring];
+        const std::uint64_t edges =
+            window(terrain_bits_, r - ring, k) | window(terrain_bits_, r + ring, k);
+        if ((edges & full) | (inner & sides)) found = ring;
+        inner |= edges;
       }
       if (found == 0) continue;
       first_ring = last_ring = found;

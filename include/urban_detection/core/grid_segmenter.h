@@ -135,6 +135,8 @@ class GridSegmenter {
   static constexpr int kMaxBitRing = 28;   // fillTerrain's bit windows: 2 * 28 + 1 bits
   std::vector<std::uint64_t> terrain_bits_;  // per row: bit k+64 = cell k has terrain (cleared)
   std::size_t bit_words_ = 0;                // 64-bit words per row of terrain_bits_
+  std::vector<std::uint64_t> terrain_near_;  // terrain_bits_ ORed over the rows within
+                                             //     terrain_fill_iterations (overwritten)
   // Per slot + 1 (entry 0: points without a cell) for the per-point pass: points below
   // split_z [m] are ground, the others get `label` (a SegmentClass).
   struct SlotLabel {
