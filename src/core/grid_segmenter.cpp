@@ -379,7 +379,25 @@ void GridSegmenter::fillTerrain() {
         inner |= edges;
       }
       if (found == 0) continue;
-      first_ring = last_ring = found;
+      // The ring's terrain cells are the set bits of its rows' windows (edge rows: columns
+      // k - found .. k + found, the rows between: those two columns), summed in row-major order
+      // from the bits, as ringSum would visit them.
+      const std::uint64_t full = ((std::uint64_t{1} << (2 * found + 1)) - 1) << (max_ring - found);
+      const std::uint64_t sides =
+          (std::uint64_t{1} << (max_ring - found)) | (std::uint64_t{1} << (max_ring + found));
+      float sum = 0.0f;
+      int cnt = 0;
+      for (int rr = r - found; rr <= r + found; ++rr) {
+        std::uint64_t m =
+            window(terrain_bits_, rr, k) & (rr == r - found || rr == r + found ? full : sides);
+        for (; m != 0; m &= m - 1) {
+          sum += ground_z_[rr * cols + k - max_ring + __builtin_ctzll(m)];
+          ++cnt;
+        }
+      }
+      fill_cells_.push_back(c);
+      fill_z_[c] = sum / static_cast<float>(cnt);
+      continue;
     }
     for (int ring = first_ring; ring <= last_ring; ++ring) {
       float sum = 0.0f;
