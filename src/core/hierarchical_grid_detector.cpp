@@ -177,15 +177,17 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   const int xi = params_.xi;
   for (std::size_t i = 0; i < n; ++i) {
     const LabeledPoint& p = foreground.points[i];
-    point_slot_[i] = -1;
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      ++stats_.invalid_points;
-      continue;
-    }
     const float fx = (p.x - origin) * inv_dense;
     const float fy = (p.y - origin) * inv_dense;
-    if (!(fx >= 0.0f && fx < nd_f && fy >= 0.0f && fy < nd_f) || std::fabs(p.z) > max_abs_z) {
-      ++stats_.outside_points;
+    // Inside the grid and the z range implies finite (comparisons with NaN and inf fail), so
+    // the finiteness tests only run for the rejected points.
+    if (!(fx >= 0.0f && fx < nd_f && fy >= 0.0f && fy < nd_f && std::fabs(p.z) <= max_abs_z)) {
+      point_slot_[i] = -1;
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+        ++stats_.invalid_points;
+      } else {
+        ++stats_.outside_points;
+      }
       continue;
     }
     const int ix = std::min(static_cast<int>(fx), nd_ - 1);
