@@ -46,9 +46,11 @@ trap cleanup EXIT
 echo "soak: ${MINUTES} min after ${WARMUP} s warm-up, source $SOURCE, master $ROS_MASTER_URI, log $LOG" >&2
 if [ "$SOURCE" = pcap ]; then
   PCAP="$OUT/soak_drive.pcap"
-  if [ ! -s "$PCAP" ]; then
+  SIM="${UD_WS:-$REPO/.ws}/devel/lib/urban_detection/urban_detection_simulate"
+  # Regenerated when the simulator or the drive description is newer than the cached file.
+  if [ ! -s "$PCAP" ] || [ "$SIM" -nt "$PCAP" ] || [ "$REPO/config/demo_drive.yaml" -nt "$PCAP" ]; then
     echo "soak: writing $PCAP (600 simulated revolutions)" >&2
-    "${UD_WS:-$REPO/.ws}/devel/lib/urban_detection/urban_detection_simulate" --revolutions 600 --pcap "$PCAP.tmp" >/dev/null
+    "$SIM" --config "$REPO/config/demo_drive.yaml" --revolutions 600 --pcap "$PCAP.tmp" >/dev/null
     mv "$PCAP.tmp" "$PCAP"
   fi
   LAUNCH=(pcap.launch "pcap:=$PCAP" loop:=true rate:=1.0)

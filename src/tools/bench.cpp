@@ -5,7 +5,7 @@
 //
 //   urban_detection_bench [--pcd-dir DIR]... [--bin-dir DIR]... [--pcap FILE
 //                         [--calibration FILE]] [--config FILE]... [--repeat N]
-//                         [--max-frames N] [--label NAME] [--json FILE]
+//                         [--max-frames N] [--label NAME] [--json FILE] [--no-kdtree]
 //
 // Inputs are streamed from disk (file reading is not timed); packets are decoded as they
 // come, cut into revolutions as the driver does, and the decode time of a revolution's
@@ -17,7 +17,9 @@
 // simulated drive of scripts/run bench) and cloud -> objects on PCD / .bin sweeps (KITTI raw
 // comes as motion-compensated clouds, not packets); the JSON says which
 // (pipeline_includes_packet_decode). markers, kdtree_detection and the standalone
-// hough_refinement are timed beside it, not in it. A Debug build (no NDEBUG) refuses to run.
+// hough_refinement are timed beside it, not in it. --no-kdtree skips the baseline (on the
+// simulated drive's dense near-range blobs it takes seconds per revolution); the speed-up is then
+// not measured (null in the JSON). A Debug build (no NDEBUG) refuses to run.
 #include <sched.h>
 #include <sys/resource.h>
 #include <time.h>
@@ -56,6 +58,11 @@ namespace core = urban_detection::core;
 using urban_detection::CloudXYZIRT;
 using Clock = std::chrono::steady_clock;
 
+using urban_detection::tools::median;
+using urban_detection::tools::percentile;
+using urban_detection::tools::jsonEscape;
+using urban_detection::tools::jsonNumber;
+
 namespace {
 
 double msSince(Clock::time_point t0) {
@@ -87,40 +94,6 @@ class StageTimer {
   Clock::time_point wall_;
   double cpu_;
 };
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  // Nearest-rank percentile.
-  const std::size_t rank =
-      static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-  return v[std::min(v.size() - 1, rank == 0 ? 0 : rank - 1)];
-}
-
-double median(const std::vector<double>& v) {
-  if (v.empty()) return std::nan("");
-  std::vector<double> s(v);
-  std::sort(s.begin(), s.end());
-  const std::size_t n = s.size();
-  return n % 2 ? s[n / 2] : 0.5 * (s[n / 2 - 1] + s[n / 2]);
-}
-
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char b[32];
-  std::snprintf(b, sizeof(b), "%.6g", v);
-  return b;
-}
-
-std::string jsonEscape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    o += c;
-  }
-  return o;
-}
 
 // A source of revolutions: clouds from files, or packets decoded into clouds.
 class Source {
@@ -232,7 +205,7 @@ void usage() {
   std::fprintf(stderr,
       "usage: urban_detection_bench [--pcd-dir DIR]... [--bin-dir DIR]...\n"
       "         [--pcap FILE [--calibration FILE]] [--config FILE]... [--repeat N]\n"
-      "         [--max-frames N] [--label NAME] [--json FILE]\n"
+      "         [--max-frames N] [--label NAME] [--json FILE] [--no-kdtree]\n"
       "Run it pinned to one core (taskset -c 0) from a Release build.\n");
 }
 
@@ -250,6 +223,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> pcd_dirs, bin_dirs, configs;
   std::string pcap, calib_path, label = "bench", json_path;
   long repeat = 3, max_frames = -1;
+  bool run_kdtree = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* what) { return urban_detection::tools::optionValue(argc, argv, &i, what); };
@@ -263,6 +237,7 @@ int main(int argc, char** argv) {
     else if (a == "--max-frames") max_frames = integer("--max-frames");
     else if (a == "--label") label = value("--label");
     else if (a == "--json") json_path = value("--json");
+    else if (a == "--no-kdtree") run_kdtree = false;
     else if (a == "-h" || a == "--help") { usage(); return 0; }
     else {
       std::fprintf(stderr, "error: unknown argument '%s'\n", a.c_str());
@@ -275,13 +250,9 @@ int main(int argc, char** argv) {
   core::HierarchicalGridDetectorParams hier_params;
   core::KdTreeDetectorParams kd_params;
   core::ObjectFilterParams filter_params;
-  for (const std::string& c : configs) {
-    std::string err;
-    if (!core::loadPipelineParamsYaml(c, &seg_params, &hier_params, &kd_params, &err) ||
-        !core::loadObjectFilterParamsYaml(c, &filter_params, &err)) {
-      std::fprintf(stderr, "error: %s\n", err.c_str());
-      return 2;
-    }
+  if (!urban_detection::tools::loadConfigs(configs, &seg_params, &hier_params, &kd_params,
+                                           &filter_params)) {
+    return 2;
   }
 
   std::vector<std::unique_ptr<Source>> sources;
@@ -393,18 +364,21 @@ int main(int argc, char** argv) {
 
         // Not part of the pipeline: the baseline on the same foreground, and the Hough
         // refinement alone (it runs inside segment(); timed here on the same frame's cell
-        // classes before refinement).
-        StageTimer kd_t;
-        kdtree->detect(foreground, &objects);
-        kd_t.stop("kdtree_detection", &stage, &cpu_stage);
-        object_filter->apply(foreground, &objects);  // same output as the kd-tree nodelet
-        kd_obj_sum += objects.size();
+        // classes before refinement and wall evidence, as segment() passes them).
+        if (run_kdtree) {
+          StageTimer kd_t;
+          kdtree->detect(foreground, &objects);
+          kd_t.stop("kdtree_detection", &stage, &cpu_stage);
+          object_filter->apply(foreground, &objects);  // same output as the kd-tree nodelet
+          kd_obj_sum += objects.size();
+        }
 
         segmenter_no_hough->segment(cloud, &labels_no_hough);
         cells = segmenter_no_hough->cellClasses();
         const auto& g = segmenter_no_hough->grid();
         StageTimer hough_t;
-        hough.refine(g.rows(), g.cols(), seg_params.cell_size_m, &cells);
+        hough.refine(g.rows(), g.cols(), seg_params.cell_size_m, &cells,
+                     &segmenter_no_hough->wallSupport());
         hough_t.stop("hough_refinement", &stage, &cpu_stage);
 
         points_sum += cloud.size();
@@ -432,8 +406,9 @@ int main(int argc, char** argv) {
   for (double v : pipeline_cpu) pipeline_cpu_sum += v;
   const double pipeline_cpu_fps =
       1000.0 * static_cast<double>(pipeline_cpu.size()) / pipeline_cpu_sum;
-  const double speedup = median(stage["kdtree_detection"]) /
-                         median(stage["hierarchical_detection"]);
+  const double speedup = run_kdtree ? median(stage["kdtree_detection"]) /
+                                         median(stage["hierarchical_detection"])
+                                   : std::nan("");
 
   const char* order[] = {"packet_decode", "segmentation", "hough_refinement",
                          "foreground_extraction", "hierarchical_detection", "object_filter",
@@ -442,10 +417,10 @@ int main(int argc, char** argv) {
   std::printf("%s: %zu revolutions (%ld pass%s over", label.c_str(), frames, repeat,
               repeat > 1 ? "es" : "");
   for (const auto& s : sources) std::printf(" [%s]", s->describe().c_str());
-  std::printf("), %.0f points, %.0f foreground points, %.1f hierarchical / %.1f kd-tree objects "
-              "per revolution; %d CPU(s) allowed\n",
-              points_sum / frames, fg_sum / frames, hier_obj_sum / frames, kd_obj_sum / frames,
-              cpus);
+  std::printf("), %.0f points, %.0f foreground points, %.1f hierarchical objects",
+              points_sum / frames, fg_sum / frames, hier_obj_sum / frames);
+  if (run_kdtree) std::printf(" / %.1f kd-tree objects", kd_obj_sum / frames);
+  std::printf(" per revolution; %d CPU(s) allowed\n", cpus);
   std::printf("  %-24s %10s %10s %14s\n", "stage", "median_ms", "p95_ms", "cpu_median_ms");
   for (const char* name : order) {
     auto it = stage.find(name);
@@ -462,8 +437,10 @@ int main(int argc, char** argv) {
               any_packets ? "packets " : "cloud ");
   std::printf("  object_filter %s: %.1f hierarchical objects rejected per revolution\n",
               filter_params.enabled ? "on" : "off", rejected_sum / frames);
-  std::printf("  pipeline_fps %.1f (cpu-time fps %.1f)   hier_vs_kdtree_speedup %.1fx   "
-              "peak_rss %.1f MB\n", pipeline_fps, pipeline_cpu_fps, speedup, peak_mb);
+  char speedup_text[64] = "not measured (--no-kdtree)";
+  if (run_kdtree) std::snprintf(speedup_text, sizeof(speedup_text), "%.1fx", speedup);
+  std::printf("  pipeline_fps %.1f (cpu-time fps %.1f)   hier_vs_kdtree_speedup %s   "
+              "peak_rss %.1f MB\n", pipeline_fps, pipeline_cpu_fps, speedup_text, peak_mb);
 
   if (!json_path.empty()) {
     std::ofstream out(json_path);
@@ -473,12 +450,12 @@ int main(int argc, char** argv) {
     }
     out << "],\n  \"revolutions\": " << frames << ",\n  \"repeat\": " << repeat
         << ",\n  \"cpus_allowed\": " << cpus
-        << ",\n  \"mean_points\": " << num(points_sum / frames)
-        << ",\n  \"mean_foreground_points\": " << num(fg_sum / frames)
-        << ",\n  \"mean_objects_hierarchical\": " << num(hier_obj_sum / frames)
-        << ",\n  \"mean_objects_kdtree\": " << num(kd_obj_sum / frames)
+        << ",\n  \"mean_points\": " << jsonNumber(points_sum / frames)
+        << ",\n  \"mean_foreground_points\": " << jsonNumber(fg_sum / frames)
+        << ",\n  \"mean_objects_hierarchical\": " << jsonNumber(hier_obj_sum / frames)
+        << ",\n  \"mean_objects_kdtree\": " << jsonNumber(run_kdtree ? kd_obj_sum / frames : std::nan(""))
         << ",\n  \"object_filter\": " << (filter_params.enabled ? "true" : "false")
-        << ",\n  \"mean_rejected_objects_hierarchical\": " << num(rejected_sum / frames)
+        << ",\n  \"mean_rejected_objects_hierarchical\": " << jsonNumber(rejected_sum / frames)
         << ",\n  \"pipeline_includes_packet_decode\": " << (any_packets ? "true" : "false")
         << ",\n  \"stages\": {";
     bool first = true;
@@ -486,18 +463,18 @@ int main(int argc, char** argv) {
       auto it = stage.find(name);
       if (it == stage.end()) continue;
       out << (first ? "\n" : ",\n") << "    \"" << name << "\": {\"median_ms\": "
-          << num(median(it->second)) << ", \"p95_ms\": " << num(percentile(it->second, 0.95))
-          << ", \"cpu_median_ms\": " << num(median(cpu_stage[name]))
-          << ", \"cpu_p95_ms\": " << num(percentile(cpu_stage[name], 0.95)) << "}";
+          << jsonNumber(median(it->second)) << ", \"p95_ms\": " << jsonNumber(percentile(it->second, 0.95))
+          << ", \"cpu_median_ms\": " << jsonNumber(median(cpu_stage[name]))
+          << ", \"cpu_p95_ms\": " << jsonNumber(percentile(cpu_stage[name], 0.95)) << "}";
       first = false;
     }
-    out << "\n  },\n  \"pipeline_median_ms\": " << num(pipeline_median)
-        << ",\n  \"pipeline_p95_ms\": " << num(percentile(pipeline, 0.95))
-        << ",\n  \"pipeline_cpu_median_ms\": " << num(median(pipeline_cpu))
-        << ",\n  \"pipeline_fps\": " << num(pipeline_fps)
-        << ",\n  \"pipeline_cpu_fps\": " << num(pipeline_cpu_fps)
-        << ",\n  \"hier_vs_kdtree_speedup\": " << num(speedup)
-        << ",\n  \"peak_rss_mb\": " << num(peak_mb) << "\n}\n";
+    out << "\n  },\n  \"pipeline_median_ms\": " << jsonNumber(pipeline_median)
+        << ",\n  \"pipeline_p95_ms\": " << jsonNumber(percentile(pipeline, 0.95))
+        << ",\n  \"pipeline_cpu_median_ms\": " << jsonNumber(median(pipeline_cpu))
+        << ",\n  \"pipeline_fps\": " << jsonNumber(pipeline_fps)
+        << ",\n  \"pipeline_cpu_fps\": " << jsonNumber(pipeline_cpu_fps)
+        << ",\n  \"hier_vs_kdtree_speedup\": " << jsonNumber(speedup)
+        << ",\n  \"peak_rss_mb\": " << jsonNumber(peak_mb) << "\n}\n";
     if (!out) {
       std::fprintf(stderr, "error: cannot write %s\n", json_path.c_str());
       return 1;

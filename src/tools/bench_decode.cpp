@@ -18,10 +18,13 @@
 #include <vector>
 
 #include "synthetic_scene.h"
+#include "tool_common.h"
 #include "urban_detection/core/hdl64e_packet.h"
 
 namespace uc = urban_detection::core;
 namespace ut = urban_detection::tools;
+
+using urban_detection::tools::percentile;
 
 namespace {
 
@@ -32,13 +35,6 @@ double threadCpuSeconds() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + ts.tv_nsec * 1e-9;
-}
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t i = std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1) + 0.5));
-  return v[i];
 }
 
 std::string kittiScanPath() {

@@ -13,20 +13,17 @@
 
 #include "urban_detection/core/simulation_config.h"
 
+#include "tool_common.h"
+
 namespace ud = urban_detection::core;
+
+using urban_detection::tools::percentile;
 
 namespace {
 
 std::string configPath() {
   const std::string pkg = ros::package::getPath("urban_detection");
   return (pkg.empty() ? std::string(".") : pkg) + "/config/demo_drive.yaml";
-}
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t i = static_cast<std::size_t>(q * (v.size() - 1) + 0.5);
-  return v[std::min(i, v.size() - 1)];
 }
 
 void BM_SimulateRevolution(benchmark::State& state) {

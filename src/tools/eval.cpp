@@ -40,6 +40,9 @@
 namespace core = urban_detection::core;
 namespace fs = std::filesystem;
 
+using urban_detection::tools::jsonEscape;
+using urban_detection::tools::jsonNumber;
+
 namespace {
 
 // ------------------------------------------------------------------------------------------
@@ -444,29 +447,12 @@ void writeFramePng(const std::string& path, const Frame& f, const urban_detectio
 // ------------------------------------------------------------------------------------------
 // Output
 
-std::string jsonEscape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    o += c;
-  }
-  return o;
-}
-
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char b[32];
-  std::snprintf(b, sizeof(b), "%.6g", v);
-  return b;
-}
-
 std::string scoreJson(const core::DetectionScore& s) {
   std::ostringstream o;
   o << "\"no\": " << s.no << ", \"mo\": " << s.mo << ", \"fo\": " << s.fo << ", \"tp\": " << s.tp
     << ", \"ignored\": " << s.ignored << ", \"detections\": " << s.detections
-    << ", \"precision\": " << num(s.precision()) << ", \"recall\": " << num(s.recall())
-    << ", \"f_rate\": " << num(s.fRate());
+    << ", \"precision\": " << jsonNumber(s.precision()) << ", \"recall\": " << jsonNumber(s.recall())
+    << ", \"f_rate\": " << jsonNumber(s.fRate());
   return o.str();
 }
 
@@ -585,16 +571,9 @@ int main(int argc, char** argv) {
   core::HierarchicalGridDetectorParams hier_params;
   core::KdTreeDetectorParams kd_params;
   core::ObjectFilterParams filter_params;
-  for (const std::string& c : configs) {
-    std::string err;
-    if (!core::loadPipelineParamsYaml(c, &seg_params, &hier_params, &kd_params, &err)) {
-      std::fprintf(stderr, "error: %s\n", err.c_str());
-      return 2;
-    }
-    if (!core::loadObjectFilterParamsYaml(c, &filter_params, &err)) {
-      std::fprintf(stderr, "error: %s\n", err.c_str());
-      return 2;
-    }
+  if (!urban_detection::tools::loadConfigs(configs, &seg_params, &hier_params, &kd_params,
+                                           &filter_params)) {
+    return 2;
   }
   if (filter_arg == "on" || filter_arg == "off") {
     filter_params.enabled = filter_arg == "on";
@@ -771,7 +750,7 @@ int main(int argc, char** argv) {
     out << "{\n  \"dataset\": \"" << dataset->name() << "\",\n  \"path\": \""
         << jsonEscape(dataset_path) << "\",\n  \"frames_evaluated\": " << frames - failed
         << ",\n  \"frames_failed\": " << failed << ",\n  \"min_iou\": "
-        << num(evaluators[0].params().min_iou) << ",\n  \"min_gt_points\": " << min_gt_points
+        << jsonNumber(evaluators[0].params().min_iou) << ",\n  \"min_gt_points\": " << min_gt_points
         << ",\n  \"configs\": [";
     for (std::size_t c = 0; c < configs.size(); ++c) {
       out << (c ? ", " : "") << "\"" << jsonEscape(configs[c]) << "\"";

@@ -74,21 +74,17 @@ int main(int argc, char** argv) {
   std::string topic = "velodyne_points";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "missing value for %s\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--rate") rate_hz = std::strtod(value().c_str(), nullptr);
-    else if (a == "--start") start_s = std::strtod(value().c_str(), nullptr);
-    else if (a == "--repeat") repeat = std::strtol(value().c_str(), nullptr, 10);
-    else if (a == "--max") max_sweeps = std::strtol(value().c_str(), nullptr, 10);
+    auto value = [&] { return urban_detection::tools::optionValue(argc, argv, &i, a.c_str()); };
+    auto number = [&] { return urban_detection::tools::optionNumber(argc, argv, &i, a.c_str()); };
+    auto count = [&] { return urban_detection::tools::optionCount(argc, argv, &i, a.c_str()); };
+    if (a == "--rate") rate_hz = number();
+    else if (a == "--start") start_s = number();
+    else if (a == "--repeat") repeat = count();
+    else if (a == "--max") max_sweeps = count();
     else if (a == "--frame-id") frame_id = value();
     else if (a == "--base-frame") base_frame = value();
     else if (a == "--odom-frame") odom_frame = value();
-    else if (a == "--sensor-height") sensor_height_m = std::strtod(value().c_str(), nullptr);
+    else if (a == "--sensor-height") sensor_height_m = number();
     else if (a == "--topic") topic = value();
     else if (a == "-h" || a == "--help") {
       usage();

@@ -15,6 +15,8 @@
 #include "urban_detection/core/simulation_config.h"
 #include "urban_detection/ros/simulation_conversions.h"
 
+#include "tool_common.h"
+
 namespace ud = urban_detection;
 
 namespace {
@@ -41,21 +43,17 @@ int main(int argc, char** argv) {
   double rpm = 0.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "missing value for %s\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
+    auto value = [&] { return urban_detection::tools::optionValue(argc, argv, &i, a.c_str()); };
+    auto number = [&] { return urban_detection::tools::optionNumber(argc, argv, &i, a.c_str()); };
+    auto count = [&] { return urban_detection::tools::optionCount(argc, argv, &i, a.c_str()); };
     if (a == "--config") config_path = value();
-    else if (a == "--revolutions") revolutions = std::strtol(value().c_str(), nullptr, 10);
+    else if (a == "--revolutions") revolutions = count();
     else if (a == "--pcap") pcap_path = value();
     else if (a == "--bag") bag_path = value();
     else if (a == "--gt") gt_path = value();
     else if (a == "--calibration") calibration_path = value();
-    else if (a == "--seed") seed = std::strtol(value().c_str(), nullptr, 10);
-    else if (a == "--rpm") rpm = std::strtod(value().c_str(), nullptr);
+    else if (a == "--seed") seed = count();
+    else if (a == "--rpm") rpm = number();
     else if (a == "-h" || a == "--help") {
       usage();
       return 0;

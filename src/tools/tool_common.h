@@ -1,5 +1,6 @@
 // Helpers shared by the detection tools (not a tool itself: only src/tools/*.cpp are built as
-// executables): sweep listing/reading and a minimal OpenCV line plot.
+// executables): option parsing, sweep listing/reading, statistics and JSON output of the
+// benchmarks and the evaluator, and a minimal OpenCV line plot.
 #pragma once
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "urban_detection/core/kitti_io.h"
+#include "urban_detection/core/params_yaml.h"
 #include "urban_detection/core/point_types.h"
 
 namespace urban_detection {
@@ -39,6 +41,71 @@ inline long optionCount(int argc, char** argv, int* i, const char* option) {
     std::exit(2);
   }
   return x;
+}
+
+/// A finite number option value; exits with status 2 naming the option otherwise.
+inline double optionNumber(int argc, char** argv, int* i, const char* option) {
+  const std::string v = optionValue(argc, argv, i, option);
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (end == v.c_str() || *end != '\0' || !std::isfinite(x)) {
+    std::fprintf(stderr, "error: %s needs a number, got '%s'\n", option, v.c_str());
+    std::exit(2);
+  }
+  return x;
+}
+
+/// Applies the pipeline config files in order over the in-class defaults: segmentation,
+/// detectors and object filter (null pointers skip that part). Prints the first error and
+/// returns false.
+inline bool loadConfigs(const std::vector<std::string>& paths, core::GridSegmenterParams* seg,
+                        core::HierarchicalGridDetectorParams* hier,
+                        core::KdTreeDetectorParams* kd, core::ObjectFilterParams* filter) {
+  for (const std::string& path : paths) {
+    std::string err;
+    if (!core::loadPipelineParamsYaml(path, seg, hier, kd, &err) ||
+        (filter != nullptr && !core::loadObjectFilterParamsYaml(path, filter, &err))) {
+      std::fprintf(stderr, "error: %s\n", err.c_str());
+      return false;
+    }
+  }
+  return true;
+}
+
+/// Nearest-rank percentile (q in [0, 1]) of `v`; NaN when `v` is empty.
+inline double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const std::size_t rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  return v[std::min(v.size() - 1, rank == 0 ? 0 : rank - 1)];
+}
+
+/// Median of `v` (mean of the two middle values for an even count); NaN when `v` is empty.
+inline double median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// A JSON number with 6 significant digits, or null when `v` is not finite.
+inline std::string jsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char b[32];
+  std::snprintf(b, sizeof(b), "%.6g", v);
+  return b;
+}
+
+/// `s` as the inside of a JSON string: quotes and backslashes escaped, control characters
+/// dropped.
+inline std::string jsonEscape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    o += c;
+  }
+  return o;
 }
 
 /// Sorted .bin and .pcd files directly in `dir` (a single file is returned as is).

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "urban_detection/core/spark_segmenter.h"
 
@@ -17,12 +18,24 @@ namespace test {
 /// (green), pole (blue).
 enum ColourClass { kBackground = 0, kCar = 1, kVegetation = 2, kPole = 3 };
 
-/// A fresh scratch directory under the system temp dir.
+/// A fresh scratch directory under the system temp dir, unique to this process.
 inline std::string scratchDir(const std::string& name) {
+  // Every scratch directory is removed when the test binary exits.
+  struct Registry {
+    std::vector<std::filesystem::path> dirs;
+    ~Registry() {
+      for (const auto& d : dirs) {
+        std::error_code ec;
+        std::filesystem::remove_all(d, ec);
+      }
+    }
+  };
+  static Registry registry;
   const auto dir = std::filesystem::temp_directory_path() /
                    ("ud_spark_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  registry.dirs.push_back(dir);
   return dir.string();
 }
 

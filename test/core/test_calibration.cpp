@@ -12,6 +12,7 @@
 #include <string>
 
 #include "urban_detection/core/calibration.h"
+#include "test_files.h"
 
 namespace uc = urban_detection::core;
 
@@ -25,21 +26,7 @@ std::string sharedCalibration(const std::string& name) {
 
 bool exists(const std::string& path) { return std::ifstream(path).good(); }
 
-// A temporary file removed at the end of the test.
-class TempFile {
- public:
-  TempFile(const std::string& suffix, const std::string& text) {
-    static int counter = 0;
-    path_ = ::testing::TempDir() + "ud_calib_" + std::to_string(::getpid()) + "_" +
-            std::to_string(counter++) + suffix;
-    std::ofstream(path_) << text;
-  }
-  ~TempFile() { std::remove(path_.c_str()); }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
+using ud_test::TempFile;
 
 // YAML text of 64 lasers; `edit(laser, field, value)` may change a value (return false to omit
 // the field).

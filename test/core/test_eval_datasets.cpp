@@ -17,6 +17,7 @@
 #include "urban_detection/core/kitti_io.h"
 #include "urban_detection/core/lidar_simulator.h"
 #include "urban_detection/core/simulation_config.h"
+#include "test_files.h"
 
 namespace urban_detection {
 namespace core {
@@ -317,7 +318,7 @@ Drive simulate(const std::string& name, int revolutions, const std::set<int>& dr
   LidarSimulator sim(generateScene(c.scene, c.drive), c.scene, c.drive,
                      Calibration::nominalHdl64eS2(), c.sensor);
   Drive d;
-  const std::string base = testing::TempDir() + "/" + name + "_" + std::to_string(::getpid());
+  const std::string base = ud_test::tempPath(name);
   d.pcap = base + ".pcap";
   d.gt = base + ".gt";
   PcapWriter pcap(d.pcap);

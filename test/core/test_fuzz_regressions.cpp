@@ -16,25 +16,13 @@
 #include "urban_detection/core/calibration.h"
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/pcap_io.h"
+#include "test_files.h"
 
 namespace uc = urban_detection::core;
 
 namespace {
 
-class TempFile {
- public:
-  TempFile(const std::string& suffix, const std::string& text) {
-    static int counter = 0;
-    path_ = ::testing::TempDir() + "ud_fuzzreg_" + std::to_string(::getpid()) + "_" +
-            std::to_string(counter++) + suffix;
-    std::ofstream(path_) << text;
-  }
-  ~TempFile() { std::remove(path_.c_str()); }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
+using ud_test::TempFile;
 
 // A valid 64-laser db.xml whose laser 5 gets `id5` as its id_ text, followed by an intensity
 // list whose item 7 is `min7`.
@@ -100,7 +88,7 @@ TEST(FuzzRegressions, DbXmlIntensityItemOutsideByteRangeIsRejectedByName) {
 // more can be read. The corrupt header here is followed by a whole valid record, which the
 // old reader returned on the second call.
 TEST(FuzzRegressions, PcapReaderStaysTruncatedAfterACorruptRecordHeader) {
-  const std::string valid_path = ::testing::TempDir() + "ud_fuzzreg_valid.pcap";
+  const std::string valid_path = ud_test::tempPath("fuzzreg_valid.pcap");
   {
     uc::PcapWriter writer(valid_path);
     uc::RawPacket packet{};

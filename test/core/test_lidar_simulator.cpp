@@ -11,6 +11,7 @@
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/lidar_simulator.h"
 #include "urban_detection/core/simulation_config.h"
+#include "test_files.h"
 
 namespace ud = urban_detection::core;
 using Eigen::Vector3d;
@@ -232,8 +233,12 @@ TEST(LidarSimulator, RevolutionsFollowRpmCutAndTimestamps) {
         const std::uint8_t* d = rev.packets[i].data();
         // The real cutter sees a new revolution exactly at our first packet.
         const bool starts = cutter.startsNewRevolution(ud::blockAzimuth(d, 0));
-        if (r > 0) EXPECT_EQ(starts, i == 0) << "rpm " << rpm << " rev " << r << " packet " << i;
-        if (last_stamp >= 0) EXPECT_NEAR(rev.packet_stamps_s[i] - last_stamp, packet_s, 1e-6);
+        if (r > 0) {
+          EXPECT_EQ(starts, i == 0) << "rpm " << rpm << " rev " << r << " packet " << i;
+        }
+        if (last_stamp >= 0) {
+          EXPECT_NEAR(rev.packet_stamps_s[i] - last_stamp, packet_s, 1e-6);
+        }
         last_stamp = rev.packet_stamps_s[i];
         // Timestamp field: microseconds past the hour of the packet stamp.
         const std::uint32_t ts = d[1200] | (d[1201] << 8) | (d[1202] << 16) |
@@ -263,7 +268,7 @@ TEST(LidarSimulator, RejectsInvalidSensorParams) {
 TEST(GroundTruthFile, RoundTripAndCorruptFiles) {
   const ud::SimulationConfig c = demoConfig();
   auto sim = makeSim(c);
-  const std::string path = testing::TempDir() + "/ud_gt_roundtrip.udgt";
+  const std::string path = ud_test::tempPath("gt_roundtrip.udgt");
   std::vector<ud::GroundTruthFrame> written(2);
   {
     ud::GroundTruthWriter w(path);
@@ -300,7 +305,7 @@ TEST(GroundTruthFile, RoundTripAndCorruptFiles) {
   // Truncated: the first frame reads, the second is corrupt.
   std::ifstream in(path, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string cut = testing::TempDir() + "/ud_gt_cut.udgt";
+  const std::string cut = ud_test::tempPath("gt_cut.udgt");
   std::ofstream(cut, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size() - 100));
   ud::GroundTruthReader r(cut);
   ud::GroundTruthFrame f;
@@ -309,7 +314,7 @@ TEST(GroundTruthFile, RoundTripAndCorruptFiles) {
   EXPECT_FALSE(r.error().empty());
   EXPECT_THROW(ud::GroundTruthReader::readAll(cut), ud::GroundTruthError);
   // Not a ground-truth file at all.
-  const std::string junk = testing::TempDir() + "/ud_gt_junk.udgt";
+  const std::string junk = ud_test::tempPath("gt_junk.udgt");
   std::ofstream(junk, std::ios::binary) << "this is not ground truth";
   EXPECT_THROW(ud::GroundTruthReader{junk}, ud::GroundTruthError);
   EXPECT_THROW(ud::GroundTruthReader{"/nonexistent/dir/file.udgt"}, ud::GroundTruthError);

@@ -17,6 +17,7 @@
 #include "urban_detection/core/object_filter.h"
 #include "urban_detection/core/params_yaml.h"
 #include "synthetic_scans.h"
+#include "test_files.h"
 
 namespace core = urban_detection::core;
 using urban_detection::LabeledCloud;
@@ -253,11 +254,7 @@ TEST(ObjectFilter, DetectionYamlMirrorsTheParamsAndTyposAreErrors) {
   EXPECT_DOUBLE_EQ(p.hedge_min_intensity, d.hedge_min_intensity);
   EXPECT_DOUBLE_EQ(p.hedge_min_length_m, d.hedge_min_length_m);
 
-  const std::string path = testing::TempDir() + "/object_filter_typo.yaml";
-  {
-    std::ofstream f(path);
-    f << "detection:\n  object_filter:\n    jump_mm: 0.3\n";
-  }
-  EXPECT_FALSE(core::loadObjectFilterParamsYaml(path, &p, &error));
+  const ud_test::TempFile typo(".yaml", "detection:\n  object_filter:\n    jump_mm: 0.3\n");
+  EXPECT_FALSE(core::loadObjectFilterParamsYaml(typo.path(), &p, &error));
   EXPECT_NE(error.find("object_filter/jump_mm: unknown parameter"), std::string::npos) << error;
 }

@@ -12,14 +12,13 @@
 
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/pcap_io.h"
+#include "test_files.h"
 
 namespace uc = urban_detection::core;
 
 namespace {
 
-std::string tempPath(const std::string& name) {
-  return ::testing::TempDir() + "ud_pcap_" + std::to_string(::getpid()) + "_" + name;
-}
+std::string tempPath(const std::string& name) { return ud_test::tempPath("pcap_" + name); }
 
 // Packets of a sensor looking at a 10 m cylinder, azimuth advancing 0.2 deg per firing.
 std::vector<uc::RawPacket> makePackets(int count) {

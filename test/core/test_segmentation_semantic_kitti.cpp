@@ -11,6 +11,7 @@
 
 #include "urban_detection/core/grid_segmenter.h"
 #include "urban_detection/core/kitti_io.h"
+#include "test_files.h"
 
 namespace urban_detection {
 namespace {
@@ -92,7 +93,7 @@ TEST(SegmentationSemanticKitti, AccuracyWithAndWithoutHough) {
 }
 
 TEST(KittiIo, ReadsBinAndRejectsTruncatedFiles) {
-  const std::string path = ::testing::TempDir() + "/ud_kitti_io_test.bin";
+  const std::string path = ud_test::tempPath("kitti_io_test.bin");
   const float data[8] = {1.f, 2.f, 3.f, 0.5f, -4.f, 5.f, -6.f, 1.0f};
   {
     FILE* f = std::fopen(path.c_str(), "wb");

@@ -8,6 +8,7 @@
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/pcap_io.h"
 #include "urban_detection/core/simulation_config.h"
+#include "test_files.h"
 
 namespace ud = urban_detection::core;
 
@@ -16,7 +17,7 @@ TEST(SimulationPcap, PcapReplaysThroughReaderCutterAndDecoder) {
       ud::loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
   ud::LidarSimulator sim(ud::generateScene(c.scene, c.drive), c.scene, c.drive,
                          ud::Calibration::nominalHdl64eS2(), c.sensor);
-  const std::string path = testing::TempDir() + "/ud_sim_test.pcap";
+  const std::string path = ud_test::tempPath("sim_test.pcap");
   std::vector<std::size_t> gt_sizes;
   std::vector<ud::RawPacket> written;
   std::vector<ud::GroundTruthFrame> frames;

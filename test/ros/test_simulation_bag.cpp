@@ -12,6 +12,7 @@
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/simulation_config.h"
 #include "urban_detection/ros/simulation_conversions.h"
+#include "../core/test_files.h"
 
 namespace ud = urban_detection;
 
@@ -21,7 +22,7 @@ TEST(SimulationBag, WrittenBagReplaysThroughTheDecoder) {
       ud::core::loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
   ud::core::LidarSimulator sim(ud::core::generateScene(c.scene, c.drive), c.scene, c.drive,
                                ud::core::Calibration::nominalHdl64eS2(), c.sensor);
-  const std::string path = testing::TempDir() + "/ud_sim_test.bag";
+  const std::string path = ud_test::tempPath("sim_test.bag");
   std::vector<std::size_t> expected_points;
   {
     ud::ros_conv::SimulationBagWriter writer(path);

@@ -96,6 +96,9 @@ class GridSegmenter {
   /// The grid of the last frame, and its per-cell classes (row-major, after Hough).
   const SimpleGrid& grid() const { return grid_; }
   const std::vector<SegmentClass>& cellClasses() const { return cell_class_; }
+  /// Per cell of the last segment() call: 1 where the Hough refiner counts the cell as wall
+  /// evidence besides tall cells (its top at the upper edge of the field of view).
+  const std::vector<std::uint8_t>& wallSupport() const { return wall_support_; }
   /// Local ground elevation [m] of each cell of the last frame (valid where cellHasGround()).
   float cellGround(std::int32_t cell) const { return ground_z_[cell]; }
   bool cellHasGround(std::int32_t cell) const { return ground_state_[cell] != kNoGround; }
