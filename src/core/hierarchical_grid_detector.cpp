@@ -58,6 +58,14 @@ std::string validate(const HierarchicalGridDetectorParams& p) {
     err << "bridge_range_m must be in [0, 1000] m, got " << p.bridge_range_m;
   } else if (!(p.gap_bridge_range_m >= 0.0 && p.gap_bridge_range_m <= 1000.0)) {
     err << "gap_bridge_range_m must be in [0, 1000] m, got " << p.gap_bridge_range_m;
+  } else if (p.roof_bridge_subcells < 0 || p.roof_bridge_subcells > 8) {
+    err << "roof_bridge_subcells must be in [0, 8], got " << p.roof_bridge_subcells;
+  } else if (!(p.roof_max_step_m >= 0.0 && p.roof_max_step_m <= 10.0)) {
+    err << "roof_max_step_m must be in [0, 10] m, got " << p.roof_max_step_m;
+  } else if (!(p.roof_bridge_range_m >= 0.0 && p.roof_bridge_range_m <= 1000.0)) {
+    err << "roof_bridge_range_m must be in [0, 1000] m, got " << p.roof_bridge_range_m;
+  } else if (!(p.ring_spacing_deg >= 0.01 && p.ring_spacing_deg <= 10.0)) {
+    err << "ring_spacing_deg must be in [0.01, 10] deg, got " << p.ring_spacing_deg;
   } else if (!(p.dense_min_weighted_points >= 0.0 && p.dense_min_weighted_points <= 1e6)) {
     err << "dense_min_weighted_points must be in [0, 1e6], got " << p.dense_min_weighted_points;
   } else if (p.min_points < 1) {
@@ -108,12 +116,13 @@ void HierarchicalGridDetector::buildBridgeTables() {
   // far tables, 2 <= max(|o.x|, |o.y|) <= B + 1, o.u > 0 and |o x u| <= 1 sub-cell (ahead on
   // the line of sight, beside it by at most one sub-cell); the farthest table adds the ring
   // max(|o.x|, |o.y|) = 2 in all directions, half of it (the other half is the same pairs
-  // seen from their other end).
+  // seen from their other end). The roof table (kRoofTable, step 3b) is radial like the near
+  // one, with B = roof_bridge_subcells.
   bridge_offsets_.clear();
   bridge_begin_.clear();
-  const int reach[3] = {params_.radial_bridge_subcells + 1, params_.far_radial_bridge_subcells + 1,
-                        params_.far_radial_bridge_subcells + 1};
-  for (int table = 0; table < 3; ++table) {
+  const int reach[4] = {params_.radial_bridge_subcells + 1, params_.far_radial_bridge_subcells + 1,
+                        params_.far_radial_bridge_subcells + 1, params_.roof_bridge_subcells + 1};
+  for (int table = 0; table < 4; ++table) {
     for (int bin = 0; bin < kDirectionBins; ++bin) {
       bridge_begin_.push_back(static_cast<std::int32_t>(bridge_offsets_.size()));
       const double a = (bin + 0.5) * 4.0 / kDirectionBins;  // inverse of directionBin()
@@ -156,6 +165,73 @@ void HierarchicalGridDetector::resetGrid() {
   coarse_cell_.clear();
 }
 
+void HierarchicalGridDetector::roofBridges() {
+  // Step 3b (header). A candidate ring must be a whole component of steps 3 (a lone ring, or
+  // rings on one flat surface): the z range of each component is taken before any roof bridge
+  // is made, so a ring joined to a car does not make the car a candidate, and a car or a
+  // pedestrian behind another car (not flat) is never one.
+  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
+  root_zmin_.resize(nds);
+  root_zmax_.resize(nds);
+  for (std::int32_t s = 0; s < nds; ++s) {
+    if (!dense_occupied_[s]) continue;
+    const std::int32_t root = find(&dense_parent_, s);
+    dense_parent_[s] = root;  // full compression: the loops below read the root directly
+    if (root == s) {
+      root_zmin_[s] = std::numeric_limits<float>::infinity();
+      root_zmax_[s] = -std::numeric_limits<float>::infinity();
+    }
+  }
+  for (std::int32_t s = 0; s < nds; ++s) {
+    if (!dense_occupied_[s]) continue;
+    const std::int32_t root = dense_parent_[s];
+    root_zmin_[root] = std::min(root_zmin_[root], dense_zmin_[s]);
+    root_zmax_[root] = std::max(root_zmax_[root], dense_zmax_[s]);
+  }
+  dense_flat_.assign(nds, 0);
+  const float step = static_cast<float>(params_.roof_max_step_m);
+  for (std::int32_t s = 0; s < nds; ++s) {
+    const std::int32_t root = dense_parent_[s];
+    dense_flat_[s] = dense_occupied_[s] && root_zmax_[root] - root_zmin_[root] <= step;
+  }
+  const float range2 =
+      static_cast<float>(params_.roof_bridge_range_m * params_.roof_bridge_range_m);
+  const float dtheta = static_cast<float>(params_.ring_spacing_deg * M_PI / 180.0);
+  const float origin = static_cast<float>(origin_m_);
+  const float dcell = static_cast<float>(dense_cell_m_);
+  for (std::int32_t s = 0; s < nds; ++s) {
+    if (!dense_occupied_[s]) continue;
+    const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
+    const float cx = (ix + 0.5f) * dcell + origin, cy = (iy + 0.5f) * dcell + origin;
+    const float d2 = cx * cx + cy * cy;
+    if (d2 < dcell * dcell || d2 > range2) continue;
+    const std::int32_t cs = dense_coarse_[s];
+    const float za = coarse_zmax_[cs];
+    const float inv_d = 1.0f / std::sqrt(d2);
+    const std::int32_t* begin =
+        &bridge_begin_[kRoofTable * (kDirectionBins + 1) + directionBin(cx, cy)];
+    for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
+      const int ox = bridge_offsets_[k].x, oy = bridge_offsets_[k].y;
+      const int x = ix + ox, y = iy + oy;
+      if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
+      const std::int32_t r = dense_slot_[y * nd_ + x];
+      if (r < 0 || !dense_flat_[r]) continue;
+      const float zb = dense_zmax_[r];
+      if (std::fabs(zb - za) > step || coarse_zmax_[dense_coarse_[r]] - zb > step) continue;
+      // Two rings land d^2 * dtheta / h apart on a horizontal surface h below the sensor at
+      // distance d (small angles; the sensor is at z = 0).
+      const float along = (ox * cx + oy * cy) * inv_d * dcell;
+      const float h = -zb;
+      if (h > 0.0f && along * h > dtheta * d2 + dcell * h) continue;
+      if (!linked(cs, dense_coarse_[r])) continue;
+      const std::int32_t a = find(&dense_parent_, s), b = find(&dense_parent_, r);
+      if (a == b) continue;
+      dense_parent_[std::max(a, b)] = std::min(a, b);
+      ++stats_.roof_bridges;
+    }
+  }
+}
+
 void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
                                       std::vector<DetectedObject>* objects) {
   stats_ = HierarchicalGridStats();
@@ -165,6 +241,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   dense_count_.clear();
   dense_xy_.clear();
   dense_zmax_.clear();
+  dense_zmin_.clear();
   dense_coarse_.clear();
   coarse_zmax_.clear();
   point_slot_.resize(n);
@@ -210,9 +287,11 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       }
       dense_coarse_.push_back(cslot);
       dense_zmax_.push_back(p.z);
+      dense_zmin_.push_back(p.z);
     }
     ++dense_count_[slot];
     dense_zmax_[slot] = std::max(dense_zmax_[slot], p.z);
+    dense_zmin_[slot] = std::min(dense_zmin_[slot], p.z);
     point_slot_[i] = slot;
   }
   const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
@@ -335,6 +414,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
         if (r >= 0 && psiOk(ks, key[r]) && unite(s, r)) ++stats_.bridges;
       }
     }
+    if (params_.roof_bridge_subcells > 0) roofBridges();
   }
 
   // --- Component index per sub-cell (near-empty ones borrow a dense neighbour's). -----------

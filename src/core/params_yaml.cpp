@@ -123,6 +123,10 @@ bool applyHierarchical(const YAML::Node& node, const std::string& where,
   t.bind("far_radial_bridge_subcells", &p->far_radial_bridge_subcells);
   t.bind("bridge_range_m", &p->bridge_range_m);
   t.bind("gap_bridge_range_m", &p->gap_bridge_range_m);
+  t.bind("roof_bridge_subcells", &p->roof_bridge_subcells);
+  t.bind("roof_max_step_m", &p->roof_max_step_m);
+  t.bind("roof_bridge_range_m", &p->roof_bridge_range_m);
+  t.bind("ring_spacing_deg", &p->ring_spacing_deg);
   t.bind("dense_refinement", &p->dense_refinement);
   t.bind("min_points", &p->min_points);
   t.bind("max_extent_m", &p->max_extent_m);

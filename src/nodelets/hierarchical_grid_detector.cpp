@@ -32,6 +32,10 @@ class HierarchicalGridDetector : public DetectorNodelet {
     c.far_radial_bridge_subcells = params_.far_radial_bridge_subcells;
     c.bridge_range_m = params_.bridge_range_m;
     c.gap_bridge_range_m = params_.gap_bridge_range_m;
+    c.roof_bridge_subcells = params_.roof_bridge_subcells;
+    c.roof_max_step_m = params_.roof_max_step_m;
+    c.roof_bridge_range_m = params_.roof_bridge_range_m;
+    c.ring_spacing_deg = params_.ring_spacing_deg;
     c.min_points = params_.min_points;
     c.max_extent_m = params_.max_extent_m;
     reconfigure_nh_ = ros::NodeHandle(pnh, "hierarchical_grid");
@@ -53,6 +57,10 @@ class HierarchicalGridDetector : public DetectorNodelet {
     p.far_radial_bridge_subcells = c.far_radial_bridge_subcells;
     p.bridge_range_m = c.bridge_range_m;
     p.gap_bridge_range_m = c.gap_bridge_range_m;
+    p.roof_bridge_subcells = c.roof_bridge_subcells;
+    p.roof_max_step_m = c.roof_max_step_m;
+    p.roof_bridge_range_m = c.roof_bridge_range_m;
+    p.ring_spacing_deg = c.ring_spacing_deg;
     p.min_points = c.min_points;
     p.max_extent_m = c.max_extent_m;
     const std::string error = ros_conv::checkHierarchicalGridParams(reconfigure_nh_, p);

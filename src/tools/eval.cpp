@@ -223,6 +223,7 @@ class SimulatedDriveDataset : public Dataset {
 struct Diagnostics {
   std::map<std::string, std::size_t> missed_by_cause;
   std::map<std::string, std::size_t> false_by_class;
+  std::map<std::string, std::size_t> false_fragments;  // false parts of GT objects, by kind
 };
 
 const char* segName(core::SegmentClass c) { return core::toString(c); }
@@ -344,11 +345,59 @@ void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::Segment
     if (m.verdict[d] != core::DetectionVerdict::kFalse) continue;
     const std::string what = detectionContent(f, ds, dets[d]);
     ++diag->false_by_class[what];
+    // A false detection made mostly of a GT object's points: a merge of several objects, the
+    // leftover of an object matched by another detection, or a piece of a missed object; with
+    // the segmentation of the object's points outside this detection (what cut it off).
+    std::string fragment;
+    if (what.compare(0, 8, "part_of_") == 0) {
+      std::map<std::int32_t, std::size_t> gt_count;
+      for (std::uint32_t i : dets[d].indices) {
+        if (i < n && f.gt.object_of_point[i] >= 0) ++gt_count[f.gt.object_of_point[i]];
+      }
+      std::int32_t g = -1;
+      std::size_t gn = 0, objects_over_10 = 0;
+      for (const auto& kv : gt_count) {
+        if (kv.second >= 10) ++objects_over_10;
+        if (kv.second > gn) {
+          gn = kv.second;
+          g = kv.first;
+        }
+      }
+      std::map<core::SegmentClass, std::size_t> rest_seg;
+      std::size_t rest_in_other_det = 0;
+      for (std::uint32_t i : pts[g]) {
+        if (det_of_point[i] == static_cast<std::int32_t>(d)) continue;
+        ++rest_seg[i < seg.size() ? seg[i] : core::SegmentClass::kUnknown];
+        if (det_of_point[i] >= 0) ++rest_in_other_det;
+      }
+      fragment = objects_over_10 >= 2          ? "merge"
+                 : m.matched_detection[g] >= 0 ? "leftover_of_matched"
+                 : 2 * gn >= pts[g].size()     ? "most_of_missed"
+                                               : "piece_of_missed";
+      ++diag->false_fragments[fragment];
+      if (out) {
+        char buf[160];
+        std::snprintf(buf, sizeof(buf), " %s gt %u %zu/%zu, rest: other det %zu", fragment.c_str(),
+                      f.gt.objects[g].id, gn, pts[g].size(), rest_in_other_det);
+        fragment = buf;
+        for (const auto& kv : rest_seg) {
+          fragment += std::string(" ") + segName(kv.first) + " " + std::to_string(kv.second);
+        }
+        float zmin = 1e9f, zmax = -1e9f;
+        for (std::uint32_t i : dets[d].indices) {
+          if (i >= n) continue;
+          zmin = std::min(zmin, f.cloud[i].z);
+          zmax = std::max(zmax, f.cloud[i].z);
+        }
+        std::snprintf(buf, sizeof(buf), "; z %.2f..%.2f", zmin, zmax);
+        fragment += buf;
+      }
+    }
     if (out) {
       const auto& c = dets[d].centroid;
-      std::fprintf(out, "  %s %-18s false  %-28s %6zu pts %5.1f m  (%.1f, %.1f)\n",
-                   f.id.c_str(), detector.c_str(), what.c_str(), dets[d].indices.size(),
-                   std::hypot(c.x(), c.y()), c.x(), c.y());
+      std::fprintf(out, "  %s %-18s false  %-28s %6zu pts %5.1f m  (%.1f, %.1f)%s\n", f.id.c_str(),
+                   detector.c_str(), what.c_str(), dets[d].indices.size(), std::hypot(c.x(), c.y()),
+                   c.x(), c.y(), fragment.c_str());
     }
   }
 }
@@ -736,6 +785,10 @@ int main(int argc, char** argv) {
     std::printf("%s: missed by cause %s; false by content %s\n", detectors[k]->name().c_str(),
                 countsJson(diags[k].missed_by_cause).c_str(),
                 countsJson(diags[k].false_by_class).c_str());
+    if (details) {
+      std::printf("%s: false parts of GT objects by kind %s\n", detectors[k]->name().c_str(),
+                  countsJson(diags[k].false_fragments).c_str());
+    }
     std::printf("%s: object filter %s, rejected by content %s\n", detectors[k]->name().c_str(),
                 filter_params.enabled ? "on" : "off",
                 countsJson(rejected_by_content[k]).c_str());

@@ -156,6 +156,10 @@ TEST(DetectionConfig, YamlMirrorsTheParamsStructs) {
   EXPECT_EQ(g["far_radial_bridge_subcells"].as<int>(), h.far_radial_bridge_subcells);
   EXPECT_DOUBLE_EQ(g["bridge_range_m"].as<double>(), h.bridge_range_m);
   EXPECT_DOUBLE_EQ(g["gap_bridge_range_m"].as<double>(), h.gap_bridge_range_m);
+  EXPECT_EQ(g["roof_bridge_subcells"].as<int>(), h.roof_bridge_subcells);
+  EXPECT_DOUBLE_EQ(g["roof_max_step_m"].as<double>(), h.roof_max_step_m);
+  EXPECT_DOUBLE_EQ(g["roof_bridge_range_m"].as<double>(), h.roof_bridge_range_m);
+  EXPECT_DOUBLE_EQ(g["ring_spacing_deg"].as<double>(), h.ring_spacing_deg);
   EXPECT_DOUBLE_EQ(g["dense_min_weighted_points"].as<double>(), h.dense_min_weighted_points);
   EXPECT_EQ(g["dense_refinement"].as<bool>(), h.dense_refinement);
   EXPECT_EQ(g["min_points"].as<int>(), h.min_points);
