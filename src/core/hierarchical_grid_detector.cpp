@@ -175,7 +175,7 @@ void HierarchicalGridDetector::roofBridges() {
   root_zmax_.resize(nds);
   for (std::int32_t s = 0; s < nds; ++s) {
     if (!dense_occupied_[s]) continue;
-    const std::int32_t root = find(&dense_parent_, s);
+    const std::int32_t root = findRoot(dense_parent_.data(), s);
     dense_parent_[s] = root;  // full compression: the loops below read the root directly
     if (root == s) {
       root_zmin_[s] = std::numeric_limits<float>::infinity();
@@ -224,7 +224,8 @@ void HierarchicalGridDetector::roofBridges() {
       const float h = -zb;
       if (h > 0.0f && along * h > dtheta * d2 + dcell * h) continue;
       if (!linked(cs, dense_coarse_[r])) continue;
-      const std::int32_t a = find(&dense_parent_, s), b = find(&dense_parent_, r);
+      const std::int32_t a = findRoot(dense_parent_.data(), s),
+                         b = findRoot(dense_parent_.data(), r);
       if (a == b) continue;
       dense_parent_[std::max(a, b)] = std::min(a, b);
       ++stats_.roof_bridges;
