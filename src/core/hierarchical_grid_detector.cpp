@@ -268,8 +268,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       }
       continue;
     }
-    const int ix = std::min(static_cast<int>(fx), nd_ - 1);
-    const int iy = std::min(static_cast<int>(fy), nd_ - 1);
+    const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);  // fx, fy < nd_ exactly
     const std::int32_t cell = iy * nd_ + ix;
     std::int32_t slot = dense_slot_[cell];
     if (slot < 0) {

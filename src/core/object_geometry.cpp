@@ -158,35 +158,35 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   constexpr float kInf = std::numeric_limits<float>::infinity();
   col_lo_.assign(cols, Eigen::Vector2f(0.0f, kInf));
   col_hi_.assign(cols, Eigen::Vector2f(0.0f, -kInf));
-  Eigen::Vector2f first, last;  // extremes along, the first one met on ties
   auto bin = [&](auto along_x_tag) {
     constexpr bool kAlongX = decltype(along_x_tag)::value;
     Eigen::Vector2f* col_lo = col_lo_.data();
     Eigen::Vector2f* col_hi = col_hi_.data();
-    float a_first = kAlongX ? pts[0].x() : pts[0].y(), a_last = a_first;
-    float b_first = kAlongX ? pts[0].y() : pts[0].x(), b_last = b_first;
     for (std::size_t i = 0; i < n; ++i) {
       const float a = kAlongX ? pts[i].x() : pts[i].y(), b = kAlongX ? pts[i].y() : pts[i].x();
       const int c = std::min(static_cast<int>((a - lo) * scale), cols - 1);
       Eigen::Vector2f& l = col_lo[c];
       Eigen::Vector2f& h = col_hi[c];
-      const bool is_lo = b<l.y(), is_hi = b> h.y();
+      const bool is_lo = b < l.y();
+      const bool is_hi = b > h.y();
       l = Eigen::Vector2f(is_lo ? a : l.x(), is_lo ? b : l.y());
       h = Eigen::Vector2f(is_hi ? a : h.x(), is_hi ? b : h.y());
-      const bool is_first = a<a_first, is_last = a> a_last;
-      b_first = is_first ? b : b_first;
-      a_first = is_first ? a : a_first;
-      b_last = is_last ? b : b_last;
-      a_last = is_last ? a : a_last;
     }
-    first = Eigen::Vector2f(a_first, b_first);
-    last = Eigen::Vector2f(a_last, b_last);
   };
   if (along_x) {
     bin(std::true_type());
   } else {
     bin(std::false_type());
   }
+  // The extremes along: the first points whose along coordinate is the box's minimum and
+  // maximum (pass 1 found the values; min/max of floats are exact).
+  const float hi = along_x ? mxx : mxy;
+  auto firstWith = [&](float value) {
+    std::size_t i = 0;
+    while (i + 1 < n && (along_x ? pts[i].x() : pts[i].y()) != value) ++i;
+    return Eigen::Vector2f(along_x ? pts[i] : Eigen::Vector2f(pts[i].y(), pts[i].x()));
+  };
+  const Eigen::Vector2f first = firstWith(lo), last = firstWith(hi);
   // Andrew's monotone chain without sorting: with one candidate per column, each chain is
   // already ordered along the long side. Work in (along, across) coordinates.
   cand_.resize(2 * static_cast<std::size_t>(cols) + 4);
