@@ -166,68 +166,70 @@ void HierarchicalGridDetector::resetGrid() {
 }
 
 void HierarchicalGridDetector::roofBridges() {
-  // Step 3b (header). A candidate ring must be a whole component of steps 3 (a lone ring, or
+  // Step 3b (header). A candidate ring must be a whole component of step 3 (a lone ring, or
   // rings on one flat surface): the z range of each component is taken before any roof bridge
   // is made, so a ring joined to a car does not make the car a candidate, and a car or a
-  // pedestrian behind another car (not flat) is never one.
+  // pedestrian behind another car (not flat) is never one. Union-find roots are the smallest
+  // slot of their component, so one ascending pass meets each root before its members.
   const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
   root_zmin_.resize(nds);
   root_zmax_.resize(nds);
   for (std::int32_t s = 0; s < nds; ++s) {
     if (!dense_occupied_[s]) continue;
     const std::int32_t root = findRoot(dense_parent_.data(), s);
-    dense_parent_[s] = root;  // full compression: the loops below read the root directly
     if (root == s) {
-      root_zmin_[s] = std::numeric_limits<float>::infinity();
-      root_zmax_[s] = -std::numeric_limits<float>::infinity();
+      root_zmin_[s] = dense_zmin_[s];
+      root_zmax_[s] = dense_zmax_[s];
+    } else {
+      root_zmin_[root] = std::min(root_zmin_[root], dense_zmin_[s]);
+      root_zmax_[root] = std::max(root_zmax_[root], dense_zmax_[s]);
     }
   }
-  for (std::int32_t s = 0; s < nds; ++s) {
-    if (!dense_occupied_[s]) continue;
-    const std::int32_t root = dense_parent_[s];
-    root_zmin_[root] = std::min(root_zmin_[root], dense_zmin_[s]);
-    root_zmax_[root] = std::max(root_zmax_[root], dense_zmax_[s]);
-  }
-  dense_flat_.assign(nds, 0);
   const float step = static_cast<float>(params_.roof_max_step_m);
-  for (std::int32_t s = 0; s < nds; ++s) {
-    const std::int32_t root = dense_parent_[s];
-    dense_flat_[s] = dense_occupied_[s] && root_zmax_[root] - root_zmin_[root] <= step;
-  }
   const float range2 =
       static_cast<float>(params_.roof_bridge_range_m * params_.roof_bridge_range_m);
   const float dtheta = static_cast<float>(params_.ring_spacing_deg * M_PI / 180.0);
   const float origin = static_cast<float>(origin_m_);
   const float dcell = static_cast<float>(dense_cell_m_);
+  // The rings b are few: from each, look back towards the sensor along its line of sight for
+  // the sub-cells a it may join (the offsets of b's direction bin, negated).
+  dense_flat_.clear();
   for (std::int32_t s = 0; s < nds; ++s) {
-    if (!dense_occupied_[s]) continue;
-    const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
+    if (dense_occupied_[s] && dense_zmax_[s] - dense_zmin_[s] <= step) {
+      const std::int32_t root = findRoot(dense_parent_.data(), s);
+      if (root_zmax_[root] - root_zmin_[root] <= step) dense_flat_.push_back(s);
+    }
+  }
+  for (const std::int32_t b : dense_flat_) {
+    const int ix = dense_xy_[b].x, iy = dense_xy_[b].y;
     const float cx = (ix + 0.5f) * dcell + origin, cy = (iy + 0.5f) * dcell + origin;
-    const float d2 = cx * cx + cy * cy;
-    if (d2 < dcell * dcell || d2 > range2) continue;
-    const std::int32_t cs = dense_coarse_[s];
-    const float za = coarse_zmax_[cs];
-    const float inv_d = 1.0f / std::sqrt(d2);
+    const float db2 = cx * cx + cy * cy;
+    if (db2 < dcell * dcell) continue;
+    const float zb = dense_zmax_[b];
+    const std::int32_t cb = dense_coarse_[b];
+    if (coarse_zmax_[cb] - zb > step) continue;
+    const float h = -zb;  // the sensor is at z = 0
+    const float inv_d = 1.0f / std::sqrt(db2);
     const std::int32_t* begin =
         &bridge_begin_[kRoofTable * (kDirectionBins + 1) + directionBin(cx, cy)];
     for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
       const int ox = bridge_offsets_[k].x, oy = bridge_offsets_[k].y;
-      const int x = ix + ox, y = iy + oy;
+      const int x = ix - ox, y = iy - oy;
       if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
-      const std::int32_t r = dense_slot_[y * nd_ + x];
-      if (r < 0 || !dense_flat_[r]) continue;
-      const float zb = dense_zmax_[r];
-      if (std::fabs(zb - za) > step || coarse_zmax_[dense_coarse_[r]] - zb > step) continue;
+      const std::int32_t a = dense_slot_[y * nd_ + x];
+      if (a < 0 || !dense_occupied_[a]) continue;
+      const std::int32_t ca = dense_coarse_[a];
+      if (std::fabs(zb - coarse_zmax_[ca]) > step || !linked(ca, cb)) continue;
       // Two rings land d^2 * dtheta / h apart on a horizontal surface h below the sensor at
-      // distance d (small angles; the sensor is at z = 0).
+      // distance d (small angles).
+      const float ax = cx - ox * dcell, ay = cy - oy * dcell;
+      const float da2 = ax * ax + ay * ay;
       const float along = (ox * cx + oy * cy) * inv_d * dcell;
-      const float h = -zb;
-      if (h > 0.0f && along * h > dtheta * d2 + dcell * h) continue;
-      if (!linked(cs, dense_coarse_[r])) continue;
-      const std::int32_t a = findRoot(dense_parent_.data(), s),
-                         b = findRoot(dense_parent_.data(), r);
-      if (a == b) continue;
-      dense_parent_[std::max(a, b)] = std::min(a, b);
+      if (da2 > range2 || (h > 0.0f && along * h > dtheta * da2 + dcell * h)) continue;
+      const std::int32_t ra = findRoot(dense_parent_.data(), a),
+                         rb = findRoot(dense_parent_.data(), b);
+      if (ra == rb) continue;
+      dense_parent_[std::max(ra, rb)] = std::min(ra, rb);
       ++stats_.roof_bridges;
     }
   }

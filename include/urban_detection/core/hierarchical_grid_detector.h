@@ -43,10 +43,11 @@
 ///  3b. Roof bridge (ours). Scan rings land r^2 * dtheta / h apart on a horizontal surface h
 ///     below the sensor at distance r (dtheta = `ring_spacing_deg`): on a car roof 0.3 m below
 ///     the sensor that is ~0.8 m at 7 m, so the far ring of a roof is cut off from the rest of
-///     the car and becomes an object of its own. After step 3, a dense sub-cell a nearer than
-///     `roof_bridge_range_m` is also connected to a dense sub-cell b on its line of sight (as in
-///     step 3: ahead, at most one sub-cell beside it) up to `roof_bridge_subcells` + 1
-///     sub-cells ahead when b looks like a lone ring on a roof at the height of a's top:
+///     the car and becomes an object of its own. After step 3, a dense sub-cell b is also
+///     connected to a dense sub-cell a nearer than `roof_bridge_range_m` on b's line of sight
+///     (as in step 3: nearer the sensor, at most one sub-cell beside it, up to
+///     `roof_bridge_subcells` + 1 sub-cells away) when b looks like a lone ring on a roof at the
+///     height of a's top:
 ///       - b's component of step 3 is flat: its z range is at most `roof_max_step_m` (a car,
 ///         a pedestrian or a wall behind a car is not, whatever its top);
 ///       - b's top z_b is within `roof_max_step_m` of the Z_max of a's super-cell and of b's
@@ -184,10 +185,10 @@ class HierarchicalGridDetector : public ObjectDetector {
   std::vector<float> dense_zmin_;           // [m] lowest point
   std::vector<std::int32_t> dense_parent_;  // union-find of the dense level
   std::vector<std::int32_t> dense_object_;  // object index or -1
-  // Step 3b: z range [m] per component root, and per sub-cell whether its component is flat.
+  // Step 3b: z range [m] per component root, and the sub-cells whose component is flat.
   std::vector<float> root_zmin_;
   std::vector<float> root_zmax_;
-  std::vector<std::uint8_t> dense_flat_;
+  std::vector<std::int32_t> dense_flat_;
   // Per touched super-cell (slot).
   std::vector<std::int32_t> coarse_cell_;
   std::vector<float> coarse_zmax_;
