@@ -37,12 +37,14 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
   ground_z_.assign(n, 0.0f);
   ground_state_.assign(n, kNoGround);
   fill_z_.assign(n, 0.0f);
-  hops_.assign(n, 0);
-  dense_.assign(n, 0);
+  dense_.assign(n, kEmptyOrSparse);
+  grow_queue_.resize(n);
+  touched_.resize(n);
   // Terrain bit map of fillTerrain: a zero word of padding on both sides of each row, so
   // windows reaching past the grid's left and right edges read zeros.
   bit_words_ = static_cast<std::size_t>((grid_.cols() + 63) / 64 + 2);
   terrain_bits_.assign(bit_words_ * static_cast<std::size_t>(grid_.rows()), 0);
+  terrain_near_.assign(terrain_bits_.size(), 0);
 }
 
 void GridSegmenter::setParams(const GridSegmenterParams& params) {
@@ -58,10 +60,10 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   for (const std::int32_t c : grid_.occupiedCells()) {
     cell_class_[c] = SegmentClass::kUnknown;
     wall_support_[c] = 0;
-    dense_[c] = 0;
+    dense_[c] = kEmptyOrSparse;
   }
-  for (const std::int32_t c : touched_) ground_state_[c] = kNoGround;
-  touched_.clear();
+  for (std::size_t i = 0; i < touched_count_; ++i) ground_state_[touched_[i]] = kNoGround;
+  touched_count_ = 0;
   stats_ = SegmentationStats();
 
   grid_.build(cloud, static_cast<float>(params_.sensor_height_m),
@@ -71,11 +73,20 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
   const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
   const std::vector<GridCell>& stats = grid_.occupiedStats();
+  // Per cell: clutter, or dense (and flat); per slot: the elevation the terrain growing
+  // compares (the mean of a flat cell, the lowest point of a mixed one).
+  const float flat = static_cast<float>(params_.ground_max_range_m);
+  slot_elev_.resize(occupied.size());
   for (std::size_t s = 0; s < occupied.size(); ++s) {
     const std::int32_t c = occupied[s];
-    const bool sparse = stats[s].count < min_pts;
-    if (sparse) cell_class_[c] = SegmentClass::kClutter;
-    dense_[c] = sparse ? 0 : 1;
+    const GridCell& cell = stats[s];
+    if (cell.count < min_pts) {
+      cell_class_[c] = SegmentClass::kClutter;
+      continue;
+    }
+    const bool is_flat = cell.zRange() < flat;
+    dense_[c] = is_flat ? kDenseFlat : kDense;
+    slot_elev_[s] = is_flat ? cell.zMean() : cell.z_min;
   }
 
   growGround();
@@ -184,17 +195,21 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
 // its mean elevation is within ground_max_step_m of the cell it is reached from, and then
 // propagates further; a cell holding ground and object returns joins through its lowest point
 // but does not propagate, so the growing cannot climb a car body or a wall cell by cell.
+//
+// Speed (same visiting order and float operations as the plain breadth-first search): each
+// queue entry carries its row, ground height and hop count, so a dequeued cell needs no
+// division and no per-cell lookups; a neighbour is first tested on two byte maps (ground state,
+// then dense_: empty or sparse / dense / dense and flat) and only a dense one reads its
+// elevation, precomputed per slot in segment(); the eight neighbours are unrolled, with bounds
+// checks only for cells on the grid's border.
 void GridSegmenter::growGround() {
-  const float flat = static_cast<float>(params_.ground_max_range_m);
   const float step = static_cast<float>(params_.ground_max_step_m);
   const float seed_h = static_cast<float>(params_.seed_max_abs_height_m);
   const float tol = static_cast<float>(params_.ground_tolerance_m);
   const float seed_r2 = static_cast<float>(params_.seed_radius_m * params_.seed_radius_m);
   const int rows = grid_.rows(), cols = grid_.cols();
 
-  const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
   const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
-  const std::vector<GridCell>& stats = grid_.occupiedStats();
   // Every cell given a terrain here is also set in fillTerrain's bit map (bit k + 64 of its
   // row: one zero word of padding left of each row).
   std::uint64_t* bits = terrain_bits_.data();
@@ -203,70 +218,84 @@ void GridSegmenter::growGround() {
     bits[static_cast<std::size_t>(r) * bit_words + ((k + 64) >> 6)] |= std::uint64_t{1}
                                                                       << ((k + 64) & 63);
   };
-  queue_.clear();
+  // Each cell is queued and touched at most once per frame: both buffers hold numCells().
+  QueueEntry* queue = grow_queue_.data();
+  std::int32_t* touched = touched_.data() + touched_count_;
+  std::uint8_t* state = ground_state_.data();
+  const std::uint8_t* dense = dense_.data();
+  float* ground_z = ground_z_.data();
+  const float* elev = slot_elev_.data();
+  std::size_t tail = 0;
   for (std::size_t s = 0; s < occupied.size(); ++s) {
-    const GridCell& cell = stats[s];
-    if (cell.count < min_pts) continue;  // clutter
+    // Dense, flat (then elev is the mean) and close to z = 0, near the sensor.
     const std::int32_t c = occupied[s];
-    if (cell.zRange() >= flat || std::fabs(cell.zMean()) > seed_h) continue;
+    if (dense[c] != kDenseFlat || std::fabs(elev[s]) > seed_h) continue;
     float x, y;
     grid_.cellCenter(c, &x, &y);
     if (x * x + y * y > seed_r2) continue;
-    ground_state_[c] = kReached;
-    ground_z_[c] = cell.zMean();
-    markTerrain(grid_.rowOf(c), grid_.colOf(c));
-    touched_.push_back(c);
-    queue_.push_back(c);
+    const int r = grid_.rowOf(c);
+    state[c] = kReached;
+    ground_z[c] = elev[s];
+    markTerrain(r, c - r * cols);
+    *touched++ = c;
+    queue[tail++] = QueueEntry{c, elev[s], r, 0};
   }
-  std::uint32_t reached = static_cast<std::uint32_t>(queue_.size());
+  std::uint32_t reached = static_cast<std::uint32_t>(tail);
   const int max_hops =
       std::min(250, static_cast<int>(params_.ground_max_gap_m / grid_.params().cell_size_m));
-  // Neighbour offsets in the row-major grid, in the order of kDr / kDc (the visiting order
-  // decides which neighbour reaches a cell first, hence its ground height).
-  std::int32_t offsets[8];
-  for (int d = 0; d < 8; ++d) offsets[d] = kDr[d] * cols + kDc[d];
-  for (std::size_t head = 0; head < queue_.size(); ++head) {
-    const std::int32_t c = queue_[head];
-    const int r = grid_.rowOf(c), k = grid_.colOf(c);
-    const bool interior = r > 0 && r < rows - 1 && k > 0 && k < cols - 1;
-    const float g = ground_z_[c];
-    const int hop = ground_state_[c] == kBridged ? hops_[c] : 0;
-    for (int d = 0; d < 8; ++d) {
-      if (!interior) {
-        const int nr = r + kDr[d], nk = k + kDc[d];
-        if (nr < 0 || nr >= rows || nk < 0 || nk >= cols) continue;
-      }
-      const std::int32_t nc = c + offsets[d];
-      if (ground_state_[nc] != kNoGround) continue;
-      // dense_ (one byte per cell) answers "empty or sparse" for most neighbours, which are
-      // empty, without loading their 16-byte GridCell from the 1.6 MB cell array.
-      if (!dense_[nc]) {
+  for (std::size_t head = 0; head < tail; ++head) {
+    const QueueEntry q = queue[head];
+    const int r = q.row, k = q.cell - q.row * cols;
+    const float g = q.ground_z;
+    const int hop = q.hops;
+    // One neighbour (the visiting order decides which neighbour reaches a cell first, hence
+    // its ground height).
+    auto visit = [&](int dr, int dc) {
+      const std::int32_t nc = q.cell + dr * cols + dc;
+      if (state[nc] != kNoGround) return;
+      const std::uint8_t dn = dense[nc];
+      if (dn == kEmptyOrSparse) {
         // Empty and sparse cells carry the terrain across the gaps between far rings and
         // through shadows, for a limited distance; sparse cells keep it for their points.
-        if (hop >= max_hops) continue;
-        ground_state_[nc] = kBridged;
-        ground_z_[nc] = g;
-        markTerrain(r + kDr[d], k + kDc[d]);
-        hops_[nc] = static_cast<std::uint8_t>(hop + 1);
-        touched_.push_back(nc);
-        queue_.push_back(nc);
-        continue;
+        if (hop >= max_hops) return;
+        state[nc] = kBridged;
+        ground_z[nc] = g;
+        markTerrain(r + dr, k + dc);
+        *touched++ = nc;
+        queue[tail++] = QueueEntry{nc, g, r + dr, hop + 1};
+        return;
       }
-      const GridCell& cell = stats[grid_.slotOf(nc)];
-      const bool is_flat = cell.zRange() < flat;
-      const float e = is_flat ? cell.zMean() : cell.z_min;
-      if (std::fabs(e - g) >= step) continue;
-      ground_state_[nc] = kReached;
-      markTerrain(r + kDr[d], k + kDc[d]);
+      const bool is_flat = dn == kDenseFlat;
+      const float e = elev[grid_.slotOf(nc)];
+      if (std::fabs(e - g) >= step) return;
+      state[nc] = kReached;
+      markTerrain(r + dr, k + dc);
       // The lowest point of a mixed cell is its ground unless it lies clearly above the terrain
       // it was reached from: then the base was not sampled (a wall hit above its foot at range)
       // and that point belongs to the object.
-      ground_z_[nc] = !is_flat && e - g > tol ? g : e;
-      touched_.push_back(nc);
+      const float gz = !is_flat && e - g > tol ? g : e;
+      ground_z[nc] = gz;
+      *touched++ = nc;
       ++reached;
-      if (is_flat) queue_.push_back(nc);
+      if (is_flat) queue[tail++] = QueueEntry{nc, gz, r + dr, 0};
+    };
+    if (r > 0 && r < rows - 1 && k > 0 && k < cols - 1) {
+      visit(-1, -1);
+      visit(-1, 0);
+      visit(-1, 1);
+      visit(0, -1);
+      visit(0, 1);
+      visit(1, -1);
+      visit(1, 0);
+      visit(1, 1);
+    } else {
+      for (int d = 0; d < 8; ++d) {
+        const int nr = r + kDr[d], nk = k + kDc[d];
+        if (nr >= 0 && nr < rows && nk >= 0 && nk < cols) visit(kDr[d], kDc[d]);
+      }
     }
   }
+  touched_count_ = static_cast<std::size_t>(touched - touched_.data());
   stats_.cells_ground_reached = reached;
 }
 
@@ -276,7 +305,10 @@ void GridSegmenter::growGround() {
 // than dilating the whole terrain map. Most of these cells (facades, far vegetation) have no
 // terrain within the search radius at all, so the nearest non-empty ring is found first on a
 // bit map of the terrain cells (one 64-bit window per row), and only that ring is then summed,
-// in the same row-major order as a plain ring scan.
+// in the same row-major order as a plain ring scan. A second bit map, the terrain bits ORed
+// over the 2 * terrain_fill_iterations + 1 rows around each row, answers "no terrain within
+// the search radius" with one window per cell (the cell's own bit is clear: it has no
+// terrain), and only the other cells look for their nearest ring, row pair by row pair.
 void GridSegmenter::fillTerrain() {
   const int rows = grid_.rows(), cols = grid_.cols();
   const int max_ring = params_.terrain_fill_iterations;
@@ -305,7 +337,27 @@ void GridSegmenter::fillTerrain() {
   const bool use_bits = max_ring >= 1 && max_ring <= kMaxBitRing;
   const bool sparse_ground = params_.ground_in_sparse_cells;
   const std::uint64_t window_mask = (std::uint64_t{1} << (2 * max_ring + 1)) - 1;
-  std::uint64_t m[2 * kMaxBitRing + 1];
+  const std::size_t bw = bit_words_;
+  if (use_bits) {
+    for (int r = 0; r < rows; ++r) {
+      std::uint64_t* near = terrain_near_.data() + static_cast<std::size_t>(r) * bw;
+      std::fill(near, near + bw, std::uint64_t{0});
+      for (int rr = std::max(0, r - max_ring); rr <= std::min(rows - 1, r + max_ring); ++rr) {
+        const std::uint64_t* w = terrain_bits_.data() + static_cast<std::size_t>(rr) * bw;
+        for (std::size_t i = 0; i < bw; ++i) near[i] |= w[i];
+      }
+    }
+  }
+  // Terrain bits of columns k - max_ring .. k + max_ring of row rr of `map`.
+  auto window = [&](const std::vector<std::uint64_t>& map, int rr, int k) -> std::uint64_t {
+    if (rr < 0 || rr >= rows) return 0;
+    const int start = k - max_ring + 64;
+    const int word = start >> 6, shift = start & 63;
+    const std::uint64_t* w = map.data() + static_cast<std::size_t>(rr) * bw;
+    std::uint64_t v = w[word] >> shift;
+    if (shift != 0) v |= w[word + 1] << (64 - shift);
+    return v & window_mask;
+  };
   for (const std::int32_t c : grid_.occupiedCells()) {
     if (ground_state_[c] != kNoGround ||
         (!sparse_ground && cell_class_[c] == SegmentClass::kClutter)) {
@@ -314,31 +366,38 @@ void GridSegmenter::fillTerrain() {
     const int r = grid_.rowOf(c), k = grid_.colOf(c);
     int first_ring = 1, last_ring = max_ring;
     if (use_bits) {
-      // m[j]: terrain bits of columns k - max_ring .. k + max_ring of row r - max_ring + j.
-      const int start = k - max_ring + 64;
-      const int word = start >> 6, shift = start & 63;
-      for (int j = 0; j <= 2 * max_ring; ++j) {
-        const int rr = r - max_ring + j;
-        if (rr < 0 || rr >= rows) {
-          m[j] = 0;
-          continue;
-        }
-        const std::uint64_t* w = terrain_bits_.data() + static_cast<std::size_t>(rr) * bit_words_;
-        std::uint64_t v = w[word] >> shift;
-        if (shift != 0) v |= w[word + 1] << (64 - shift);
-        m[j] = v & window_mask;
-      }
-      std::uint64_t inner = m[max_ring];  // rows strictly inside the current ring
+      if (window(terrain_near_, r, k) == 0) continue;     // no terrain within max_ring
+      std::uint64_t inner = window(terrain_bits_, r, k);  // rows strictly inside the ring
       int found = 0;
       for (int ring = 1; ring <= max_ring && found == 0; ++ring) {
         const std::uint64_t full = ((std::uint64_t{1} << (2 * ring + 1)) - 1) << (max_ring - ring);
         const std::uint64_t sides =
             (std::uint64_t{1} << (max_ring - ring)) | (std::uint64_t{1} << (max_ring + ring));
-        if (((m[max_ring - ring] | m[max_ring + ring]) & full) | (inner & sides)) found = ring;
-        inner |= m[max_ring - ring] | m[max_ring + ring];
+        const std::uint64_t edges =
+            window(terrain_bits_, r - ring, k) | window(terrain_bits_, r + ring, k);
+        if ((edges & full) | (inner & sides)) found = ring;
+        inner |= edges;
       }
       if (found == 0) continue;
-      first_ring = last_ring = found;
+      // The ring's terrain cells are the set bits of its rows' windows (edge rows: columns
+      // k - found .. k + found, the rows between: those two columns), summed in row-major order
+      // from the bits, as ringSum would visit them.
+      const std::uint64_t full = ((std::uint64_t{1} << (2 * found + 1)) - 1) << (max_ring - found);
+      const std::uint64_t sides =
+          (std::uint64_t{1} << (max_ring - found)) | (std::uint64_t{1} << (max_ring + found));
+      float sum = 0.0f;
+      int cnt = 0;
+      for (int rr = r - found; rr <= r + found; ++rr) {
+        std::uint64_t m =
+            window(terrain_bits_, rr, k) & (rr == r - found || rr == r + found ? full : sides);
+        for (; m != 0; m &= m - 1) {
+          sum += ground_z_[rr * cols + k - max_ring + __builtin_ctzll(m)];
+          ++cnt;
+        }
+      }
+      fill_cells_.push_back(c);
+      fill_z_[c] = sum / static_cast<float>(cnt);
+      continue;
     }
     for (int ring = first_ring; ring <= last_ring; ++ring) {
       float sum = 0.0f;
@@ -356,7 +415,7 @@ void GridSegmenter::fillTerrain() {
   for (const std::int32_t c : fill_cells_) {
     ground_z_[c] = fill_z_[c];
     ground_state_[c] = kFilled;
-    touched_.push_back(c);
+    touched_[touched_count_++] = c;
   }
 }
 
@@ -388,7 +447,7 @@ void GridSegmenter::classifyCells() {
       // A flat patch the growing did not reach, close to the surrounding terrain (paper: the
       // neighbours' elevation within an allowed range): ground at its own elevation.
       cls = SegmentClass::kGround;
-      if (state == kNoGround) touched_.push_back(c);
+      if (state == kNoGround) touched_[touched_count_++] = c;
       ground_state_[c] = kFilled;
       ground_z_[c] = cell.zMean();
     } else {

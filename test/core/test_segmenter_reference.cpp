@@ -44,8 +44,8 @@ std::vector<CloudXYZIRT> sharedFrames(std::size_t per_drive) {
 }
 
 // A street: road, curb, facades on both sides, parked cars, plus invalid points sprinkled in
-// (NaN, +-inf, far away, absurdly high) at fixed positions.
-CloudXYZIRT syntheticStreet(unsigned seed) {
+// (NaN, +-inf, far away, absurdly high) at fixed positions from point `invalid_from` on.
+CloudXYZIRT syntheticStreet(unsigned seed, std::size_t invalid_from = 0) {
   std::vector<test::Box> boxes = {
       {-30.f, 6.0f, 0.0f, 30.f, 7.0f, 12.0f, 1},   // facade left
       {-30.f, -8.0f, 0.0f, 30.f, -7.0f, 1.3f, 2},  // low wall right (Hough territory)
@@ -61,6 +61,7 @@ CloudXYZIRT syntheticStreet(unsigned seed) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
   for (std::size_t i = 0; i < cloud.size(); i += 97) {
+    if (i < invalid_from) continue;
     switch ((i / 97) % 6) {
       case 0: cloud[i].x = nan; break;
       case 1: cloud[i].z = inf; break;
@@ -99,13 +100,14 @@ void expectSameAsReference(core::GridSegmenter* seg, const CloudXYZIRT& cloud,
 }
 
 std::vector<core::GridSegmenterParams> variants() {
-  std::vector<core::GridSegmenterParams> v(4);
+  std::vector<core::GridSegmenterParams> v(5);
   v[1].hough.enabled = false;
   v[2].ground_in_sparse_cells = false;
   v[2].min_points_per_cell = 6;
   v[3].cell_size_m = 0.4;
   v[3].max_range_m = 50.0;
   v[3].terrain_fill_iterations = 3;
+  v[4].terrain_fill_iterations = 30;  // beyond the terrain bit windows: plain ring scan
   return v;
 }
 
@@ -121,6 +123,34 @@ TEST(SegmenterReference, SyntheticStreetsWithInvalidPointsMatchTheReference) {
       EXPECT_GT(ref.stats.points_short, 100u);
       EXPECT_GT(ref.stats.points_unknown, 100u);
       expectSameAsReference(&seg, cloud, "synthetic seed " + std::to_string(seed));
+    }
+  }
+}
+
+// SimpleGrid::build takes a run-by-run path for chunks of points without invalid points and a
+// point-by-point one otherwise; runs cross chunk boundaries and both paths. Streets without
+// invalid points (long runs near the sensor, 1-point runs far away), and with invalid points
+// only in the second half, so that chunks of both kinds follow each other.
+TEST(SegmenterReference, StreetsWithAndWithoutInvalidChunksMatchTheReference) {
+  for (const auto& params : variants()) {
+    core::GridSegmenter seg(params);
+    for (unsigned seed = 4; seed <= 5; ++seed) {
+      const CloudXYZIRT clean = syntheticStreet(seed, std::numeric_limits<std::size_t>::max());
+      const auto ref = reference::segment(clean, params);
+      // Not vacuous: many 1024-point chunks (SimpleGrid's) hold no point without a cell.
+      std::size_t clean_chunks = 0;
+      for (std::size_t b = 0; b + 1024 <= clean.size(); b += 1024) {
+        bool any_unknown = false;
+        for (std::size_t i = b; i < b + 1024; ++i) {
+          any_unknown = any_unknown || ref.labels[i] == SegmentClass::kUnknown;
+        }
+        clean_chunks += any_unknown ? 0 : 1;
+      }
+      EXPECT_GT(clean_chunks, 20u);
+      EXPECT_GT(ref.stats.points_short, 100u);
+      expectSameAsReference(&seg, clean, "clean street seed " + std::to_string(seed));
+      const CloudXYZIRT half = syntheticStreet(seed, clean.size() / 2);
+      expectSameAsReference(&seg, half, "street invalid from half, seed " + std::to_string(seed));
     }
   }
 }

@@ -106,6 +106,15 @@ class GridSegmenter {
 
  private:
   enum GroundState : std::uint8_t { kNoGround = 0, kReached = 1, kFilled = 2, kBridged = 3 };
+  enum DenseState : std::uint8_t { kEmptyOrSparse = 0, kDense = 1, kDenseFlat = 2 };
+  // An entry of the terrain growing's queue: the cell, its row, the ground height it carries
+  // and the empty cells crossed to reach it (0 for an occupied cell).
+  struct QueueEntry {
+    std::int32_t cell;
+    float ground_z;  // [m]
+    std::int32_t row;
+    std::int32_t hops;
+  };
   void growGround();
   void fillTerrain();
   void classifyCells();
@@ -119,15 +128,18 @@ class GridSegmenter {
   std::vector<std::uint8_t> wall_support_;  // cell top at the upper edge of the field of view
   std::vector<float> ground_z_;          // [m] local ground elevation per cell
   std::vector<std::uint8_t> ground_state_;
-  std::vector<std::uint8_t> dense_;      // 1: occupied with at least min_points_per_cell points
-  std::vector<std::uint8_t> hops_;       // empty cells crossed to reach a bridged cell
-  std::vector<std::int32_t> queue_;
-  std::vector<std::int32_t> touched_;    // cells whose ground state was set this frame
+  std::vector<std::uint8_t> dense_;       // DenseState: min_points_per_cell points or more, flat
+  std::vector<float> slot_elev_;          // [m] per slot: mean (flat cell) or lowest point
+  std::vector<QueueEntry> grow_queue_;    // numCells() entries: each cell is queued at most once
+  std::vector<std::int32_t> touched_;     // numCells() entries; the first touched_count_ are the
+  std::size_t touched_count_ = 0;         //     cells whose ground state was set this frame
   std::vector<std::int32_t> fill_cells_;  // cells given a filled terrain this frame
   std::vector<float> fill_z_;             // [m] their terrain, applied after the search
   static constexpr int kMaxBitRing = 28;   // fillTerrain's bit windows: 2 * 28 + 1 bits
   std::vector<std::uint64_t> terrain_bits_;  // per row: bit k+64 = cell k has terrain (cleared)
   std::size_t bit_words_ = 0;                // 64-bit words per row of terrain_bits_
+  std::vector<std::uint64_t> terrain_near_;  // terrain_bits_ ORed over the rows within
+                                             //     terrain_fill_iterations (overwritten)
   // Per slot + 1 (entry 0: points without a cell) for the per-point pass: points below
   // split_z [m] are ground, the others get `label` (a SegmentClass).
   struct SlotLabel {

@@ -98,7 +98,11 @@ class SimpleGrid {
   /// Cell of a metric position, or kNoCell when outside the grid or non-finite.
   std::int32_t cellAt(float x_m, float y_m) const;
   /// Centre of a cell in the sensor frame [m].
-  void cellCenter(std::int32_t index, float* x_m, float* y_m) const;
+  void cellCenter(std::int32_t index, float* x_m, float* y_m) const {
+    const int row = rowOf(index);
+    *x_m = origin_m_ + (static_cast<float>(index - row * side_) + 0.5f) * cell_m_;
+    *y_m = origin_m_ + (static_cast<float>(row) + 0.5f) * cell_m_;
+  }
 
  private:
   static const GridCell kEmptyCell;
@@ -107,6 +111,7 @@ class SimpleGrid {
   float inv_cell_ = 1.0f;
   double inv_side_ = 1.0;  // [1/cells] 1 / side_, for rowOf
   float origin_m_ = 0.0f;  // [m] coordinate of the grid's lower-left corner (both axes)
+  float cell_m_ = 1.0f;    // [m] cell side as a float (cellCenter)
   std::vector<std::int32_t> slot_;        // per cell: slot, or -1 (reset on occupied_ only)
   std::vector<std::int32_t> occupied_;    // per slot: cell index
   std::vector<GridCell> occupied_cells_;  // per slot: statistics
