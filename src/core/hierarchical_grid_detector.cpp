@@ -17,6 +17,15 @@ constexpr int kForward[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
 // to 64 Mi sub-cells (256 MB) so a typo in the extent cannot exhaust memory.
 constexpr double kMaxDenseCells = 64.0 * 1024 * 1024;
 
+// Union-find root with path halving; inline, it runs for every link tried.
+inline std::int32_t findRoot(std::int32_t* parent, std::int32_t i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];
+    i = parent[i];
+  }
+  return i;
+}
+
 const HierarchicalGridDetectorParams& checked(const HierarchicalGridDetectorParams& p) {
   const std::string err = validate(p);
   if (!err.empty()) throw std::invalid_argument("HierarchicalGridDetector: " + err);
@@ -96,7 +105,7 @@ HierarchicalGridDetector::HierarchicalGridDetector(const HierarchicalGridDetecto
   buildBridgeTables();
 }
 
-int HierarchicalGridDetector::directionBin(float x, float y) {
+inline int HierarchicalGridDetector::directionBin(float x, float y) {
   // Pseudo-angle in [0, 4), monotonic in the true angle, without a trigonometric call.
   const float t = x / (std::fabs(x) + std::fabs(y));
   const float a = y >= 0.0f ? 1.0f - t : 3.0f + t;
@@ -139,18 +148,15 @@ void HierarchicalGridDetector::buildBridgeTables() {
     }
     bridge_begin_.push_back(static_cast<std::int32_t>(bridge_offsets_.size()));
   }
-}
-
-int HierarchicalGridDetector::find(std::vector<std::int32_t>* parent, std::int32_t i) const {
-  std::vector<std::int32_t>& p = *parent;
-  while (p[i] != i) {
-    p[i] = p[p[i]];  // path halving
-    i = p[i];
+  bridge_flat_.clear();
+  probe_margin_ = 1;  // the 8-neighbourhood
+  for (const CellXY& o : bridge_offsets_) {
+    bridge_flat_.push_back(o.y * nd_ + o.x);
+    probe_margin_ = std::max({probe_margin_, std::abs(o.x), std::abs(o.y)});
   }
-  return i;
 }
 
-bool HierarchicalGridDetector::linked(std::int32_t a, std::int32_t b) const {
+inline bool HierarchicalGridDetector::linked(std::int32_t a, std::int32_t b) const {
   return a == b || std::fabs(coarse_zmax_[a] - coarse_zmax_[b]) <= params_.psi_max_m;
 }
 
@@ -172,7 +178,7 @@ void HierarchicalGridDetector::roofBridges() {
   root_zmax_.resize(nds);
   for (std::int32_t s = 0; s < nds; ++s) {
     if (!dense_occupied_[s]) continue;
-    const std::int32_t root = find(&dense_parent_, s);
+    const std::int32_t root = findRoot(dense_parent_.data(), s);
     if (root == s) {
       root_zmin_[s] = dense_zmin_[s];
       root_zmax_[s] = dense_zmax_[s];
@@ -192,7 +198,7 @@ void HierarchicalGridDetector::roofBridges() {
   dense_flat_.clear();
   for (std::int32_t s = 0; s < nds; ++s) {
     if (dense_occupied_[s] && dense_zmax_[s] - dense_zmin_[s] <= step) {
-      const std::int32_t root = find(&dense_parent_, s);
+      const std::int32_t root = findRoot(dense_parent_.data(), s);
       if (root_zmax_[root] - root_zmin_[root] <= step) dense_flat_.push_back(s);
     }
   }
@@ -222,7 +228,8 @@ void HierarchicalGridDetector::roofBridges() {
       const float da2 = ax * ax + ay * ay;
       const float along = (ox * cx + oy * cy) * inv_d * dcell;
       if (da2 > range2 || (h > 0.0f && along * h > dtheta * da2 + dcell * h)) continue;
-      const std::int32_t ra = find(&dense_parent_, a), rb = find(&dense_parent_, b);
+      const std::int32_t ra = findRoot(dense_parent_.data(), a),
+                         rb = findRoot(dense_parent_.data(), b);
       if (ra == rb) continue;
       dense_parent_[std::max(ra, rb)] = std::min(ra, rb);
       ++stats_.roof_bridges;
@@ -252,19 +259,20 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   const int xi = params_.xi;
   for (std::size_t i = 0; i < n; ++i) {
     const LabeledPoint& p = foreground.points[i];
-    point_slot_[i] = -1;
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      ++stats_.invalid_points;
-      continue;
-    }
     const float fx = (p.x - origin) * inv_dense;
     const float fy = (p.y - origin) * inv_dense;
-    if (!(fx >= 0.0f && fx < nd_f && fy >= 0.0f && fy < nd_f) || std::fabs(p.z) > max_abs_z) {
-      ++stats_.outside_points;
+    // Inside the grid and the z range implies finite (comparisons with NaN and inf fail), so
+    // the finiteness tests only run for the rejected points.
+    if (!(fx >= 0.0f && fx < nd_f && fy >= 0.0f && fy < nd_f && std::fabs(p.z) <= max_abs_z)) {
+      point_slot_[i] = -1;
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+        ++stats_.invalid_points;
+      } else {
+        ++stats_.outside_points;
+      }
       continue;
     }
-    const int ix = std::min(static_cast<int>(fx), nd_ - 1);
-    const int iy = std::min(static_cast<int>(fy), nd_ - 1);
+    const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);  // fx, fy < nd_ exactly
     const std::int32_t cell = iy * nd_ + ix;
     std::int32_t slot = dense_slot_[cell];
     if (slot < 0) {
@@ -310,12 +318,12 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       if (x < 0 || x >= nc_ || y >= nc_) continue;
       const std::int32_t r = coarse_slot_[y * nc_ + x];
       if (r < 0 || !linked(s, r)) continue;
-      const int a = find(&coarse_parent_, s), b = find(&coarse_parent_, r);
+      const int a = findRoot(coarse_parent_.data(), s), b = findRoot(coarse_parent_.data(), r);
       if (a != b) coarse_parent_[std::max(a, b)] = std::min(a, b);
     }
   }
   for (std::int32_t s = 0; s < ncs; ++s) {
-    if (find(&coarse_parent_, s) == s) ++stats_.coarse_blobs;
+    if (findRoot(coarse_parent_.data(), s) == s) ++stats_.coarse_blobs;
   }
 
   // --- Dense level: weighted densities; dense sub-cells are the nodes of the components. ----
@@ -335,28 +343,58 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     }
   }
 
+  // The psi test of two sub-cells, with one load per candidate: key = Z_max of the sub-cell's
+  // super-cell when the sub-cell is dense, NaN otherwise (every comparison with NaN fails).
+  // |za - zb| <= psi_max is linked(): equal super-cells give 0 <= psi_max.
+  const double psi_max = params_.psi_max_m;
+  dense_key_.resize(nds);
+  for (std::int32_t s = 0; s < nds; ++s) {
+    dense_key_[s] = dense_occupied_[s] ? coarse_zmax_[dense_coarse_[s]]
+                                       : std::numeric_limits<float>::quiet_NaN();
+  }
+  const float* key = dense_key_.data();
+  const std::int32_t* slot_map = dense_slot_.data();
+  auto psiOk = [psi_max](float za, float zb) { return std::fabs(za - zb) <= psi_max; };
+  // Sub-cells at least probe_margin_ from the grid border probe through flat offsets without
+  // bounds checks; the others (never on real data with the default extent) check each probe.
+  auto interior = [this](int ix, int iy) {
+    return ix >= probe_margin_ && iy >= probe_margin_ && ix < nd_ - probe_margin_ &&
+           iy < nd_ - probe_margin_;
+  };
+
   if (params_.dense_refinement) {
     // Connected components of the dense sub-cells (8-neighbourhood) whose super-cells are
     // psi-linked, plus the radial bridges of step 3 (header).
     const float bridge_range2 = static_cast<float>(params_.bridge_range_m * params_.bridge_range_m);
     const float gap_range2 =
         static_cast<float>(params_.gap_bridge_range_m * params_.gap_bridge_range_m);
-    auto unite = [this](std::int32_t a, std::int32_t b) {
-      a = find(&dense_parent_, a);
-      b = find(&dense_parent_, b);
+    std::int32_t* parent = dense_parent_.data();
+    auto unite = [parent](std::int32_t a, std::int32_t b) {
+      a = findRoot(parent, a);
+      b = findRoot(parent, b);
       if (a == b) return false;
-      dense_parent_[std::max(a, b)] = std::min(a, b);
+      parent[std::max(a, b)] = std::min(a, b);
       return true;
     };
+    const std::int32_t forward_flat[4] = {
+        kForward[0][1] * nd_ + kForward[0][0], kForward[1][1] * nd_ + kForward[1][0],
+        kForward[2][1] * nd_ + kForward[2][0], kForward[3][1] * nd_ + kForward[3][0]};
     for (std::int32_t s = 0; s < nds; ++s) {
       if (!dense_occupied_[s]) continue;
       const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
-      const std::int32_t cs = dense_coarse_[s];
-      for (const auto& o : kForward) {
-        const int x = ix + o[0], y = iy + o[1];
-        if (x < 0 || x >= nd_ || y >= nd_) continue;
-        const std::int32_t r = dense_slot_[y * nd_ + x];
-        if (r >= 0 && dense_occupied_[r] && linked(cs, dense_coarse_[r])) unite(s, r);
+      const float ks = key[s];
+      const bool inside = interior(ix, iy);
+      const std::int32_t* here = slot_map + dense_cell_[s];
+      for (int f = 0; f < 4; ++f) {
+        std::int32_t r;
+        if (inside) {
+          r = here[forward_flat[f]];
+        } else {
+          const int x = ix + kForward[f][0], y = iy + kForward[f][1];
+          if (x < 0 || x >= nd_ || y >= nd_) continue;
+          r = slot_map[y * nd_ + x];
+        }
+        if (r >= 0 && psiOk(ks, key[r])) unite(s, r);
       }
       // Outwards along the line of sight (step 3): the precomputed offsets of the ray's
       // direction bin, every dense sub-cell there.
@@ -366,13 +404,18 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       const int table = d2 > gap_range2 ? 2 : d2 > bridge_range2 ? 1 : 0;
       const int bin = directionBin(cx, cy);
       const std::int32_t* begin = &bridge_begin_[table * (kDirectionBins + 1) + bin];
+      if (inside) {
+        for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
+          const std::int32_t r = here[bridge_flat_[k]];
+          if (r >= 0 && psiOk(ks, key[r]) && unite(s, r)) ++stats_.bridges;
+        }
+        continue;
+      }
       for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
         const int x = ix + bridge_offsets_[k].x, y = iy + bridge_offsets_[k].y;
         if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
-        const std::int32_t r = dense_slot_[y * nd_ + x];
-        if (r >= 0 && dense_occupied_[r] && linked(cs, dense_coarse_[r]) && unite(s, r)) {
-          ++stats_.bridges;
-        }
+        const std::int32_t r = slot_map[y * nd_ + x];
+        if (r >= 0 && psiOk(ks, key[r]) && unite(s, r)) ++stats_.bridges;
       }
     }
     if (params_.roof_bridge_subcells > 0) roofBridges();
@@ -385,26 +428,44 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   root_object_.assign(params_.dense_refinement ? nds : ncs, -1);
   std::int32_t ncomp = 0;
   auto componentOf = [&](std::int32_t s) -> std::int32_t {
-    const std::int32_t root = params_.dense_refinement ? find(&dense_parent_, s)
-                                                       : find(&coarse_parent_, dense_coarse_[s]);
+    const std::int32_t root = params_.dense_refinement
+                                  ? findRoot(dense_parent_.data(), s)
+                                  : findRoot(coarse_parent_.data(), dense_coarse_[s]);
     if (root_object_[root] < 0) root_object_[root] = ncomp++;
     return root_object_[root];
   };
+  // The 8-neighbourhood in the order of the original (dy, dx) loops: ties of rho keep the first.
+  std::int32_t ring_flat[8];
+  int ring_dx[8], ring_dy[8];
+  for (int dy = -1, m = 0; dy <= 1; ++dy) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      if (dx == 0 && dy == 0) continue;
+      ring_dx[m] = dx;
+      ring_dy[m] = dy;
+      ring_flat[m++] = dy * nd_ + dx;
+    }
+  }
   for (std::int32_t s = 0; s < nds; ++s) {
     if (!params_.dense_refinement || dense_occupied_[s]) {
       dense_object_[s] = componentOf(s);
       continue;
     }
     const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
+    const float zs = coarse_zmax_[dense_coarse_[s]];
+    const bool inside = interior(ix, iy);
+    const std::int32_t* here = slot_map + dense_cell_[s];
     std::int32_t best = -1;
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int x = ix + dx, y = iy + dy;
-        if ((dx == 0 && dy == 0) || x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
-        const std::int32_t r = dense_slot_[y * nd_ + x];
-        if (r < 0 || !dense_occupied_[r] || !linked(dense_coarse_[s], dense_coarse_[r])) continue;
-        if (best < 0 || dense_rho_[r] > dense_rho_[best]) best = r;
+    for (int m = 0; m < 8; ++m) {
+      std::int32_t r;
+      if (inside) {
+        r = here[ring_flat[m]];
+      } else {
+        const int x = ix + ring_dx[m], y = iy + ring_dy[m];
+        if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
+        r = slot_map[y * nd_ + x];
       }
+      if (r < 0 || !psiOk(zs, key[r])) continue;
+      if (best < 0 || dense_rho_[r] > dense_rho_[best]) best = r;
     }
     if (best >= 0) dense_object_[s] = componentOf(best);
   }
@@ -450,20 +511,25 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   }
   stats_.objects = nobj;
 
-  // --- Output. One pass scatters every point to its object (a counting sort into one flat
-  // position array); the objects vector is resized, not cleared, so the index vectors keep
-  // their capacity between frames. ----------------------------------------------------------
+  // --- Output. One pass scatters every point to its object (a counting sort), writing its
+  // index and xy contiguously per object and accumulating the object's moments (pass 1 of the
+  // geometry) on the way, so the cloud is read once, sequentially. The objects vector is
+  // resized, not cleared, so the index vectors keep their capacity between frames. ----------
   objects->resize(nobj);
   object_begin_.assign(nobj + 1, 0);
   for (std::int32_t c = 0; c < ncomp; ++c) {
     if (comp_final_[c] >= 0) object_begin_[comp_final_[c] + 1] = comp_count_[c];
   }
+  index_out_.resize(nobj);
+  xy_out_.resize(nobj);
   for (std::size_t k = 0; k < nobj; ++k) {
     object_begin_[k + 1] += object_begin_[k];
     (*objects)[k].indices.resize(object_begin_[k + 1] - object_begin_[k]);
+    index_out_[k] = (*objects)[k].indices.data();
   }
-  positions_.resize(object_begin_[nobj]);
-  cursor_.assign(object_begin_.begin(), object_begin_.end() - 1);
+  object_xy_.resize(object_begin_[nobj]);
+  for (std::size_t k = 0; k < nobj; ++k) xy_out_[k] = object_xy_.data() + object_begin_[k];
+  moments_.assign(nobj, ObjectMoments());
   for (std::int32_t s = 0; s < nds; ++s) {
     dense_object_[s] = dense_object_[s] < 0 ? -1 : comp_final_[dense_object_[s]];
   }
@@ -472,13 +538,15 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     if (s < 0) continue;
     const std::int32_t k = dense_object_[s];
     if (k < 0) continue;
-    positions_[cursor_[k]++] = static_cast<std::uint32_t>(i);
+    const LabeledPoint& p = foreground.points[i];
+    moments_[k].add(p.x, p.y, p.z);
+    *xy_out_[k]++ = Eigen::Vector2f(p.x, p.y);
+    *index_out_[k]++ = p.index;
   }
   for (std::size_t k = 0; k < nobj; ++k) {
     DetectedObject& obj = (*objects)[k];
     obj.id = static_cast<std::uint32_t>(k + 1);
-    geometry_.compute(foreground, positions_.data() + object_begin_[k],
-                      object_begin_[k + 1] - object_begin_[k], &obj, obj.indices.data());
+    geometry_.finish(moments_[k], object_xy_.data() + object_begin_[k], &obj);
   }
 }
 

@@ -48,56 +48,60 @@ void minAreaRectangle(const std::vector<Eigen::Vector2f>& hull, Eigen::Vector2f*
   if (hull.empty()) return;
   *center = hull[0];  // kept when every hull edge is degenerate (coincident points)
   const std::size_t n = hull.size();
+  const Eigen::Vector2f* h = hull.data();
+  auto next = [n](std::size_t k) { return k + 1 == n ? 0 : k + 1; };
   // Rotating calipers: the minimum-area rectangle has a side on a hull edge; going round the
   // (counter-clockwise) edges, the vertices extreme along the edge, across it and against it
-  // only move forward, so all edges are tried in O(n).
+  // only move forward, so all edges are tried in O(n). The yaw (an atan2) is computed once,
+  // for the best edge.
   auto dot = [](const Eigen::Vector2f& a, const Eigen::Vector2f& b) { return a.dot(b); };
   std::size_t a = 0, b = 0, c = 0;  // max along u, max along v (inward), min along u
-  bool init = false;
+  bool init = false, found = false;
   double best_area = std::numeric_limits<double>::infinity();
+  Eigen::Vector2f best_u(0.0f, 0.0f);
+  float best_lu = 0.0f, best_lv = 0.0f;
   for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector2f e = hull[(i + 1) % n] - hull[i];
+    const Eigen::Vector2f e = h[next(i)] - h[i];
     const float len = e.norm();
     if (len <= 0.0f) continue;
     const Eigen::Vector2f u = e / len;
     const Eigen::Vector2f v(-u.y(), u.x());
     if (!init) {
       for (std::size_t k = 0; k < n; ++k) {
-        if (dot(hull[k], u) > dot(hull[a], u)) a = k;
-        if (dot(hull[k], v) > dot(hull[b], v)) b = k;
-        if (dot(hull[k], u) < dot(hull[c], u)) c = k;
+        if (dot(h[k], u) > dot(h[a], u)) a = k;
+        if (dot(h[k], v) > dot(h[b], v)) b = k;
+        if (dot(h[k], u) < dot(h[c], u)) c = k;
       }
       init = true;
     } else {
-      for (std::size_t s = 0; s < n && dot(hull[(a + 1) % n], u) >= dot(hull[a], u); ++s) {
-        a = (a + 1) % n;
-      }
-      for (std::size_t s = 0; s < n && dot(hull[(b + 1) % n], v) >= dot(hull[b], v); ++s) {
-        b = (b + 1) % n;
-      }
-      for (std::size_t s = 0; s < n && dot(hull[(c + 1) % n], u) <= dot(hull[c], u); ++s) {
-        c = (c + 1) % n;
-      }
+      for (std::size_t s = 0; s < n && dot(h[next(a)], u) >= dot(h[a], u); ++s) a = next(a);
+      for (std::size_t s = 0; s < n && dot(h[next(b)], v) >= dot(h[b], v); ++s) b = next(b);
+      for (std::size_t s = 0; s < n && dot(h[next(c)], u) <= dot(h[c], u); ++s) c = next(c);
     }
-    const float umin = dot(hull[c], u), umax = dot(hull[a], u);
-    const float vmin = dot(hull[i], v), vmax = dot(hull[b], v);
+    const float umin = dot(h[c], u), umax = dot(h[a], u);
+    const float vmin = dot(h[i], v), vmax = dot(h[b], v);
     const double area = static_cast<double>(umax - umin) * static_cast<double>(vmax - vmin);
     if (area < best_area - 1e-12) {
       best_area = area;
       *center = u * (0.5f * (umin + umax)) + v * (0.5f * (vmin + vmax));
-      float lu = umax - umin, lv = vmax - vmin;
-      float yaw = std::atan2(u.y(), u.x());
-      if (lv > lu) {
-        std::swap(lu, lv);
-        yaw += static_cast<float>(M_PI / 2);
-      }
-      // Normalise to (-pi/2, pi/2]: a box is symmetric under a half turn.
-      while (yaw > static_cast<float>(M_PI / 2)) yaw -= static_cast<float>(M_PI);
-      while (yaw <= -static_cast<float>(M_PI / 2)) yaw += static_cast<float>(M_PI);
-      *size = Eigen::Vector2f(lu, lv);
-      *yaw_rad = yaw;
+      best_u = u;
+      best_lu = umax - umin;
+      best_lv = vmax - vmin;
+      found = true;
     }
   }
+  if (!found) return;
+  float lu = best_lu, lv = best_lv;
+  float yaw = std::atan2(best_u.y(), best_u.x());
+  if (lv > lu) {
+    std::swap(lu, lv);
+    yaw += static_cast<float>(M_PI / 2);
+  }
+  // Normalise to (-pi/2, pi/2]: a box is symmetric under a half turn.
+  while (yaw > static_cast<float>(M_PI / 2)) yaw -= static_cast<float>(M_PI);
+  while (yaw <= -static_cast<float>(M_PI / 2)) yaw += static_cast<float>(M_PI);
+  *size = Eigen::Vector2f(lu, lv);
+  *yaw_rad = yaw;
 }
 
 void ObjectGeometry::compute(const LabeledCloud& cloud,
@@ -108,36 +112,33 @@ void ObjectGeometry::compute(const LabeledCloud& cloud,
 
 void ObjectGeometry::compute(const LabeledCloud& cloud, const std::uint32_t* positions,
                              std::size_t n, DetectedObject* object, std::uint32_t* indices_out) {
+  // Pass 1: centroid and axis-aligned box; the xy of the points are gathered contiguously.
+  ObjectMoments m;
+  pts_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const LabeledPoint& p = cloud.points[positions[i]];
+    m.add(p.x, p.y, p.z);
+    pts_[i] = Eigen::Vector2f(p.x, p.y);
+    if (indices_out) indices_out[i] = p.index;
+  }
+  finish(m, pts_.data(), object);
+}
+
+void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
+                            DetectedObject* object) {
   object->centroid.setZero();
   object->min_pt.setZero();
   object->max_pt.setZero();
   object->obb_center.setZero();
   object->obb_size.setZero();
   object->obb_yaw_rad = 0.0f;
+  const std::size_t n = m.n;
   if (n == 0) return;
-
-  // Pass 1: centroid and axis-aligned box; the xy of the points are gathered contiguously.
-  double sx = 0.0, sy = 0.0, sz = 0.0;
-  float mnx = std::numeric_limits<float>::max(), mny = mnx, mnz = mnx;
-  float mxx = -mnx, mxy = -mnx, mxz = -mnx;
-  pts_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const LabeledPoint& p = cloud.points[positions[i]];
-    sx += p.x;
-    sy += p.y;
-    sz += p.z;
-    mnx = std::min(mnx, p.x);
-    mny = std::min(mny, p.y);
-    mnz = std::min(mnz, p.z);
-    mxx = std::max(mxx, p.x);
-    mxy = std::max(mxy, p.y);
-    mxz = std::max(mxz, p.z);
-    pts_[i] = Eigen::Vector2f(p.x, p.y);
-    if (indices_out) indices_out[i] = p.index;
-  }
   const double inv = 1.0 / static_cast<double>(n);
-  object->centroid = Eigen::Vector3f(static_cast<float>(sx * inv), static_cast<float>(sy * inv),
-                                     static_cast<float>(sz * inv));
+  object->centroid = Eigen::Vector3f(static_cast<float>(m.sx * inv), static_cast<float>(m.sy * inv),
+                                     static_cast<float>(m.sz * inv));
+  const float mnx = m.min_x, mny = m.min_y, mnz = m.min_z;
+  const float mxx = m.max_x, mxy = m.max_y, mxz = m.max_z;
   object->min_pt = Eigen::Vector3f(mnx, mny, mnz);
   object->max_pt = Eigen::Vector3f(mxx, mxy, mxz);
 
@@ -145,35 +146,31 @@ void ObjectGeometry::compute(const LabeledCloud& cloud, const std::uint32_t* pos
   // the longer side of the box; each column keeps its two extreme points across (and the
   // global extremes along). A point between the two extremes of its column lies within one
   // column width of the segment joining them, so the hull of the candidates is within
-  // kHullTolerance of the exact hull, at O(n) cost instead of sorting every point.
+  // kHullTolerance of the exact hull, at O(n) cost instead of sorting every point. The
+  // extremes' coordinates are kept beside their indices: no dependent load per point.
   const bool along_x = (mxx - mnx) >= (mxy - mny);
   const float lo = along_x ? mnx : mny, len = along_x ? mxx - mnx : mxy - mny;
   const int cols = std::clamp(static_cast<int>(std::ceil(len / kHullTolerance)), 1, kMaxColumns);
   const float scale = len > 0.0f ? cols / len : 0.0f;
-  col_lo_.assign(cols, -1);
-  col_hi_.assign(cols, -1);
-  std::int32_t first = 0, last = 0;
+  // Per column the lowest and highest point across, as (along, across); an empty column keeps
+  // the infinite sentinels (finite points always replace them). Branch-free selects: which
+  // point is extreme is unpredictable.
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  col_lo_.assign(cols, Eigen::Vector2f(0.0f, kInf));
+  col_hi_.assign(cols, Eigen::Vector2f(0.0f, -kInf));
   auto bin = [&](auto along_x_tag) {
     constexpr bool kAlongX = decltype(along_x_tag)::value;
-    auto a_of = [](const Eigen::Vector2f& q) { return kAlongX ? q.x() : q.y(); };
-    auto b_of = [](const Eigen::Vector2f& q) { return kAlongX ? q.y() : q.x(); };
-    float a_first = a_of(pts_[0]), a_last = a_first;
+    Eigen::Vector2f* col_lo = col_lo_.data();
+    Eigen::Vector2f* col_hi = col_hi_.data();
     for (std::size_t i = 0; i < n; ++i) {
-      const float a = a_of(pts_[i]), b = b_of(pts_[i]);
+      const float a = kAlongX ? pts[i].x() : pts[i].y(), b = kAlongX ? pts[i].y() : pts[i].x();
       const int c = std::min(static_cast<int>((a - lo) * scale), cols - 1);
-      std::int32_t& l = col_lo_[c];
-      std::int32_t& h = col_hi_[c];
-      const std::int32_t ii = static_cast<std::int32_t>(i);
-      if (l < 0 || b < b_of(pts_[l])) l = ii;
-      if (h < 0 || b > b_of(pts_[h])) h = ii;
-      if (a < a_first) {
-        a_first = a;
-        first = ii;
-      }
-      if (a > a_last) {
-        a_last = a;
-        last = ii;
-      }
+      Eigen::Vector2f& l = col_lo[c];
+      Eigen::Vector2f& h = col_hi[c];
+      const bool is_lo = b < l.y();
+      const bool is_hi = b > h.y();
+      l = Eigen::Vector2f(is_lo ? a : l.x(), is_lo ? b : l.y());
+      h = Eigen::Vector2f(is_hi ? a : h.x(), is_hi ? b : h.y());
     }
   };
   if (along_x) {
@@ -181,39 +178,45 @@ void ObjectGeometry::compute(const LabeledCloud& cloud, const std::uint32_t* pos
   } else {
     bin(std::false_type());
   }
+  // The extremes along: the first points whose along coordinate is the box's minimum and
+  // maximum (pass 1 found the values; min/max of floats are exact).
+  const float hi = along_x ? mxx : mxy;
+  auto firstWith = [&](float value) {
+    std::size_t i = 0;
+    while (i + 1 < n && (along_x ? pts[i].x() : pts[i].y()) != value) ++i;
+    return Eigen::Vector2f(along_x ? pts[i] : Eigen::Vector2f(pts[i].y(), pts[i].x()));
+  };
+  const Eigen::Vector2f first = firstWith(lo), last = firstWith(hi);
   // Andrew's monotone chain without sorting: with one candidate per column, each chain is
   // already ordered along the long side. Work in (along, across) coordinates.
-  auto ab = [along_x](const Eigen::Vector2f& q) {
-    return along_x ? q : Eigen::Vector2f(q.y(), q.x());
-  };
-  cand_.clear();
-  cand_.push_back(ab(pts_[first]));
+  cand_.resize(2 * static_cast<std::size_t>(cols) + 4);
+  Eigen::Vector2f* cand = cand_.data();
+  std::size_t nc = 0;
+  cand[nc++] = first;
   for (int c = 0; c < cols; ++c) {
-    if (col_lo_[c] >= 0) cand_.push_back(ab(pts_[col_lo_[c]]));
+    if (col_lo_[c].y() < kInf) cand[nc++] = col_lo_[c];
   }
-  cand_.push_back(ab(pts_[last]));
-  const std::size_t lower_end = cand_.size();
-  cand_.push_back(ab(pts_[last]));
+  cand[nc++] = last;
+  const std::size_t lower_end = nc;
+  cand[nc++] = last;
   for (int c = cols; c-- > 0;) {
-    if (col_hi_[c] >= 0) cand_.push_back(ab(pts_[col_hi_[c]]));
+    if (col_hi_[c].y() > -kInf) cand[nc++] = col_hi_[c];
   }
-  cand_.push_back(ab(pts_[first]));
-  hull_.clear();
+  cand[nc++] = first;
+  hull_.resize(nc);
+  Eigen::Vector2f* hull = hull_.data();
+  std::size_t k = 0;
   for (std::size_t i = 0; i < lower_end; ++i) {  // lower chain, first .. last
-    while (hull_.size() >= 2 && cross(hull_[hull_.size() - 2], hull_.back(), cand_[i]) <= 0.0f) {
-      hull_.pop_back();
-    }
-    hull_.push_back(cand_[i]);
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], cand[i]) <= 0.0f) --k;
+    hull[k++] = cand[i];
   }
-  const std::size_t t = hull_.size() + 1;  // upper chain, last .. first ('last' is on top)
-  for (std::size_t i = lower_end + 1; i < cand_.size(); ++i) {
-    while (hull_.size() >= t && cross(hull_[hull_.size() - 2], hull_.back(), cand_[i]) <= 0.0f) {
-      hull_.pop_back();
-    }
-    hull_.push_back(cand_[i]);
+  const std::size_t t = k + 1;  // upper chain, last .. first ('last' is on top)
+  for (std::size_t i = lower_end + 1; i < nc; ++i) {
+    while (k >= t && cross(hull[k - 2], hull[k - 1], cand[i]) <= 0.0f) --k;
+    hull[k++] = cand[i];
   }
-  hull_.pop_back();  // 'first' again
-  if (!along_x) {  // (y, x) is a reflection: restore x, y and counter-clockwise order
+  hull_.resize(k - 1);  // 'first' again
+  if (!along_x) {       // (y, x) is a reflection: restore x, y and counter-clockwise order
     for (Eigen::Vector2f& q : hull_) q = Eigen::Vector2f(q.y(), q.x());
     std::reverse(hull_.begin(), hull_.end());
   }

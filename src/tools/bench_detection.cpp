@@ -1,7 +1,8 @@
 // urban_detection_bench_detection: detection speed on real foregrounds (paper Sec. 5, Table 1).
 //
 //   taskset -c 0 urban_detection_bench_detection [--data DIR]... [--passes N]
-//                                                [--kdtree-passes N] [benchmark flags]
+//                                                [--kdtree-passes N] [--digest [--dump FILE]]
+//                                                [benchmark flags]
 //
 // Every sweep of DIR (default: ../shared/data/kitti_raw/drive_0005 and drive_0048, KITTI .bin
 // or PCD) goes through the segmentation (GridSegmenter with default parameters,
@@ -10,9 +11,18 @@
 // revolution over all frames; compare its CPU column) and a per-revolution distribution of
 // thread CPU time: median and p95 [ms] for each
 // detector over `passes` passes over the frames, and the speed ratio of the medians.
+//
+// --digest: instead of timing, prints one 64-bit FNV-1a digest per detector of all its outputs
+// over the frames (object count, ids, index lists and the bit patterns of every centroid, box
+// and oriented-box float), so a speed change can be checked to leave the outputs bit-identical
+// by comparing two builds' digests (the kd-tree one is skipped with --kdtree-passes 0).
+// --dump FILE (with --digest): also writes every hierarchical object as one text line (frame,
+// id, point count, then the 16 box floats with 9 significant digits) to compare two builds
+// field by field when the digests differ.
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <algorithm>
+#include <cinttypes>
 #include <ctime>
 #include <cstdio>
 #include <cstring>
@@ -88,11 +98,58 @@ Distribution measure(core::ObjectDetector* det, int passes) {
   return d;
 }
 
+// FNV-1a over the bytes of every output field, frame by frame.
+class Digest {
+ public:
+  template <typename T>
+  void add(const T& v) {
+    const unsigned char* b = reinterpret_cast<const unsigned char*>(&v);
+    for (std::size_t i = 0; i < sizeof(T); ++i) h_ = (h_ ^ b[i]) * 1099511628211ull;
+  }
+  void add(const Eigen::Vector3f& v) {
+    for (int i = 0; i < 3; ++i) add(v[i]);
+  }
+  std::uint64_t value() const { return h_; }
+
+ private:
+  std::uint64_t h_ = 14695981039346656037ull;
+};
+
+std::uint64_t digestOf(core::ObjectDetector* det, std::FILE* dump = nullptr) {
+  Digest d;
+  std::vector<core::DetectedObject> objects;
+  for (std::size_t frame = 0; frame < g_frames.size(); ++frame) {
+    det->detect(g_frames[frame], &objects);
+    d.add(static_cast<std::uint64_t>(objects.size()));
+    for (const core::DetectedObject& o : objects) {
+      d.add(o.id);
+      d.add(static_cast<std::uint64_t>(o.indices.size()));
+      for (const std::uint32_t i : o.indices) d.add(i);
+      d.add(o.centroid);
+      d.add(o.min_pt);
+      d.add(o.max_pt);
+      d.add(o.obb_center);
+      d.add(o.obb_size);
+      d.add(o.obb_yaw_rad);
+      if (!dump) continue;
+      std::fprintf(dump, "%zu %u %zu", frame, o.id, o.indices.size());
+      for (const Eigen::Vector3f* v :
+           {&o.centroid, &o.min_pt, &o.max_pt, &o.obb_center, &o.obb_size}) {
+        std::fprintf(dump, " %.9g %.9g %.9g", (*v)[0], (*v)[1], (*v)[2]);
+      }
+      std::fprintf(dump, " %.9g\n", o.obb_yaw_rad);
+    }
+  }
+  return d.value();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<std::string> dirs;
   int passes = 20, kd_passes = 1;
+  bool digest = false;
+  std::string dump_path;
   std::vector<char*> bench_args = {argv[0]};
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--data") && i + 1 < argc) {
@@ -101,6 +158,10 @@ int main(int argc, char** argv) {
       passes = std::max(1, std::atoi(argv[++i]));
     } else if (!std::strcmp(argv[i], "--kdtree-passes") && i + 1 < argc) {
       kd_passes = std::max(0, std::atoi(argv[++i]));  // 0: skip
+    } else if (!std::strcmp(argv[i], "--digest")) {
+      digest = true;
+    } else if (!std::strcmp(argv[i], "--dump") && i + 1 < argc) {
+      dump_path = argv[++i];
     } else {
       bench_args.push_back(argv[i]);
     }
@@ -135,6 +196,22 @@ int main(int argc, char** argv) {
   std::printf("%zu revolutions, %.0f points and %.0f foreground points per revolution\n",
               g_frames.size(), static_cast<double>(points) / g_frames.size(),
               static_cast<double>(fg_points) / g_frames.size());
+
+  if (digest) {
+    core::HierarchicalGridDetector grid;
+    std::FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
+    if (!dump_path.empty() && !dump) {
+      std::fprintf(stderr, "cannot write %s\n", dump_path.c_str());
+      return 1;
+    }
+    std::printf("digest hierarchical_grid %016" PRIx64 "\n", digestOf(&grid, dump));
+    if (dump) std::fclose(dump);
+    if (kd_passes > 0) {
+      core::KdTreeDetector kd;
+      std::printf("digest kdtree %016" PRIx64 "\n", digestOf(&kd));
+    }
+    return 0;
+  }
 
   benchmark::RegisterBenchmark("HierarchicalGrid/revolution", BM_HierarchicalGrid)
       ->Unit(benchmark::kMillisecond);

@@ -3,6 +3,7 @@
 // and bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -517,6 +518,44 @@ TEST(HierarchicalGridInput, TwoMillionRandomPoints) {
   EXPECT_LE(assigned + s.noise_points, cloud.size() - s.outside_points);
   // Poisson occupancy: 50 points per m^2, 2 per 0.2 m sub-cell on average, P(empty) = e^-2.
   EXPECT_NEAR(static_cast<double>(s.dense_cells) / (804.0 * 804.0), 1.0 - std::exp(-2.0), 0.01);
+}
+
+// Sub-cells near the grid border probe their neighbours and bridges with bounds checks, the
+// others through flat offsets: objects touching the border of a 10 m grid come out exactly as
+// from a 20 m grid (same cell borders, multiples of 0.6 m), where they are inside.
+TEST(HierarchicalGridInput, ObjectsAtTheGridBorderAreFoundAsInALargerGrid) {
+  LabeledCloud cloud;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  // The 10 m grid covers [-10.2, 10.2)^2. Blobs on its edges and corners (and one inside),
+  // 0.5 m x 1.4 m, with gaps along the line of sight that need bridges.
+  const float centres[][2] = {{9.9f, 0.3f}, {-9.95f, -2.0f}, {3.0f, 9.95f}, {-1.0f, -9.9f},
+                              {9.9f, 9.9f}, {-9.9f, 9.9f},   {5.0f, 2.0f},  {9.9f, -4.0f}};
+  std::uint32_t truth = 1;
+  for (const auto& c : centres) {
+    for (int i = 0; i < 150; ++i) {
+      const float a = u(rng), b = u(rng);
+      if (a > 0.45f && a < 0.6f) continue;  // a hole across the blob
+      test::addPoint(&cloud, std::clamp(c[0] - 0.25f + 0.5f * a, -10.19f, 10.19f),
+                     std::clamp(c[1] - 0.7f + 1.4f * b, -10.19f, 10.19f), 1.5f * u(rng), truth);
+    }
+    ++truth;
+  }
+  HierarchicalGridDetectorParams small, large;
+  small.grid_half_extent_m = 10.0;
+  large.grid_half_extent_m = 20.0;
+  const auto a = run(cloud, small), b = run(cloud, large);
+  ASSERT_EQ(a.size(), 8u);  // one object per blob (a few isolated points may be noise)
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_GT(a[i].indices.size(), 100u);
+    for (const std::uint32_t k : a[i].indices) ASSERT_EQ(cloud[k].label, i + 1);
+    EXPECT_EQ(a[i].id, b[i].id);
+    EXPECT_EQ(a[i].indices, b[i].indices);
+    EXPECT_EQ(a[i].obb_center, b[i].obb_center);
+    EXPECT_EQ(a[i].obb_size, b[i].obb_size);
+    EXPECT_EQ(a[i].obb_yaw_rad, b[i].obb_yaw_rad);
+  }
 }
 
 TEST(HierarchicalGridParams, ValidateNamesTheBadField) {

@@ -157,6 +157,52 @@ TEST(ObjectGeometry, CalipersAndColumnHullMatchBruteForceOnRandomClouds) {
   EXPECT_TRUE(o.obb_center.isApprox(Eigen::Vector3f(3.0f, 4.0f, 1.0f)));
 }
 
+// A detector that accumulates the moments and gathers the xy itself while scattering the points
+// of interleaved objects (the hierarchical grid's output pass) gets the very same fields as
+// compute() through positions, bit for bit, with one ObjectGeometry reused across objects.
+TEST(ObjectGeometry, FinishOnScatteredMomentsEqualsComputeBitForBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  constexpr int kObjects = 7;
+  LabeledCloud cloud;
+  for (int i = 0; i < 3000; ++i) {
+    const int k = static_cast<int>(std::fabs(u(rng)) * kObjects) % kObjects;
+    // Object k: a blob of k-dependent size and shape; k = 0 is a line along y (collinear).
+    const float x = 10.0f * k + (k == 0 ? 0.0f : 0.3f * k * u(rng));
+    const float y = -4.0f + (1.0f + k) * u(rng);
+    test::addPoint(&cloud, x, y, 2.0f * u(rng), static_cast<std::uint32_t>(k));
+  }
+  std::vector<std::vector<std::uint32_t>> positions(kObjects);
+  std::vector<core::ObjectMoments> moments(kObjects);
+  std::vector<std::vector<Eigen::Vector2f>> xy(kObjects);
+  for (std::uint32_t i = 0; i < cloud.size(); ++i) {
+    const LabeledPoint& p = cloud[i];
+    positions[p.label].push_back(i);
+    moments[p.label].add(p.x, p.y, p.z);
+    xy[p.label].emplace_back(p.x, p.y);
+  }
+  core::ObjectGeometry by_positions, by_moments;
+  for (int k = kObjects; k-- > 0;) {  // reverse order: the scratch buffers shrink and grow
+    ASSERT_GT(positions[k].size(), 10u);
+    core::DetectedObject a, b;
+    by_positions.compute(cloud, positions[k], &a);
+    by_moments.finish(moments[k], xy[k].data(), &b);
+    for (int d = 0; d < 3; ++d) {
+      EXPECT_EQ(a.centroid[d], b.centroid[d]) << k;
+      EXPECT_EQ(a.min_pt[d], b.min_pt[d]) << k;
+      EXPECT_EQ(a.max_pt[d], b.max_pt[d]) << k;
+      EXPECT_EQ(a.obb_center[d], b.obb_center[d]) << k;
+      EXPECT_EQ(a.obb_size[d], b.obb_size[d]) << k;
+    }
+    EXPECT_EQ(a.obb_yaw_rad, b.obb_yaw_rad) << k;
+    EXPECT_GT(b.obb_size.x(), 1.0f) << k;  // a real box, not the zero of an empty object
+  }
+  core::DetectedObject empty;
+  empty.obb_size.setOnes();
+  by_moments.finish(core::ObjectMoments(), nullptr, &empty);
+  EXPECT_EQ(empty.obb_size, Eigen::Vector3f::Zero());
+}
+
 TEST(DistanceWeight, FitRecoversAKnownSixthDegreePolynomial) {
   // Synthetic "densities" on the ring centres 1.5..79.5 m from a known polynomial.
   const std::vector<double> truth = {0.9, -0.05, 1.2e-3, -1.5e-5, 1.0e-7, -3.5e-10, 5.0e-13};

@@ -152,7 +152,6 @@ class HierarchicalGridDetector : public ObjectDetector {
   double denseCellSize() const { return dense_cell_m_; }
 
  private:
-  int find(std::vector<std::int32_t>* parent, std::int32_t i) const;
   bool linked(std::int32_t coarse_a, std::int32_t coarse_b) const;
   void resetGrid();
   void buildBridgeTables();
@@ -179,6 +178,8 @@ class HierarchicalGridDetector : public ObjectDetector {
   };
   std::vector<CellXY> bridge_offsets_;      // radial bridge offsets, see buildBridgeTables()
   std::vector<std::int32_t> bridge_begin_;  // [near, far][direction bin] -> offsets begin
+  std::vector<std::int32_t> bridge_flat_;   // bridge_offsets_ as flat grid index offsets
+  int probe_margin_ = 1;  // [sub-cells] largest probe offset: farther from the border, no checks
   // Per touched sub-cell (slot).
   std::vector<std::int32_t> dense_cell_;    // flat grid index
   std::vector<CellXY> dense_xy_;            // grid column and row
@@ -186,6 +187,7 @@ class HierarchicalGridDetector : public ObjectDetector {
   std::vector<std::int32_t> dense_coarse_;  // slot of its super-cell
   std::vector<std::uint8_t> dense_occupied_;
   std::vector<float> dense_rho_;            // weighted density
+  std::vector<float> dense_key_;            // [m] super-cell Z_max if dense, else NaN
   std::vector<float> dense_zmax_;           // [m] highest point
   std::vector<float> dense_zmin_;           // [m] lowest point
   std::vector<std::int32_t> dense_parent_;  // union-find of the dense level
@@ -203,12 +205,15 @@ class HierarchicalGridDetector : public ObjectDetector {
   // Per component.
   std::vector<std::int32_t> root_object_;  // union-find root -> component index
   std::vector<std::uint32_t> comp_count_;
-  std::vector<float> comp_rho_;              // distance-weighted point count per component
-  std::vector<std::int32_t> comp_box_;       // sub-cell min x, min y, max x, max y per component
-  std::vector<std::int32_t> comp_final_;     // component -> output object index or -1
-  std::vector<std::uint32_t> positions_;     // cloud positions, grouped by output object
-  std::vector<std::uint32_t> object_begin_;  // object k: positions_[begin[k], begin[k + 1])
-  std::vector<std::uint32_t> cursor_;
+  std::vector<float> comp_rho_;           // distance-weighted point count per component
+  std::vector<std::int32_t> comp_box_;    // sub-cell min x, min y, max x, max y per component
+  std::vector<std::int32_t> comp_final_;  // component -> output object index or -1
+  // Per output object.
+  std::vector<std::uint32_t> object_begin_;  // object k: object_xy_[begin[k], begin[k + 1])
+  std::vector<Eigen::Vector2f> object_xy_;   // [m] xy of the points, grouped by object
+  std::vector<ObjectMoments> moments_;       // pass 1 of the object geometry
+  std::vector<std::uint32_t*> index_out_;    // scatter cursors into the objects' indices
+  std::vector<Eigen::Vector2f*> xy_out_;     // scatter cursors into object_xy_
 };
 
 }  // namespace core

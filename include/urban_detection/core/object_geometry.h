@@ -4,7 +4,9 @@
 /// boxes that differ only because their point groups differ. ROS-free.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -14,6 +16,30 @@
 
 namespace urban_detection {
 namespace core {
+
+/// Pass 1 of the object geometry: sums and axis-aligned extremes of an object's points, in the
+/// order they are added (the sums are in double; the order fixes their last bits). A detector
+/// that visits each point anyway (the hierarchical grid's output scatter) accumulates them
+/// there and hands them to ObjectGeometry::finish(), so the points are read once.
+struct ObjectMoments {
+  double sx = 0.0, sy = 0.0, sz = 0.0;  // [m] sums of x, y, z
+  float min_x = std::numeric_limits<float>::max(), min_y = min_x, min_z = min_x;  // [m]
+  float max_x = -min_x, max_y = -min_x, max_z = -min_x;                           // [m]
+  std::size_t n = 0;
+
+  void add(float x, float y, float z) {
+    sx += x;
+    sy += y;
+    sz += z;
+    min_x = std::min(min_x, x);
+    min_y = std::min(min_y, y);
+    min_z = std::min(min_z, z);
+    max_x = std::max(max_x, x);
+    max_y = std::max(max_y, y);
+    max_z = std::max(max_z, z);
+    ++n;
+  }
+};
 
 /// Computes the box fields of DetectedObjects. Holds scratch buffers so that, in steady state,
 /// computing the geometry of a frame's objects allocates nothing.
@@ -37,16 +63,20 @@ class ObjectGeometry {
   /// `index` field of each point (n entries), read in the same pass.
   void compute(const LabeledCloud& cloud, const std::uint32_t* cloud_positions, std::size_t n,
                DetectedObject* object, std::uint32_t* indices_out = nullptr);
+  /// The part of compute() after pass 1, for a caller that accumulated `moments` and gathered
+  /// the xy of the object's points itself (`xy`, moments.n entries, in the order they were
+  /// added). compute() is this after its own pass 1, so both give identical fields.
+  void finish(const ObjectMoments& moments, const Eigen::Vector2f* xy, DetectedObject* object);
 
   /// [m] the hull (and so the oriented box) is exact to within this distance, see compute().
   static constexpr float kHullTolerance = 0.05f;
 
  private:
   static constexpr int kMaxColumns = 512;
-  std::vector<Eigen::Vector2f> pts_;   // xy of the object's points
-  std::vector<std::int32_t> col_lo_, col_hi_;  // per column: extreme points across
-  std::vector<Eigen::Vector2f> cand_;  // hull candidates: lower chain, then upper chain
-  std::vector<Eigen::Vector2f> hull_;  // convex hull, counter-clockwise
+  std::vector<Eigen::Vector2f> pts_;              // xy of the object's points
+  std::vector<Eigen::Vector2f> col_lo_, col_hi_;  // per column: extreme points across
+  std::vector<Eigen::Vector2f> cand_;             // hull candidates: lower chain, then upper chain
+  std::vector<Eigen::Vector2f> hull_;             // convex hull, counter-clockwise
 };
 
 /// Convex hull of 2-D points (Andrew's monotone chain), counter-clockwise, no collinear points;
