@@ -369,11 +369,18 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     const float gap_range2 =
         static_cast<float>(params_.gap_bridge_range_m * params_.gap_bridge_range_m);
     std::int32_t* parent = dense_parent_.data();
-    auto unite = [parent](std::int32_t a, std::int32_t b) {
-      a = findRoot(parent, a);
-      b = findRoot(parent, b);
-      if (a == b) return false;
-      parent[std::max(a, b)] = std::min(a, b);
+    // Root of the sub-cell whose links are being made: found once per sub-cell, not once per
+    // link tried; a link can only replace it by a smaller root (roots stay the smallest slot).
+    std::int32_t root = 0;
+    auto unite = [parent, &root](std::int32_t r) {
+      r = findRoot(parent, r);
+      if (r == root) return false;
+      if (r < root) {
+        parent[root] = r;
+        root = r;
+      } else {
+        parent[r] = root;
+      }
       return true;
     };
     const std::int32_t forward_flat[4] = {
@@ -385,6 +392,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       const float ks = key[s];
       const bool inside = interior(ix, iy);
       const std::int32_t* here = slot_map + dense_cell_[s];
+      root = findRoot(parent, s);
       for (int f = 0; f < 4; ++f) {
         std::int32_t r;
         if (inside) {
@@ -394,7 +402,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
           if (x < 0 || x >= nd_ || y >= nd_) continue;
           r = slot_map[y * nd_ + x];
         }
-        if (r >= 0 && psiOk(ks, key[r])) unite(s, r);
+        if (r >= 0 && psiOk(ks, key[r])) unite(r);
       }
       // Outwards along the line of sight (step 3): the precomputed offsets of the ray's
       // direction bin, every dense sub-cell there.
@@ -407,7 +415,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       if (inside) {
         for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
           const std::int32_t r = here[bridge_flat_[k]];
-          if (r >= 0 && psiOk(ks, key[r]) && unite(s, r)) ++stats_.bridges;
+          if (r >= 0 && psiOk(ks, key[r]) && unite(r)) ++stats_.bridges;
         }
         continue;
       }
@@ -415,7 +423,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
         const int x = ix + bridge_offsets_[k].x, y = iy + bridge_offsets_[k].y;
         if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
         const std::int32_t r = slot_map[y * nd_ + x];
-        if (r >= 0 && psiOk(ks, key[r]) && unite(s, r)) ++stats_.bridges;
+        if (r >= 0 && psiOk(ks, key[r]) && unite(r)) ++stats_.bridges;
       }
     }
     if (params_.roof_bridge_subcells > 0) roofBridges();
@@ -530,18 +538,35 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   object_xy_.resize(object_begin_[nobj]);
   for (std::size_t k = 0; k < nobj; ++k) xy_out_[k] = object_xy_.data() + object_begin_[k];
   moments_.assign(nobj, ObjectMoments());
+  // Output object per sub-cell slot + 1 (slot -1, a point in no sub-cell, gives -1).
+  slot_object_.resize(nds + 1);
+  slot_object_[0] = -1;
   for (std::int32_t s = 0; s < nds; ++s) {
-    dense_object_[s] = dense_object_[s] < 0 ? -1 : comp_final_[dense_object_[s]];
+    slot_object_[s + 1] = dense_object_[s] < 0 ? -1 : comp_final_[dense_object_[s]];
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int32_t s = point_slot_[i];
-    if (s < 0) continue;
-    const std::int32_t k = dense_object_[s];
-    if (k < 0) continue;
-    const LabeledPoint& p = foreground.points[i];
-    moments_[k].add(p.x, p.y, p.z);
-    *xy_out_[k]++ = Eigen::Vector2f(p.x, p.y);
-    *index_out_[k]++ = p.index;
+  // In scan order consecutive points mostly belong to the same object: a run of them is
+  // accumulated in registers (the same additions in the same order), not through the object's
+  // moments and cursors in memory, whose store-to-load latency would chain point to point.
+  const std::int32_t* object_of = slot_object_.data() + 1;
+  const std::int32_t* point_slot = point_slot_.data();
+  for (std::size_t i = 0; i < n;) {
+    const std::int32_t k = object_of[point_slot[i]];
+    if (k < 0) {
+      ++i;
+      continue;
+    }
+    ObjectMoments m = moments_[k];
+    Eigen::Vector2f* xy = xy_out_[k];
+    std::uint32_t* index = index_out_[k];
+    do {
+      const LabeledPoint& p = foreground.points[i];
+      m.add(p.x, p.y, p.z);
+      *xy++ = Eigen::Vector2f(p.x, p.y);
+      *index++ = p.index;
+    } while (++i < n && object_of[point_slot[i]] == k);
+    moments_[k] = m;
+    xy_out_[k] = xy;
+    index_out_[k] = index;
   }
   for (std::size_t k = 0; k < nobj; ++k) {
     DetectedObject& obj = (*objects)[k];

@@ -156,21 +156,52 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   // the infinite sentinels (finite points always replace them). Branch-free selects: which
   // point is extreme is unpredictable.
   constexpr float kInf = std::numeric_limits<float>::infinity();
-  col_lo_.assign(cols, Eigen::Vector2f(0.0f, kInf));
-  col_hi_.assign(cols, Eigen::Vector2f(0.0f, -kInf));
+  // Four float arrays per set of columns (along and across of the lowest point, of the
+  // highest): consecutive points mostly fall in the same column, so a load often reads what
+  // the previous point just stored, and a float load from a float store forwards on every CPU
+  // (one from the upper half of a stored pair does not on all). The second half of the points
+  // goes to a second set of columns in the same loop, so two independent chains of loads and
+  // stores run side by side; merging keeps the first half's point on ties, i.e. the first
+  // point with the extreme value, as one pass would.
+  col_.resize(8 * static_cast<std::size_t>(cols));
+  float* lo_a = col_.data();
+  float* lo_b = lo_a + cols;
+  float* hi_a = lo_b + cols;
+  float* hi_b = hi_a + cols;
+  float* lo_a2 = hi_b + cols;
+  float* lo_b2 = lo_a2 + cols;
+  float* hi_a2 = lo_b2 + cols;
+  float* hi_b2 = hi_a2 + cols;
+  std::fill(lo_b, lo_b + cols, kInf);
+  std::fill(hi_b, hi_b + cols, -kInf);
+  std::fill(lo_b2, lo_b2 + cols, kInf);
+  std::fill(hi_b2, hi_b2 + cols, -kInf);
   auto bin = [&](auto along_x_tag) {
     constexpr bool kAlongX = decltype(along_x_tag)::value;
-    Eigen::Vector2f* col_lo = col_lo_.data();
-    Eigen::Vector2f* col_hi = col_hi_.data();
-    for (std::size_t i = 0; i < n; ++i) {
-      const float a = kAlongX ? pts[i].x() : pts[i].y(), b = kAlongX ? pts[i].y() : pts[i].x();
+    auto put = [&](const Eigen::Vector2f& q, float* la, float* lb, float* ha, float* hb) {
+      const float a = kAlongX ? q.x() : q.y(), b = kAlongX ? q.y() : q.x();
       const int c = std::min(static_cast<int>((a - lo) * scale), cols - 1);
-      Eigen::Vector2f& l = col_lo[c];
-      Eigen::Vector2f& h = col_hi[c];
-      const bool is_lo = b < l.y();
-      const bool is_hi = b > h.y();
-      l = Eigen::Vector2f(is_lo ? a : l.x(), is_lo ? b : l.y());
-      h = Eigen::Vector2f(is_hi ? a : h.x(), is_hi ? b : h.y());
+      const bool is_lo = b < lb[c];
+      const bool is_hi = b > hb[c];
+      la[c] = is_lo ? a : la[c];
+      lb[c] = is_lo ? b : lb[c];
+      ha[c] = is_hi ? a : ha[c];
+      hb[c] = is_hi ? b : hb[c];
+    };
+    const std::size_t half = n / 2;
+    const Eigen::Vector2f* second = pts + half;
+    for (std::size_t i = 0; i < half; ++i) {
+      put(pts[i], lo_a, lo_b, hi_a, hi_b);
+      put(second[i], lo_a2, lo_b2, hi_a2, hi_b2);
+    }
+    if (n % 2) put(pts[n - 1], lo_a2, lo_b2, hi_a2, hi_b2);
+    for (int c = 0; c < cols; ++c) {
+      const bool is_lo = lo_b2[c] < lo_b[c];
+      const bool is_hi = hi_b2[c] > hi_b[c];
+      lo_a[c] = is_lo ? lo_a2[c] : lo_a[c];
+      lo_b[c] = is_lo ? lo_b2[c] : lo_b[c];
+      hi_a[c] = is_hi ? hi_a2[c] : hi_a[c];
+      hi_b[c] = is_hi ? hi_b2[c] : hi_b[c];
     }
   };
   if (along_x) {
@@ -194,13 +225,13 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   std::size_t nc = 0;
   cand[nc++] = first;
   for (int c = 0; c < cols; ++c) {
-    if (col_lo_[c].y() < kInf) cand[nc++] = col_lo_[c];
+    if (lo_b[c] < kInf) cand[nc++] = Eigen::Vector2f(lo_a[c], lo_b[c]);
   }
   cand[nc++] = last;
   const std::size_t lower_end = nc;
   cand[nc++] = last;
   for (int c = cols; c-- > 0;) {
-    if (col_hi_[c].y() > -kInf) cand[nc++] = col_hi_[c];
+    if (hi_b[c] > -kInf) cand[nc++] = Eigen::Vector2f(hi_a[c], hi_b[c]);
   }
   cand[nc++] = first;
   hull_.resize(nc);

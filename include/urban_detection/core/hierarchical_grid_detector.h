@@ -205,9 +205,10 @@ class HierarchicalGridDetector : public ObjectDetector {
   // Per component.
   std::vector<std::int32_t> root_object_;  // union-find root -> component index
   std::vector<std::uint32_t> comp_count_;
-  std::vector<float> comp_rho_;           // distance-weighted point count per component
-  std::vector<std::int32_t> comp_box_;    // sub-cell min x, min y, max x, max y per component
-  std::vector<std::int32_t> comp_final_;  // component -> output object index or -1
+  std::vector<float> comp_rho_;            // distance-weighted point count per component
+  std::vector<std::int32_t> comp_box_;     // sub-cell min x, min y, max x, max y per component
+  std::vector<std::int32_t> comp_final_;   // component -> output object index or -1
+  std::vector<std::int32_t> slot_object_;  // sub-cell slot + 1 -> output object index or -1
   // Per output object.
   std::vector<std::uint32_t> object_begin_;  // object k: object_xy_[begin[k], begin[k + 1])
   std::vector<Eigen::Vector2f> object_xy_;   // [m] xy of the points, grouped by object

@@ -74,7 +74,7 @@ class ObjectGeometry {
  private:
   static constexpr int kMaxColumns = 512;
   std::vector<Eigen::Vector2f> pts_;              // xy of the object's points
-  std::vector<Eigen::Vector2f> col_lo_, col_hi_;  // per column: extreme points across
+  std::vector<float> col_;  // per column: along and across of its lowest and highest point
   std::vector<Eigen::Vector2f> cand_;             // hull candidates: lower chain, then upper chain
   std::vector<Eigen::Vector2f> hull_;             // convex hull, counter-clockwise
 };
