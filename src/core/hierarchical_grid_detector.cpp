@@ -6,6 +6,11 @@
 #include <sstream>
 #include <stdexcept>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#include <xmmintrin.h>
+#endif
+
 namespace urban_detection {
 namespace core {
 namespace {
@@ -257,23 +262,21 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   const float nd_f = static_cast<float>(nd_);
   const float max_abs_z = static_cast<float>(params_.max_abs_z_m);
   const int xi = params_.xi;
-  for (std::size_t i = 0; i < n; ++i) {
-    const LabeledPoint& p = foreground.points[i];
-    const float fx = (p.x - origin) * inv_dense;
-    const float fy = (p.y - origin) * inv_dense;
-    // Inside the grid and the z range implies finite (comparisons with NaN and inf fail), so
-    // the finiteness tests only run for the rejected points.
-    if (!(fx >= 0.0f && fx < nd_f && fy >= 0.0f && fy < nd_f && std::fabs(p.z) <= max_abs_z)) {
-      point_slot_[i] = -1;
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-        ++stats_.invalid_points;
-      } else {
-        ++stats_.outside_points;
-      }
-      continue;
+  const LabeledPoint* points = foreground.points.data();
+  // A point outside the grid or the z range; inside implies finite (comparisons with NaN and
+  // inf fail), so the finiteness tests only run for the rejected points.
+  auto reject = [&](std::size_t i) {
+    const LabeledPoint& p = points[i];
+    point_slot_[i] = -1;
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      ++stats_.invalid_points;
+    } else {
+      ++stats_.outside_points;
     }
-    const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);  // fx, fy < nd_ exactly
-    const std::int32_t cell = iy * nd_ + ix;
+  };
+  // A point inside, in sub-cell (ix, iy), flat index cell = iy * nd_ + ix.
+  auto place = [&](std::size_t i, std::int32_t cell, int ix, int iy) {
+    const float z = points[i].z;
     std::int32_t slot = dense_slot_[cell];
     if (slot < 0) {
       slot = static_cast<std::int32_t>(dense_cell_.size());
@@ -290,13 +293,73 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
         coarse_zmax_.push_back(-std::numeric_limits<float>::infinity());
       }
       dense_coarse_.push_back(cslot);
-      dense_zmax_.push_back(p.z);
-      dense_zmin_.push_back(p.z);
+      dense_zmax_.push_back(z);
+      dense_zmin_.push_back(z);
     }
     ++dense_count_[slot];
-    dense_zmax_[slot] = std::max(dense_zmax_[slot], p.z);
-    dense_zmin_[slot] = std::min(dense_zmin_[slot], p.z);
+    dense_zmax_[slot] = std::max(dense_zmax_[slot], z);
+    dense_zmin_[slot] = std::min(dense_zmin_[slot], z);
     point_slot_[i] = slot;
+  };
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  // Four points at a time: the same float operations as the scalar loop below (subtract,
+  // multiply, ordered comparisons, truncation), so the same cells, in a quarter of the
+  // instructions; the table lookups stay scalar.
+  {
+    const __m128 v_origin = _mm_set1_ps(origin), v_inv = _mm_set1_ps(inv_dense);
+    const __m128 v_nd = _mm_set1_ps(nd_f), v_zero = _mm_setzero_ps();
+    const __m128 v_max_z = _mm_set1_ps(max_abs_z);
+    const __m128 v_abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128i v_nd_i = _mm_set1_epi32(nd_);
+    alignas(16) std::int32_t bx[4], by[4], bc[4];
+    for (; i + 4 <= n; i += 4) {
+      __m128 x = _mm_loadu_ps(&points[i].x), y = _mm_loadu_ps(&points[i + 1].x);
+      __m128 z = _mm_loadu_ps(&points[i + 2].x), w = _mm_loadu_ps(&points[i + 3].x);
+      _MM_TRANSPOSE4_PS(x, y, z, w);
+      const __m128 fx = _mm_mul_ps(_mm_sub_ps(x, v_origin), v_inv);
+      const __m128 fy = _mm_mul_ps(_mm_sub_ps(y, v_origin), v_inv);
+      const __m128 ok =
+          _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpge_ps(fx, v_zero), _mm_cmplt_ps(fx, v_nd)),
+                                _mm_and_ps(_mm_cmpge_ps(fy, v_zero), _mm_cmplt_ps(fy, v_nd))),
+                     _mm_cmple_ps(_mm_and_ps(z, v_abs), v_max_z));
+      const __m128i ix = _mm_cvttps_epi32(fx), iy = _mm_cvttps_epi32(fy);
+      // iy * nd_ + ix; SSE2 multiplies 32-bit lanes pairwise into 64 bits (even, then odd).
+      const __m128i even = _mm_mul_epu32(iy, v_nd_i);
+      const __m128i odd = _mm_mul_epu32(_mm_srli_si128(iy, 4), v_nd_i);
+      const __m128i prod = _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
+                                              _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
+      _mm_store_si128(reinterpret_cast<__m128i*>(bx), ix);
+      _mm_store_si128(reinterpret_cast<__m128i*>(by), iy);
+      _mm_store_si128(reinterpret_cast<__m128i*>(bc), _mm_add_epi32(prod, ix));
+      const int mask = _mm_movemask_ps(ok);
+      if (mask == 0xf) {
+        place(i, bc[0], bx[0], by[0]);
+        place(i + 1, bc[1], bx[1], by[1]);
+        place(i + 2, bc[2], bx[2], by[2]);
+        place(i + 3, bc[3], bx[3], by[3]);
+        continue;
+      }
+      for (int j = 0; j < 4; ++j) {
+        if (mask & (1 << j)) {
+          place(i + j, bc[j], bx[j], by[j]);
+        } else {
+          reject(i + j);
+        }
+      }
+    }
+  }
+#endif
+  for (; i < n; ++i) {
+    const LabeledPoint& p = points[i];
+    const float fx = (p.x - origin) * inv_dense;
+    const float fy = (p.y - origin) * inv_dense;
+    if (fx >= 0.0f && fx < nd_f && fy >= 0.0f && fy < nd_f && std::fabs(p.z) <= max_abs_z) {
+      const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);  // fx, fy < nd_ exactly
+      place(i, iy * nd_ + ix, ix, iy);
+    } else {
+      reject(i);
+    }
   }
   const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
   const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
@@ -328,16 +391,18 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
 
   // --- Dense level: weighted densities; dense sub-cells are the nodes of the components. ----
   dense_occupied_.assign(nds, 0);
-  dense_rho_.resize(nds);
+  dense_rho_.resize(nds + 1);  // [0]: slot -1 (no sub-cell), see the ring of step 4
+  dense_rho_[0] = 0.0f;
+  float* const rho = dense_rho_.data() + 1;
   dense_parent_.resize(nds);
   const float thr = static_cast<float>(params_.dense_min_weighted_points);
   const float dcell = static_cast<float>(dense_cell_m_);
   for (std::int32_t s = 0; s < nds; ++s) {
     const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
     const float x = (ix + 0.5f) * dcell + origin, y = (iy + 0.5f) * dcell + origin;
-    dense_rho_[s] = static_cast<float>(dense_count_[s]) * weight_(std::sqrt(x * x + y * y));
+    rho[s] = static_cast<float>(dense_count_[s]) * weight_(std::sqrt(x * x + y * y));
     dense_parent_[s] = s;
-    if (dense_rho_[s] >= thr) {
+    if (rho[s] >= thr) {
       dense_occupied_[s] = 1;
       ++stats_.dense_occupied;
     }
@@ -345,14 +410,16 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
 
   // The psi test of two sub-cells, with one load per candidate: key = Z_max of the sub-cell's
   // super-cell when the sub-cell is dense, NaN otherwise (every comparison with NaN fails).
-  // |za - zb| <= psi_max is linked(): equal super-cells give 0 <= psi_max.
+  // |za - zb| <= psi_max is linked(): equal super-cells give 0 <= psi_max. Slot -1 (an empty
+  // sub-cell) has a key too, NaN: a probe needs no test for it.
   const double psi_max = params_.psi_max_m;
-  dense_key_.resize(nds);
+  dense_key_.resize(nds + 1);
+  dense_key_[0] = std::numeric_limits<float>::quiet_NaN();
   for (std::int32_t s = 0; s < nds; ++s) {
-    dense_key_[s] = dense_occupied_[s] ? coarse_zmax_[dense_coarse_[s]]
-                                       : std::numeric_limits<float>::quiet_NaN();
+    dense_key_[s + 1] = dense_occupied_[s] ? coarse_zmax_[dense_coarse_[s]]
+                                           : std::numeric_limits<float>::quiet_NaN();
   }
-  const float* key = dense_key_.data();
+  const float* key = dense_key_.data() + 1;
   const std::int32_t* slot_map = dense_slot_.data();
   auto psiOk = [psi_max](float za, float zb) { return std::fabs(za - zb) <= psi_max; };
   // Sub-cells at least probe_margin_ from the grid border probe through flat offsets without
@@ -393,16 +460,23 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       const bool inside = interior(ix, iy);
       const std::int32_t* here = slot_map + dense_cell_[s];
       root = findRoot(parent, s);
-      for (int f = 0; f < 4; ++f) {
-        std::int32_t r;
-        if (inside) {
-          r = here[forward_flat[f]];
-        } else {
+      if (inside) {
+        // All four psi tests first, without branches (their outcomes are data-dependent), then
+        // the links in the same order.
+        unsigned linked_forward = 0;
+        for (int f = 0; f < 4; ++f) {
+          linked_forward |= static_cast<unsigned>(psiOk(ks, key[here[forward_flat[f]]])) << f;
+        }
+        for (; linked_forward; linked_forward &= linked_forward - 1) {
+          unite(here[forward_flat[__builtin_ctz(linked_forward)]]);
+        }
+      } else {
+        for (int f = 0; f < 4; ++f) {
           const int x = ix + kForward[f][0], y = iy + kForward[f][1];
           if (x < 0 || x >= nd_ || y >= nd_) continue;
-          r = slot_map[y * nd_ + x];
+          const std::int32_t r = slot_map[y * nd_ + x];
+          if (psiOk(ks, key[r])) unite(r);
         }
-        if (r >= 0 && psiOk(ks, key[r])) unite(r);
       }
       // Outwards along the line of sight (step 3): the precomputed offsets of the ray's
       // direction bin, every dense sub-cell there.
@@ -413,9 +487,17 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       const int bin = directionBin(cx, cy);
       const std::int32_t* begin = &bridge_begin_[table * (kDirectionBins + 1) + bin];
       if (inside) {
-        for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
-          const std::int32_t r = here[bridge_flat_[k]];
-          if (r >= 0 && psiOk(ks, key[r]) && unite(r)) ++stats_.bridges;
+        // As above, up to 64 probes at a time.
+        for (std::int32_t k0 = begin[0]; k0 < begin[1]; k0 += 64) {
+          const std::int32_t* flat = bridge_flat_.data() + k0;
+          const int m = std::min<std::int32_t>(64, begin[1] - k0);
+          std::uint64_t linked_bridge = 0;
+          for (int j = 0; j < m; ++j) {
+            linked_bridge |= static_cast<std::uint64_t>(psiOk(ks, key[here[flat[j]]])) << j;
+          }
+          for (; linked_bridge; linked_bridge &= linked_bridge - 1) {
+            if (unite(here[flat[__builtin_ctzll(linked_bridge)]])) ++stats_.bridges;
+          }
         }
         continue;
       }
@@ -423,7 +505,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
         const int x = ix + bridge_offsets_[k].x, y = iy + bridge_offsets_[k].y;
         if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
         const std::int32_t r = slot_map[y * nd_ + x];
-        if (r >= 0 && psiOk(ks, key[r]) && unite(r)) ++stats_.bridges;
+        if (psiOk(ks, key[r]) && unite(r)) ++stats_.bridges;
       }
     }
     if (params_.roof_bridge_subcells > 0) roofBridges();
@@ -462,7 +544,9 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     const float zs = coarse_zmax_[dense_coarse_[s]];
     const bool inside = interior(ix, iy);
     const std::int32_t* here = slot_map + dense_cell_[s];
+    // The first of the densest (rho >= 1 > -inf), by selects rather than branches.
     std::int32_t best = -1;
+    float best_rho = -std::numeric_limits<float>::infinity();
     for (int m = 0; m < 8; ++m) {
       std::int32_t r;
       if (inside) {
@@ -472,8 +556,10 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
         if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
         r = slot_map[y * nd_ + x];
       }
-      if (r < 0 || !psiOk(zs, key[r])) continue;
-      if (best < 0 || dense_rho_[r] > dense_rho_[best]) best = r;
+      const float rho_r = rho[r];
+      const bool take = psiOk(zs, key[r]) & (rho_r > best_rho);
+      best = take ? r : best;
+      best_rho = take ? rho_r : best_rho;
     }
     if (best >= 0) dense_object_[s] = componentOf(best);
   }
@@ -494,7 +580,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       continue;
     }
     comp_count_[c] += dense_count_[s];
-    comp_rho_[c] += dense_rho_[s];
+    comp_rho_[c] += rho[s];
     const std::int32_t ix = dense_xy_[s].x, iy = dense_xy_[s].y;
     std::int32_t* box = &comp_box_[4 * static_cast<std::size_t>(c)];
     box[0] = std::min(box[0], ix);

@@ -5,6 +5,10 @@
 #include <limits>
 #include <type_traits>
 
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
+
 namespace urban_detection {
 namespace core {
 namespace {
@@ -176,17 +180,35 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   std::fill(hi_b, hi_b + cols, -kInf);
   std::fill(lo_b2, lo_b2 + cols, kInf);
   std::fill(hi_b2, hi_b2 + cols, -kInf);
+#if defined(__SSE2__)
+  // m ? x : y per lane, m all ones or all zeros.
+  auto select = [](__m128 m, __m128 x, __m128 y) {
+    return _mm_or_ps(_mm_and_ps(m, x), _mm_andnot_ps(m, y));
+  };
+#endif
   auto bin = [&](auto along_x_tag) {
     constexpr bool kAlongX = decltype(along_x_tag)::value;
     auto put = [&](const Eigen::Vector2f& q, float* la, float* lb, float* ha, float* hb) {
       const float a = kAlongX ? q.x() : q.y(), b = kAlongX ? q.y() : q.x();
       const int c = std::min(static_cast<int>((a - lo) * scale), cols - 1);
+#if defined(__SSE2__)
+      // Selects by mask: the compiler turns the scalar selects below into branches, which
+      // mispredict (whether a point is its column's extreme is data-dependent).
+      const __m128 va = _mm_set_ss(a), vb = _mm_set_ss(b);
+      const __m128 l_b = _mm_load_ss(lb + c), h_b = _mm_load_ss(hb + c);
+      const __m128 is_lo = _mm_cmplt_ss(vb, l_b), is_hi = _mm_cmpgt_ss(vb, h_b);
+      _mm_store_ss(la + c, select(is_lo, va, _mm_load_ss(la + c)));
+      _mm_store_ss(lb + c, select(is_lo, vb, l_b));
+      _mm_store_ss(ha + c, select(is_hi, va, _mm_load_ss(ha + c)));
+      _mm_store_ss(hb + c, select(is_hi, vb, h_b));
+#else
       const bool is_lo = b < lb[c];
       const bool is_hi = b > hb[c];
       la[c] = is_lo ? a : la[c];
       lb[c] = is_lo ? b : lb[c];
       ha[c] = is_hi ? a : ha[c];
       hb[c] = is_hi ? b : hb[c];
+#endif
     };
     const std::size_t half = n / 2;
     const Eigen::Vector2f* second = pts + half;
@@ -196,12 +218,22 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
     }
     if (n % 2) put(pts[n - 1], lo_a2, lo_b2, hi_a2, hi_b2);
     for (int c = 0; c < cols; ++c) {
+#if defined(__SSE2__)
+      const __m128 l_b = _mm_load_ss(lo_b + c), l_b2 = _mm_load_ss(lo_b2 + c);
+      const __m128 h_b = _mm_load_ss(hi_b + c), h_b2 = _mm_load_ss(hi_b2 + c);
+      const __m128 is_lo = _mm_cmplt_ss(l_b2, l_b), is_hi = _mm_cmpgt_ss(h_b2, h_b);
+      _mm_store_ss(lo_a + c, select(is_lo, _mm_load_ss(lo_a2 + c), _mm_load_ss(lo_a + c)));
+      _mm_store_ss(lo_b + c, select(is_lo, l_b2, l_b));
+      _mm_store_ss(hi_a + c, select(is_hi, _mm_load_ss(hi_a2 + c), _mm_load_ss(hi_a + c)));
+      _mm_store_ss(hi_b + c, select(is_hi, h_b2, h_b));
+#else
       const bool is_lo = lo_b2[c] < lo_b[c];
       const bool is_hi = hi_b2[c] > hi_b[c];
       lo_a[c] = is_lo ? lo_a2[c] : lo_a[c];
       lo_b[c] = is_lo ? lo_b2[c] : lo_b[c];
       hi_a[c] = is_hi ? hi_a2[c] : hi_a[c];
       hi_b[c] = is_hi ? hi_b2[c] : hi_b[c];
+#endif
     }
   };
   if (along_x) {
@@ -214,6 +246,23 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   const float hi = along_x ? mxx : mxy;
   auto firstWith = [&](float value) {
     std::size_t i = 0;
+#if defined(__SSE2__)
+    // Four points (eight floats) per step, comparing the along lanes only; the first equal
+    // point is the same as the scalar loop's.
+    static_assert(sizeof(Eigen::Vector2f) == 2 * sizeof(float), "packed xy pairs");
+    const float* f = pts[0].data();
+    const __m128 v = _mm_set1_ps(value);
+    const int lanes = along_x ? 0x55 : 0xaa;
+    for (; i + 4 <= n; i += 4) {
+      const int m = (_mm_movemask_ps(_mm_cmpeq_ps(_mm_loadu_ps(f + 2 * i), v)) |
+                     _mm_movemask_ps(_mm_cmpeq_ps(_mm_loadu_ps(f + 2 * i + 4), v)) << 4) &
+                    lanes;
+      if (m) {
+        i += static_cast<std::size_t>(__builtin_ctz(static_cast<unsigned>(m)) / 2);
+        break;
+      }
+    }
+#endif
     while (i + 1 < n && (along_x ? pts[i].x() : pts[i].y()) != value) ++i;
     return Eigen::Vector2f(along_x ? pts[i] : Eigen::Vector2f(pts[i].y(), pts[i].x()));
   };
@@ -225,13 +274,15 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   std::size_t nc = 0;
   cand[nc++] = first;
   for (int c = 0; c < cols; ++c) {
-    if (lo_b[c] < kInf) cand[nc++] = Eigen::Vector2f(lo_a[c], lo_b[c]);
+    cand[nc] = Eigen::Vector2f(lo_a[c], lo_b[c]);  // kept only if the column has a point
+    nc += lo_b[c] < kInf;
   }
   cand[nc++] = last;
   const std::size_t lower_end = nc;
   cand[nc++] = last;
   for (int c = cols; c-- > 0;) {
-    if (hi_b[c] > -kInf) cand[nc++] = Eigen::Vector2f(hi_a[c], hi_b[c]);
+    cand[nc] = Eigen::Vector2f(hi_a[c], hi_b[c]);
+    nc += hi_b[c] > -kInf;
   }
   cand[nc++] = first;
   hull_.resize(nc);

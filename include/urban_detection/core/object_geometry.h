@@ -73,10 +73,10 @@ class ObjectGeometry {
 
  private:
   static constexpr int kMaxColumns = 512;
-  std::vector<Eigen::Vector2f> pts_;              // xy of the object's points
+  std::vector<Eigen::Vector2f> pts_;  // xy of the object's points
   std::vector<float> col_;  // per column: along and across of its lowest and highest point
-  std::vector<Eigen::Vector2f> cand_;             // hull candidates: lower chain, then upper chain
-  std::vector<Eigen::Vector2f> hull_;             // convex hull, counter-clockwise
+  std::vector<Eigen::Vector2f> cand_;  // hull candidates: lower chain, then upper chain
+  std::vector<Eigen::Vector2f> hull_;  // convex hull, counter-clockwise
 };
 
 /// Convex hull of 2-D points (Andrew's monotone chain), counter-clockwise, no collinear points;
