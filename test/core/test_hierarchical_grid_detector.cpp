@@ -471,6 +471,51 @@ TEST(HierarchicalGridInput, NonFiniteAndHugePointsAreIgnored) {
   EXPECT_EQ(partitionOf(a), partitionOf(b));
 }
 
+// The binning takes four points at a time and the remainder one by one: the same points, on
+// the grid border and off it, at every position modulo four give the same objects, boxes and
+// counts.
+TEST(HierarchicalGridInput, PointsBinAlikeInBlocksOfFourAndInTheRemainder) {
+  HierarchicalGridDetector det;
+  const float lo = -80.4f;  // the grid's lower corner with the defaults: -ceil(80 / 0.6) * 0.6
+  ASSERT_EQ(static_cast<float>(-std::ceil(80.0 / 0.6) * 0.6), lo);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  // x, y, z; inside: on the lower corner, just inside the upper one, just inside the z limit;
+  // outside: just below the lower corner, on the upper one, beyond the z limit; invalid: NaN.
+  const float inside[][3] = {{lo, lo, 0.0f}, {-lo - 0.001f, 3.0f, 0.0f}, {2.0f, 2.0f, 49.99f}};
+  const float outside[][3] = {
+      {std::nextafter(lo, -100.0f), 0.0f, 0.0f}, {-lo, 0.0f, 0.0f}, {0.0f, 2.0f, -50.01f}};
+  LabeledCloud base = wellSeparatedScene();
+  for (const auto& q : inside) test::addPoint(&base, q[0], q[1], q[2], 0);
+  for (const auto& q : outside) test::addPoint(&base, q[0], q[1], q[2], 0);
+  test::addPoint(&base, nan, 1.0f, 0.0f, 0);
+  std::vector<DetectedObject> expected;
+  det.detect(base, &expected);
+  const core::HierarchicalGridStats expected_stats = det.stats();
+  EXPECT_EQ(expected_stats.outside_points, 3u);
+  EXPECT_EQ(expected_stats.invalid_points, 1u);
+  ASSERT_GE(expected.size(), 7u);
+  for (int shift = 1; shift < 8; ++shift) {
+    LabeledCloud shifted;
+    for (int k = 0; k < shift; ++k) test::addPoint(&shifted, nan, nan, nan, 0);
+    for (const LabeledPoint& p : base.points) shifted.push_back(p);
+    if (shift % 2) std::reverse(shifted.points.begin(), shifted.points.end());
+    std::vector<DetectedObject> out;
+    det.detect(shifted, &out);
+    EXPECT_EQ(det.stats().invalid_points, 1u + shift) << shift;
+    EXPECT_EQ(det.stats().outside_points, 3u) << shift;
+    EXPECT_EQ(det.stats().dense_cells, expected_stats.dense_cells) << shift;
+    EXPECT_EQ(partitionOf(out), partitionOf(expected)) << shift;
+    if (shift % 2) continue;  // reversed: the same objects, sums in another order
+    ASSERT_EQ(out.size(), expected.size());
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      EXPECT_EQ(out[k].indices, expected[k].indices) << shift;
+      EXPECT_EQ(out[k].centroid, expected[k].centroid) << shift;
+      EXPECT_EQ(out[k].obb_center, expected[k].obb_center) << shift;
+      EXPECT_EQ(out[k].obb_size, expected[k].obb_size) << shift;
+    }
+  }
+}
+
 TEST(HierarchicalGridInput, BuffersAreReusedAcrossFramesWithoutStaleState) {
   const LabeledCloud first = wellSeparatedScene();
   LabeledCloud second;

@@ -2,9 +2,11 @@
 // (paper Sec. 4), and the cell fitness value.
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -201,6 +203,107 @@ TEST(ObjectGeometry, FinishOnScatteredMomentsEqualsComputeBitForBit) {
   empty.obb_size.setOnes();
   by_moments.finish(core::ObjectMoments(), nullptr, &empty);
   EXPECT_EQ(empty.obb_size, Eigen::Vector3f::Zero());
+}
+
+// The column hull of ObjectGeometry written plainly (one scalar pass, the first point wins
+// ties), for the bit-for-bit check below of the optimised one (two halves merged, selects by
+// masks, vectorised search).
+void referenceColumnBox(const std::vector<Eigen::Vector2f>& pts, Eigen::Vector2f* center,
+                        Eigen::Vector2f* size, float* yaw) {
+  float mnx = pts[0].x(), mxx = mnx, mny = pts[0].y(), mxy = mny;
+  for (const Eigen::Vector2f& q : pts) {
+    mnx = std::min(mnx, q.x());
+    mxx = std::max(mxx, q.x());
+    mny = std::min(mny, q.y());
+    mxy = std::max(mxy, q.y());
+  }
+  const bool along_x = (mxx - mnx) >= (mxy - mny);
+  auto ab = [along_x](const Eigen::Vector2f& q) {
+    return along_x ? q : Eigen::Vector2f(q.y(), q.x());
+  };
+  const float lo = along_x ? mnx : mny, hi = along_x ? mxx : mxy, len = hi - lo;
+  const int cols =
+      std::clamp(static_cast<int>(std::ceil(len / core::ObjectGeometry::kHullTolerance)), 1, 512);
+  const float scale = len > 0.0f ? cols / len : 0.0f;
+  std::vector<int> low(cols, -1), high(cols, -1);
+  int first = -1, last = -1;
+  for (int i = 0; i < static_cast<int>(pts.size()); ++i) {
+    const Eigen::Vector2f q = ab(pts[i]);
+    const int c = std::min(static_cast<int>((q.x() - lo) * scale), cols - 1);
+    if (low[c] < 0 || q.y() < ab(pts[low[c]]).y()) low[c] = i;
+    if (high[c] < 0 || q.y() > ab(pts[high[c]]).y()) high[c] = i;
+    if (first < 0 && q.x() == lo) first = i;
+    if (last < 0 && q.x() == hi) last = i;
+  }
+  std::vector<Eigen::Vector2f> lower = {ab(pts[first])}, upper = {ab(pts[last])};
+  for (int c = 0; c < cols; ++c) {
+    if (low[c] >= 0) lower.push_back(ab(pts[low[c]]));
+  }
+  lower.push_back(ab(pts[last]));
+  for (int c = cols; c-- > 0;) {
+    if (high[c] >= 0) upper.push_back(ab(pts[high[c]]));
+  }
+  upper.push_back(ab(pts[first]));
+  auto cross = [](const Eigen::Vector2f& o, const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  std::vector<Eigen::Vector2f> hull;
+  for (const Eigen::Vector2f& q : lower) {
+    while (hull.size() >= 2 && cross(hull[hull.size() - 2], hull.back(), q) <= 0.0f) {
+      hull.pop_back();
+    }
+    hull.push_back(q);
+  }
+  const std::size_t t = hull.size() + 1;
+  for (std::size_t i = 1; i < upper.size(); ++i) {
+    while (hull.size() >= t && cross(hull[hull.size() - 2], hull.back(), upper[i]) <= 0.0f) {
+      hull.pop_back();
+    }
+    hull.push_back(upper[i]);
+  }
+  hull.pop_back();
+  if (!along_x) {
+    for (Eigen::Vector2f& q : hull) q = Eigen::Vector2f(q.y(), q.x());
+    std::reverse(hull.begin(), hull.end());
+  }
+  core::minAreaRectangle(hull, center, size, yaw);
+}
+
+// Coordinates on a 1 cm lattice: many points tie for a column's extreme, in both halves of the
+// point list, and for the box's minimum and maximum; odd and even point counts, both axes.
+TEST(ObjectGeometry, ColumnHullEqualsAPlainSinglePassBitForBit) {
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> cm(-150, 150);
+  std::uniform_int_distribution<int> small(0, 30);
+  for (int trial = 0; trial < 1300; ++trial) {
+    // 1..300 points over up to 9 x 1 m, then 1000 small objects (30 x 5 cm) where most column
+    // extremes are hull vertices.
+    const bool tiny = trial >= 300;
+    const int n = tiny ? 2 + trial % 13 : 1 + trial;
+    const float stretch = trial % 2 ? 3.0f : 0.3f;  // long along x or along y
+    LabeledCloud cloud;
+    std::vector<Eigen::Vector2f> pts;
+    for (int i = 0; i < n; ++i) {
+      const float a = 0.01f * (tiny ? small(rng) : cm(rng)), b = 0.01f * (small(rng) % 6);
+      const float x = 12.0f + (tiny ? (trial % 2 ? a : b) : 0.01f * cm(rng) * stretch);
+      const float y = -3.0f + (tiny ? (trial % 2 ? b : a) : 0.01f * cm(rng) / stretch);
+      test::addPoint(&cloud, x, y, 0.01f * cm(rng), 1);
+      pts.emplace_back(x, y);
+    }
+    std::vector<std::uint32_t> pos(n);
+    for (int i = 0; i < n; ++i) pos[i] = i;
+    core::ObjectGeometry g;
+    core::DetectedObject o;
+    g.compute(cloud, pos, &o);
+    Eigen::Vector2f c, s;
+    float yaw;
+    referenceColumnBox(pts, &c, &s, &yaw);
+    EXPECT_EQ(o.obb_center.x(), c.x()) << trial;
+    EXPECT_EQ(o.obb_center.y(), c.y()) << trial;
+    EXPECT_EQ(o.obb_size.x(), s.x()) << trial;
+    EXPECT_EQ(o.obb_size.y(), s.y()) << trial;
+    EXPECT_EQ(o.obb_yaw_rad, yaw) << trial;
+  }
 }
 
 TEST(DistanceWeight, FitRecoversAKnownSixthDegreePolynomial) {
