@@ -106,6 +106,8 @@ HierarchicalGridDetector::HierarchicalGridDetector(const HierarchicalGridDetecto
   nd_ = nc_ * params_.xi;
   origin_m_ = -half * params_.coarse_cell_m;
   dense_slot_.assign(static_cast<std::size_t>(nd_) * nd_, -1);
+  coarse_of_.resize(nd_);
+  for (int i = 0; i < nd_; ++i) coarse_of_[i] = i / params_.xi;
   coarse_slot_.assign(static_cast<std::size_t>(nc_) * nc_, -1);
   buildBridgeTables();
 }
@@ -254,6 +256,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   dense_zmin_.clear();
   dense_coarse_.clear();
   coarse_zmax_.clear();
+  coarse_xy_.clear();
   point_slot_.resize(n);
 
   // --- Binning: every point goes to its sub-cell and, through it, to its super-cell. -------
@@ -261,7 +264,6 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   const float inv_dense = static_cast<float>(1.0 / dense_cell_m_);
   const float nd_f = static_cast<float>(nd_);
   const float max_abs_z = static_cast<float>(params_.max_abs_z_m);
-  const int xi = params_.xi;
   const LabeledPoint* points = foreground.points.data();
   // A point outside the grid or the z range; inside implies finite (comparisons with NaN and
   // inf fail), so the finiteness tests only run for the rejected points.
@@ -284,12 +286,14 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       dense_cell_.push_back(cell);
       dense_xy_.push_back(CellXY{ix, iy});
       dense_count_.push_back(0);
-      const std::int32_t ccell = (iy / xi) * nc_ + ix / xi;
+      const int cx = coarse_of_[ix], cy = coarse_of_[iy];
+      const std::int32_t ccell = cy * nc_ + cx;
       std::int32_t cslot = coarse_slot_[ccell];
       if (cslot < 0) {
         cslot = static_cast<std::int32_t>(coarse_cell_.size());
         coarse_slot_[ccell] = cslot;
         coarse_cell_.push_back(ccell);
+        coarse_xy_.push_back(CellXY{cx, cy});
         coarse_zmax_.push_back(-std::numeric_limits<float>::infinity());
       }
       dense_coarse_.push_back(cslot);
@@ -372,17 +376,53 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   stats_.coarse_cells = ncs;
 
   // --- Coarse level: psi links between 8-neighbouring super-cells -> blobs. -----------------
+  // As at the dense level below: the root of the super-cell whose links are made is kept, the
+  // psi tests of its forward neighbours are a bit mask (an empty cell, slot -1, has a NaN
+  // Z_max), then the links in the same order.
   coarse_parent_.resize(ncs);
   for (std::int32_t s = 0; s < ncs; ++s) coarse_parent_[s] = s;
-  for (std::int32_t s = 0; s < ncs; ++s) {
-    const int cx = coarse_cell_[s] % nc_, cy = coarse_cell_[s] / nc_;
-    for (const auto& o : kForward) {
-      const int x = cx + o[0], y = cy + o[1];
-      if (x < 0 || x >= nc_ || y >= nc_) continue;
-      const std::int32_t r = coarse_slot_[y * nc_ + x];
-      if (r < 0 || !linked(s, r)) continue;
-      const int a = findRoot(coarse_parent_.data(), s), b = findRoot(coarse_parent_.data(), r);
-      if (a != b) coarse_parent_[std::max(a, b)] = std::min(a, b);
+  coarse_key_.resize(ncs + 1);
+  coarse_key_[0] = std::numeric_limits<float>::quiet_NaN();
+  std::copy(coarse_zmax_.begin(), coarse_zmax_.end(), coarse_key_.begin() + 1);
+  {
+    const float* ckey = coarse_key_.data() + 1;
+    std::int32_t* cparent = coarse_parent_.data();
+    const double psi_max = params_.psi_max_m;
+    std::int32_t croot = 0;
+    auto uniteCoarse = [cparent, &croot](std::int32_t r) {
+      r = findRoot(cparent, r);
+      if (r == croot) return;
+      if (r < croot) {
+        cparent[croot] = r;
+        croot = r;
+      } else {
+        cparent[r] = croot;
+      }
+    };
+    std::int32_t forward_flat[4];
+    for (int f = 0; f < 4; ++f) forward_flat[f] = kForward[f][1] * nc_ + kForward[f][0];
+    for (std::int32_t s = 0; s < ncs; ++s) {
+      const int cx = coarse_xy_[s].x, cy = coarse_xy_[s].y;
+      const float zs = ckey[s];
+      croot = findRoot(cparent, s);
+      if (cx >= 1 && cx < nc_ - 1 && cy < nc_ - 1) {
+        const std::int32_t* here = coarse_slot_.data() + coarse_cell_[s];
+        unsigned linked_forward = 0;
+        for (int f = 0; f < 4; ++f) {
+          linked_forward |=
+              static_cast<unsigned>(std::fabs(zs - ckey[here[forward_flat[f]]]) <= psi_max) << f;
+        }
+        for (; linked_forward; linked_forward &= linked_forward - 1) {
+          uniteCoarse(here[forward_flat[__builtin_ctz(linked_forward)]]);
+        }
+        continue;
+      }
+      for (const auto& o : kForward) {
+        const int x = cx + o[0], y = cy + o[1];
+        if (x < 0 || x >= nc_ || y >= nc_) continue;
+        const std::int32_t r = coarse_slot_[y * nc_ + x];
+        if (r >= 0 && linked(s, r)) uniteCoarse(r);
+      }
     }
   }
   for (std::int32_t s = 0; s < ncs; ++s) {

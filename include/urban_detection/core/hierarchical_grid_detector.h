@@ -173,6 +173,7 @@ class HierarchicalGridDetector : public ObjectDetector {
   // Grid -> slot maps (-1 = untouched), reset through the touched slot lists.
   std::vector<std::int32_t> dense_slot_;   // nd_ * nd_
   std::vector<std::int32_t> coarse_slot_;  // nc_ * nc_
+  std::vector<std::int32_t> coarse_of_;    // sub-cell column or row -> super-cell's (i / xi)
   struct CellXY {
     std::int32_t x, y;
   };
@@ -198,6 +199,8 @@ class HierarchicalGridDetector : public ObjectDetector {
   std::vector<std::int32_t> dense_flat_;
   // Per touched super-cell (slot).
   std::vector<std::int32_t> coarse_cell_;
+  std::vector<CellXY> coarse_xy_;  // grid column and row
+  std::vector<float> coarse_key_;  // [m] Z_max at slot + 1, NaN at 0 (slot -1: empty)
   std::vector<float> coarse_zmax_;
   std::vector<std::int32_t> coarse_parent_;  // union-find of the coarse level
   // Per input point: its sub-cell slot, or -1.
