@@ -34,7 +34,13 @@ ParamTable hierarchicalGridTable(core::HierarchicalGridDetectorParams* p) {
       .add("max_extent_m", &p->max_extent_m, 0.1, 1000.0, "m")
       .add("weight/full_density_distance_m", &p->weight.full_density_distance_m, 0.0, 1000.0, "m")
       .add("weight/max_distance_m", &p->weight.max_distance_m, 0.1, 1000.0, "m")
-      .add("weight/max_weight", &p->weight.max_weight, 1.0, 1e6);
+      .add("weight/max_weight", &p->weight.max_weight, 1.0, 1e6)
+      .add("far_merge/max_gap_m", &p->far_merge.max_gap_m, 0.0, 10.0, "m")
+      .add("far_merge/max_across_gap_m", &p->far_merge.max_across_gap_m, 0.0, 10.0, "m")
+      .add("far_merge/max_z_gap_m", &p->far_merge.max_z_gap_m, 0.0, 10.0, "m")
+      .add("far_merge/min_range_m", &p->far_merge.min_range_m, 0.0, 1000.0, "m")
+      .add("far_merge/max_length_m", &p->far_merge.max_length_m, 0.01, 100.0, "m")
+      .add("far_merge/max_width_m", &p->far_merge.max_width_m, 0.01, 100.0, "m");
   return t;
 }
 
