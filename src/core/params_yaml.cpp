@@ -191,6 +191,8 @@ bool applyObjectFilter(const YAML::Node& node, const std::string& where, ObjectF
   t.bind("max_jump_fraction", &p->max_jump_fraction);
   t.bind("hedge_min_intensity", &p->hedge_min_intensity);
   t.bind("hedge_min_length_m", &p->hedge_min_length_m);
+  t.bind("uniform_max_intensity_std", &p->uniform_max_intensity_std);
+  t.bind("uniform_min_points", &p->uniform_min_points);
   return t.apply(node, where, error);
 }
 

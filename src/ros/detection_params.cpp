@@ -102,6 +102,8 @@ void loadObjectFilterParams(const ros::NodeHandle& nh, core::ObjectFilterParams*
   loadParam(nh, "max_jump_fraction", &p->max_jump_fraction, 0.0, 1.0);
   loadParam(nh, "hedge_min_intensity", &p->hedge_min_intensity, 0.0, 1e6);
   loadParam(nh, "hedge_min_length_m", &p->hedge_min_length_m, 0.0, 100.0, "m");
+  loadParam(nh, "uniform_max_intensity_std", &p->uniform_max_intensity_std, 0.0, 1e6);
+  loadParam(nh, "uniform_min_points", &p->uniform_min_points, 2, 1000000);
   throwIfInvalid(nh, core::validate(*p));
 }
 
