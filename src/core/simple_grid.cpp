@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #if defined(__SSE2__)
@@ -60,6 +61,9 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
   const float org = origin_m_, inv = inv_cell_, side_f = static_cast<float>(side_);
   const int side = side_;
   constexpr std::size_t kChunk = 1024;
+#if defined(__SSE2__)
+  constexpr std::uintptr_t kPrefetchBytes = 128 * sizeof(PointXYZIRT);  // 4 kB ahead
+#endif
   chunk_cell_.resize(kChunk);
   std::int32_t* cc = chunk_cell_.data();
   std::int32_t* slot_of = slot_.data();
@@ -133,6 +137,12 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
     const __m128i sidei = _mm_set1_epi32(side), ones = _mm_set1_epi32(-1);
     __m128i any_invalid = _mm_setzero_si128();
     for (; i + 4 <= end; i += 4) {
+      // The cloud (32 bytes a point, megabytes a sweep) mostly comes from memory: the hardware
+      // prefetcher alone leaves this loop waiting for it (it streams within 4 kB pages only),
+      // so the two cache lines 128 points ahead are requested here (prefetches never fault).
+      const std::uintptr_t ahead = reinterpret_cast<std::uintptr_t>(pts + i) + kPrefetchBytes;
+      _mm_prefetch(reinterpret_cast<const char*>(ahead), _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(ahead + 64), _MM_HINT_T0);
       __m128 x = _mm_load_ps(pts[i].data), y = _mm_load_ps(pts[i + 1].data);
       __m128 z = _mm_load_ps(pts[i + 2].data), w = _mm_load_ps(pts[i + 3].data);
       _MM_TRANSPOSE4_PS(x, y, z, w);
