@@ -71,7 +71,8 @@ class HoughWallRefiner {
   /// Line detector of refine(): false (default) = this class's own progressive probabilistic
   /// Hough transform, which returns exactly the segments of cv::HoughLinesP (same algorithm,
   /// random point order and arithmetic; tests compare the two) without its per-call 115 kB
-  /// accumulator allocation and with the votes' rho bins computed four angles at a time;
+  /// accumulator allocation (a 37 kB one of the reachable bins is kept) and with the votes'
+  /// rho bins computed four angles at a time;
   /// true = cv::HoughLinesP itself (reference for tests and comparisons).
   void setUseOpenCvHough(bool use) { use_opencv_ = use; }
 
@@ -88,9 +89,9 @@ class HoughWallRefiner {
   cv::Mat image_;                   // scratch: binary image for cv::HoughLinesP
   std::vector<std::uint8_t> mask_;  // scratch: occupancy of the Hough window (own detector)
   std::vector<cv::Vec4i> lines_;    // scratch: raw Hough output
-  // Scratch of houghLinesP, kept between calls: accumulator (angle-major; after a call only
-  // the bins the window reaches are non-zero), trigonometric tables and flat index of each
-  // angle's rho 0 for the last theta and window size, non-zero pixels, rho bins of one pixel.
+  // Scratch of houghLinesP, kept between calls: accumulator (the reachable rho bins of each
+  // angle, angle after angle), trigonometric tables and flat index of each angle's rho 0 for
+  // the last theta and window size, non-zero pixels, flat indices of one pixel's votes.
   std::vector<std::int32_t> accum_;
   std::vector<float> cos_, sin_;
   std::vector<std::int32_t> row_base_;
