@@ -1,7 +1,6 @@
 #include "urban_detection/core/hough_wall_refiner.h"
 
 #include <algorithm>
-#include <climits>
 #include <cmath>
 #include <cstring>
 #include <opencv2/imgproc.hpp>

@@ -5,14 +5,17 @@
 // and under parameter variants that switch the optional branches on and off. Frames run
 // back to back through one segmenter, so stale scratch state from the previous frame would
 // show up as a mismatch.
-#include <gtest/gtest.h>
+#include "urban_detection/core/point_types.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
-#include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include "reference_segmenter.h"
 #include "segmentation_scene.h"
@@ -20,7 +23,6 @@
 #include "urban_detection/core/grid_segmenter.h"
 #include "urban_detection/core/hough_wall_refiner.h"
 #include "urban_detection/core/kitti_io.h"
-#include "urban_detection/core/point_types.h"
 
 namespace urban_detection {
 namespace {
@@ -128,10 +130,10 @@ TEST(SegmenterReference, SyntheticStreetsWithInvalidPointsMatchTheReference) {
   }
 }
 
-// SimpleGrid::build accumulates run by run (eight points per step; an invalid point is skipped
-// without ending the run) and point by point at the end of each 1024-point chunk; runs cross
-// chunk boundaries and both paths. Streets without invalid points (long runs near the sensor,
-// 1-point runs far away), and with invalid points only in the second half.
+// SimpleGrid::build takes a run-by-run path for chunks of points without invalid points and a
+// point-by-point one otherwise; runs cross chunk boundaries and both paths. Streets without
+// invalid points (long runs near the sensor, 1-point runs far away), and with invalid points
+// only in the second half, so that chunks of both kinds follow each other.
 TEST(SegmenterReference, StreetsWithAndWithoutInvalidChunksMatchTheReference) {
   for (const auto& params : variants()) {
     core::GridSegmenter seg(params);
@@ -227,7 +229,7 @@ namespace {
 // HoughWallRefiner::houghLinesP must return exactly cv::HoughLinesP's segments: random images
 // (scattered pixels and drawn line segments) of several sizes, densities, angle resolutions,
 // vote thresholds, lengths and gaps, all through one refiner (its accumulator and tables are
-// kept between calls and only partly re-zeroed: stale votes would change the segments).
+// kept between calls and rebuilt when theta or the size changes: stale ones would show).
 TEST(HoughLinesP, SameSegmentsAsOpenCv) {
   core::HoughWallRefiner refiner;
   std::mt19937 rng(11);
@@ -271,6 +273,56 @@ TEST(HoughLinesP, SameSegmentsAsOpenCv) {
   }
   EXPECT_EQ(images, 160u);
   EXPECT_GT(total_lines, 1000u);  // not vacuous
+}
+
+}  // namespace
+}  // namespace urban_detection
+
+namespace urban_detection {
+namespace {
+
+// SimpleGrid::build's AVX2 cell pass (eight points at a time, chosen at run time) must give
+// bit for bit the SSE2 path's per-point slots and heights and per-cell statistics: synthetic
+// streets with invalid points, a clean one, odd lengths (tails of fewer than eight points) and
+// the real scans of ../shared/data.
+TEST(SimpleGridAvx2, SameGridAsTheSse2Path) {
+  core::SimpleGrid avx2, sse2;
+  sse2.setAllowAvx2(false);
+  EXPECT_FALSE(sse2.avx2Active());
+  if (!avx2.avx2Active()) GTEST_SKIP() << "this CPU has no AVX2";
+  std::vector<CloudXYZIRT> clouds = sharedFrames(3);
+  for (unsigned seed = 1; seed <= 3; ++seed) clouds.push_back(syntheticStreet(seed));
+  clouds.push_back(syntheticStreet(4, std::numeric_limits<std::size_t>::max()));
+  CloudXYZIRT odd = syntheticStreet(5);
+  odd.points.resize(3 * 1024 + 13);
+  clouds.push_back(odd);
+  std::size_t valid_points = 0, invalid_points = 0;
+  for (std::size_t f = 0; f < clouds.size(); ++f) {
+    const CloudXYZIRT& cloud = clouds[f];
+    avx2.build(cloud, 1.73f, 50.0f);
+    sse2.build(cloud, 1.73f, 50.0f);
+    ASSERT_EQ(avx2.pointSlots(), sse2.pointSlots()) << "cloud " << f;
+    ASSERT_EQ(avx2.pointHeights().size(), sse2.pointHeights().size());
+    EXPECT_EQ(std::memcmp(avx2.pointHeights().data(), sse2.pointHeights().data(),
+                          sizeof(float) * cloud.size()),
+              0)
+        << "cloud " << f;
+    ASSERT_EQ(avx2.occupiedCells(), sse2.occupiedCells()) << "cloud " << f;
+    const auto& a = avx2.occupiedStats();
+    const auto& b = sse2.occupiedStats();
+    ASSERT_EQ(a.size(), b.size());
+    std::size_t differ = 0;
+    for (std::size_t s = 0; s < a.size(); ++s) {
+      differ += a[s].count != b[s].count ||
+                std::memcmp(&a[s].z_min, &b[s].z_min, sizeof(float)) != 0 ||
+                std::memcmp(&a[s].z_max, &b[s].z_max, sizeof(float)) != 0 ||
+                std::memcmp(&a[s].z_sum, &b[s].z_sum, sizeof(float)) != 0;
+    }
+    EXPECT_EQ(differ, 0u) << "cloud " << f;
+    for (const std::int32_t s : avx2.pointSlots()) (s == 0 ? invalid_points : valid_points)++;
+  }
+  EXPECT_GT(valid_points, 100000u);
+  EXPECT_GT(invalid_points, 100u);
 }
 
 }  // namespace
