@@ -86,6 +86,8 @@ std::string validate(const HierarchicalGridDetectorParams& p) {
                p.weight.max_distance_m <= 1000.0)) {
     err << "weight distances need 0 <= full_density_distance_m < max_distance_m <= 1000 m, got "
         << p.weight.full_density_distance_m << " and " << p.weight.max_distance_m;
+  } else {
+    return validate(p.far_merge);
   }
   return err.str();
 }
@@ -93,6 +95,7 @@ std::string validate(const HierarchicalGridDetectorParams& p) {
 HierarchicalGridDetector::HierarchicalGridDetector(const HierarchicalGridDetectorParams& params)
     : params_(checked(params)),
       weight_(params.weight, (params.grid_half_extent_m + params.coarse_cell_m) * M_SQRT2 + 1.0),
+      far_merger_(params.far_merge),
       dense_cell_m_(params.coarse_cell_m / params.xi) {
   // An even number of super-cells with the sensor on a cell corner: cell borders lie on
   // multiples of W_S (and of W_S / xi), independent of the extent.
@@ -548,6 +551,9 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     obj.id = static_cast<std::uint32_t>(k + 1);
     geometry_.finish(moments_[k], object_xy_.data() + object_begin_[k], &obj);
   }
+  // --- Step 6 (far_object_merger.h).
+  stats_.far_joins = far_merger_.apply(foreground, objects);
+  stats_.objects = objects->size();
 }
 
 }  // namespace core

@@ -28,6 +28,11 @@ std::string validate(const ObjectFilterParams& p) {
   require(std::isfinite(p.hedge_min_length_m) && p.hedge_min_length_m >= 0.0 &&
               p.hedge_min_length_m <= 100.0,
           "hedge_min_length_m", "in [0, 100] m");
+  require(std::isfinite(p.uniform_max_intensity_std) && p.uniform_max_intensity_std >= 0.0 &&
+              p.uniform_max_intensity_std <= 1e6,
+          "uniform_max_intensity_std", "in [0, 1e6] (0 = rule off)");
+  require(p.uniform_min_points >= 2 && p.uniform_min_points <= 1000000, "uniform_min_points",
+          "in [2, 1e6]");
   require(std::isfinite(p.row_gap_deg) && p.row_gap_deg > 0.0 && p.row_gap_deg <= 5.0,
           "row_gap_deg", "in (0, 5] deg");
   require(std::isfinite(p.max_azimuth_gap_deg) && p.max_azimuth_gap_deg > 0.0 &&
@@ -129,6 +134,11 @@ ObjectFeatures ObjectFilter::features(const LabeledCloud& foreground,
 }
 
 RejectReason ObjectFilter::classify(const ObjectFeatures& f) const {
+  if (params_.uniform_max_intensity_std > 0.0 &&
+      f.points >= static_cast<std::size_t>(params_.uniform_min_points) &&
+      f.std_intensity < params_.uniform_max_intensity_std) {
+    return RejectReason::kUniform;
+  }
   if (f.points < static_cast<std::size_t>(params_.min_points) ||
       !(f.range_m <= params_.max_range_m)) {
     return RejectReason::kNone;
@@ -165,7 +175,9 @@ ObjectFilterStats ObjectFilter::apply(const LabeledCloud& foreground,
     const RejectReason why = classify(f);
     if (why != RejectReason::kNone) {
       ++s.vegetation;
-      ++(why == RejectReason::kPorous ? s.porous : s.bright_hedge);
+      ++(why == RejectReason::kPorous        ? s.porous
+         : why == RejectReason::kBrightHedge ? s.bright_hedge
+                                             : s.uniform);
       if (rejected) rejected->push_back(std::move(o));
       continue;
     }

@@ -112,6 +112,14 @@ bool applyHierarchical(const YAML::Node& node, const std::string& where,
   weight.bind("full_density_distance_m", &w.full_density_distance_m);
   weight.bind("max_distance_m", &w.max_distance_m);
   weight.bind("max_weight", &w.max_weight);
+  FarObjectMergerParams& fm = p->far_merge;
+  FieldTable far_merge;
+  far_merge.bind("max_gap_m", &fm.max_gap_m);
+  far_merge.bind("max_across_gap_m", &fm.max_across_gap_m);
+  far_merge.bind("max_z_gap_m", &fm.max_z_gap_m);
+  far_merge.bind("min_range_m", &fm.min_range_m);
+  far_merge.bind("max_length_m", &fm.max_length_m);
+  far_merge.bind("max_width_m", &fm.max_width_m);
   FieldTable t;
   t.bind("coarse_cell_m", &p->coarse_cell_m);
   t.bind("xi", &p->xi);
@@ -133,6 +141,9 @@ bool applyHierarchical(const YAML::Node& node, const std::string& where,
   t.bind("max_extent_m", &p->max_extent_m);
   t.bindMap("weight", [&weight, where](const YAML::Node& n, std::string* err) {
     return weight.apply(n, where + "weight/", err);
+  });
+  t.bindMap("far_merge", [&far_merge, where](const YAML::Node& n, std::string* err) {
+    return far_merge.apply(n, where + "far_merge/", err);
   });
   return t.apply(node, where, error);
 }
@@ -180,6 +191,8 @@ bool applyObjectFilter(const YAML::Node& node, const std::string& where, ObjectF
   t.bind("max_jump_fraction", &p->max_jump_fraction);
   t.bind("hedge_min_intensity", &p->hedge_min_intensity);
   t.bind("hedge_min_length_m", &p->hedge_min_length_m);
+  t.bind("uniform_max_intensity_std", &p->uniform_max_intensity_std);
+  t.bind("uniform_min_points", &p->uniform_min_points);
   return t.apply(node, where, error);
 }
 

@@ -39,6 +39,8 @@ class HierarchicalGridDetector : public DetectorNodelet {
     c.min_points = params_.min_points;
     c.min_weighted_points = params_.min_weighted_points;
     c.max_extent_m = params_.max_extent_m;
+    c.far_merge_max_gap_m = params_.far_merge.max_gap_m;
+    c.far_merge_min_range_m = params_.far_merge.min_range_m;
     reconfigure_nh_ = ros::NodeHandle(pnh, "hierarchical_grid");
     reconfigure_ = std::make_unique<Reconfigure>(
         reconfigure_nh_, c, [this](const auto& config) { return apply(config); });
@@ -65,6 +67,8 @@ class HierarchicalGridDetector : public DetectorNodelet {
     p.min_points = c.min_points;
     p.min_weighted_points = c.min_weighted_points;
     p.max_extent_m = c.max_extent_m;
+    p.far_merge.max_gap_m = c.far_merge_max_gap_m;
+    p.far_merge.min_range_m = c.far_merge_min_range_m;
     const std::string error = ros_conv::checkHierarchicalGridParams(reconfigure_nh_, p);
     if (!error.empty()) return error;
     replaceDetector(std::make_unique<core::HierarchicalGridDetector>(p));

@@ -34,7 +34,13 @@ ParamTable hierarchicalGridTable(core::HierarchicalGridDetectorParams* p) {
       .add("max_extent_m", &p->max_extent_m, 0.1, 1000.0, "m")
       .add("weight/full_density_distance_m", &p->weight.full_density_distance_m, 0.0, 1000.0, "m")
       .add("weight/max_distance_m", &p->weight.max_distance_m, 0.1, 1000.0, "m")
-      .add("weight/max_weight", &p->weight.max_weight, 1.0, 1e6);
+      .add("weight/max_weight", &p->weight.max_weight, 1.0, 1e6)
+      .add("far_merge/max_gap_m", &p->far_merge.max_gap_m, 0.0, 10.0, "m")
+      .add("far_merge/max_across_gap_m", &p->far_merge.max_across_gap_m, 0.0, 10.0, "m")
+      .add("far_merge/max_z_gap_m", &p->far_merge.max_z_gap_m, 0.0, 10.0, "m")
+      .add("far_merge/min_range_m", &p->far_merge.min_range_m, 0.0, 1000.0, "m")
+      .add("far_merge/max_length_m", &p->far_merge.max_length_m, 0.01, 100.0, "m")
+      .add("far_merge/max_width_m", &p->far_merge.max_width_m, 0.01, 100.0, "m");
   return t;
 }
 
@@ -96,6 +102,8 @@ void loadObjectFilterParams(const ros::NodeHandle& nh, core::ObjectFilterParams*
   loadParam(nh, "max_jump_fraction", &p->max_jump_fraction, 0.0, 1.0);
   loadParam(nh, "hedge_min_intensity", &p->hedge_min_intensity, 0.0, 1e6);
   loadParam(nh, "hedge_min_length_m", &p->hedge_min_length_m, 0.0, 100.0, "m");
+  loadParam(nh, "uniform_max_intensity_std", &p->uniform_max_intensity_std, 0.0, 1e6);
+  loadParam(nh, "uniform_min_points", &p->uniform_min_points, 2, 1000000);
   throwIfInvalid(nh, core::validate(*p));
 }
 

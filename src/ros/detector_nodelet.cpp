@@ -62,6 +62,7 @@ void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& 
   const core::ObjectFilterStats filtered = filter_->apply(*foreground, &objects_);
   diagnostics_->count("rejected objects (porous)", filtered.porous, false);
   diagnostics_->count("rejected objects (bright hedge)", filtered.bright_hedge, false);
+  diagnostics_->count("rejected objects (uniform material)", filtered.uniform, false);
   std_msgs::Header header;
   pcl_conversions::fromPCL(foreground->header, header);
   if (objects_pub_.getNumSubscribers() > 0) {

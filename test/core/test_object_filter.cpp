@@ -253,8 +253,62 @@ TEST(ObjectFilter, DetectionYamlMirrorsTheParamsAndTyposAreErrors) {
   EXPECT_DOUBLE_EQ(p.max_range_m, d.max_range_m);
   EXPECT_DOUBLE_EQ(p.hedge_min_intensity, d.hedge_min_intensity);
   EXPECT_DOUBLE_EQ(p.hedge_min_length_m, d.hedge_min_length_m);
+  EXPECT_DOUBLE_EQ(p.uniform_max_intensity_std, d.uniform_max_intensity_std);
+  EXPECT_EQ(p.uniform_min_points, d.uniform_min_points);
 
   const ud_test::TempFile typo(".yaml", "detection:\n  object_filter:\n    jump_mm: 0.3\n");
   EXPECT_FALSE(core::loadObjectFilterParamsYaml(typo.path(), &p, &error));
   EXPECT_NE(error.find("object_filter/jump_mm: unknown parameter"), std::string::npos) << error;
+}
+
+TEST(ObjectFilter, UniformMaterialRuleIsOffByDefaultAndKeepsMixedObjects) {
+  Scene s;
+  // A hedge 9 m away (one material: intensity 90 +- 10), a car (dark paint 20 with bright lamps
+  // and plate 120) and, 40 m away beyond the porosity rule's max_range_m, a second hedge.
+  s.objects.push_back(
+      scan(box({8.0, -6.0, -1.73}, {8.6, -2.0, -0.5}), -40, -10, -14, 0, &s.fg, 0.09, 0.4, 90.0f));
+  s.objects.push_back(
+      scan(box({8.0, 5.0, -1.6}, {12.2, 6.8, -0.3}), 25, 45, -14, 0, &s.fg, 0.09, 0.4, 20.0f));
+  s.objects.push_back(scan(box({40.0, -1.0, -1.73}, {40.6, 1.0, -0.5}), -2, 2, -8, 0, &s.fg, 0.09,
+                           0.4, 90.0f));
+  for (std::size_t k = 0; k < s.fg.size(); ++k) {
+    s.fg.points[k].intensity += (k % 2 ? 10.0f : -10.0f);
+  }
+  for (std::size_t k = 0; k < s.objects[1].indices.size(); k += 3) {
+    for (LabeledPoint& p : s.fg.points) {
+      if (p.index == s.objects[1].indices[k]) p.intensity = 120.0f;
+    }
+  }
+  ASSERT_GE(s.objects[2].indices.size(), 10u);
+  const std::vector<core::DetectedObject> all = s.objects;
+  core::ObjectFilter off(on());
+  off.indexForeground(s.fg);
+  EXPECT_NEAR(off.features(s.fg, all[0]).std_intensity, 10.0, 0.5);
+  EXPECT_GT(off.features(s.fg, all[1]).std_intensity, 40.0);
+  off.apply(s.fg, &s.objects);
+  EXPECT_EQ(s.objects.size(), 3u) << "uniform_max_intensity_std 0: rule off";
+
+  core::ObjectFilterParams p = on();
+  p.uniform_max_intensity_std = 30.0;
+  core::ObjectFilter uniform(p);
+  s.objects = all;
+  std::vector<core::DetectedObject> rejected;
+  const core::ObjectFilterStats st = uniform.apply(s.fg, &s.objects, &rejected);
+  EXPECT_EQ(st.uniform, 2u);
+  EXPECT_EQ(st.porous + st.bright_hedge, 0u);
+  ASSERT_EQ(rejected.size(), 2u);
+  EXPECT_EQ(rejected[0].indices, all[0].indices) << "the near hedge";
+  EXPECT_EQ(rejected[1].indices, all[2].indices) << "the far hedge: any range";
+  ASSERT_EQ(s.objects.size(), 1u);
+  EXPECT_EQ(s.objects[0].indices, all[1].indices) << "the car";
+
+  // Too few points to judge a spread: kept.
+  p.uniform_min_points = static_cast<int>(all[2].indices.size()) + 1;
+  core::ObjectFilter few(p);
+  s.objects = {all[2]};
+  EXPECT_EQ(few.apply(s.fg, &s.objects).uniform, 0u);
+  EXPECT_EQ(s.objects.size(), 1u);
+
+  p.uniform_max_intensity_std = -1.0;
+  EXPECT_NE(core::validate(p).find("uniform_max_intensity_std"), std::string::npos);
 }

@@ -69,6 +69,7 @@ TEST(ParamsYaml, DetectionFileAndAutoDetection) {
   const std::string det = writeTemp(
       "f.yaml",
       "hierarchical_grid:\n  coarse_cell_m: 0.5\n  weight:\n    max_weight: 7.0\n"
+      "  far_merge:\n    max_gap_m: 0.8\n"
       "kdtree:\n  cluster_tolerance_m: 0.3\nmarkers:\n  lifetime_s: 0.2\n");
   GridSegmenterParams seg;
   HierarchicalGridDetectorParams hier;
@@ -77,6 +78,8 @@ TEST(ParamsYaml, DetectionFileAndAutoDetection) {
   ASSERT_TRUE(loadPipelineParamsYaml(det, &seg, &hier, &kd, &err)) << err;
   EXPECT_DOUBLE_EQ(hier.coarse_cell_m, 0.5);
   EXPECT_DOUBLE_EQ(hier.weight.max_weight, 7.0);
+  EXPECT_DOUBLE_EQ(hier.far_merge.max_gap_m, 0.8);
+  EXPECT_DOUBLE_EQ(hier.far_merge.min_range_m, FarObjectMergerParams().min_range_m);
   EXPECT_DOUBLE_EQ(kd.cluster_tolerance_m, 0.3);
   EXPECT_DOUBLE_EQ(seg.cell_size_m, GridSegmenterParams().cell_size_m);  // untouched
   // A segmentation file goes to the segmenter only.

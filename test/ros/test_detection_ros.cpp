@@ -172,6 +172,13 @@ TEST(DetectionConfig, YamlMirrorsTheParamsStructs) {
   EXPECT_DOUBLE_EQ(w["full_density_distance_m"].as<double>(), h.weight.full_density_distance_m);
   EXPECT_DOUBLE_EQ(w["max_distance_m"].as<double>(), h.weight.max_distance_m);
   EXPECT_DOUBLE_EQ(w["max_weight"].as<double>(), h.weight.max_weight);
+  const YAML::Node fm = g["far_merge"];
+  EXPECT_DOUBLE_EQ(fm["max_gap_m"].as<double>(), h.far_merge.max_gap_m);
+  EXPECT_DOUBLE_EQ(fm["max_across_gap_m"].as<double>(), h.far_merge.max_across_gap_m);
+  EXPECT_DOUBLE_EQ(fm["max_z_gap_m"].as<double>(), h.far_merge.max_z_gap_m);
+  EXPECT_DOUBLE_EQ(fm["min_range_m"].as<double>(), h.far_merge.min_range_m);
+  EXPECT_DOUBLE_EQ(fm["max_length_m"].as<double>(), h.far_merge.max_length_m);
+  EXPECT_DOUBLE_EQ(fm["max_width_m"].as<double>(), h.far_merge.max_width_m);
   const core::KdTreeDetectorParams k;
   const YAML::Node kd = y["kdtree"];
   EXPECT_DOUBLE_EQ(kd["cluster_tolerance_m"].as<double>(), k.cluster_tolerance_m);

@@ -65,6 +65,9 @@
 ///     ~7 m): a fixed point count is too strict far away and too lax near the sensor, where
 ///     fragments of bushes and leftovers of cars have tens of points. Ids are 1..N in the
 ///     order of the objects' first point in the input cloud.
+///  6. Far pieces of one vehicle (ours, far_object_merger.h): objects at least
+///     `far_merge.min_range_m` away whose boxes are at most `far_merge.max_gap_m` apart are
+///     joined when the result still fits a vehicle box; `far_merge.max_gap_m` = 0: off.
 ///
 /// Non-finite points, points outside the grid and points with |z| > max_abs_z_m are ignored
 /// (counted in the stats).
@@ -75,6 +78,7 @@
 #include <vector>
 
 #include "urban_detection/core/distance_weight.h"
+#include "urban_detection/core/far_object_merger.h"
 #include "urban_detection/core/object_detector.h"
 #include "urban_detection/core/object_geometry.h"
 #include "urban_detection/core/point_types.h"
@@ -114,6 +118,7 @@ struct HierarchicalGridDetectorParams {
                                            //     lower are dropped (step 5); 0 = off
   double max_extent_m = 20.0;              // [m] objects with a longer xy box side are dropped
   DistanceWeightParams weight;             // distance weight of sub-cell densities (paper Sec. 4)
+  FarObjectMergerParams far_merge;         // step 6: far pieces of one vehicle joined (ours)
 };
 
 /// Returns "" when `p` is usable, else a message naming the first bad field and its range.
@@ -134,6 +139,7 @@ struct HierarchicalGridStats {
   std::size_t components = 0;      // objects before the size filters
   std::size_t dropped_small = 0;   // components with < min_points points
   std::size_t dropped_large = 0;   // components longer than max_extent_m
+  std::size_t far_joins = 0;       // far pieces joined by step 6
   std::size_t objects = 0;
 };
 
@@ -164,6 +170,7 @@ class HierarchicalGridDetector : public ObjectDetector {
   HierarchicalGridDetectorParams params_;
   DistanceWeight weight_;
   ObjectGeometry geometry_;
+  FarObjectMerger far_merger_;
   HierarchicalGridStats stats_;
   double dense_cell_m_;
   int nd_;           // sub-cells per grid side

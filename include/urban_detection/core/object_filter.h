@@ -18,6 +18,14 @@
 /// `hedge_min_intensity` and whose box is at least `hedge_min_length_m` long (longer than a
 /// person) is rejected. The threshold is in the sensor's intensity units (KITTI reflectance
 /// x 255 in this package's readers), so it is set per sensor, never by default.
+///
+/// Optional third rule (off by default, also per sensor): vegetation, walls and fences are one
+/// material, so the intensities of their returns spread little, while vehicles and people mix
+/// paint, glass, tyres, lamps, plates, skin and cloth. An object with at least
+/// `uniform_min_points` points whose intensity standard deviation is below
+/// `uniform_max_intensity_std` is rejected, at any range and whatever the porosity gates above.
+/// On KITTI's HDL-64E (reflectance x 255) cars spread 33-70 and SemanticKITTI's vegetation
+/// 13-33 (README); a simulator that gives each object one reflectivity cannot use it.
 #pragma once
 
 #include <cstddef>
@@ -46,6 +54,9 @@ struct ObjectFilterParams {
   // Bright-hedge rule (intensity, depends on the sensor's intensity scale; 0 = off):
   double hedge_min_intensity = 0.0;  // [input intensity units] reject when the mean is above
   double hedge_min_length_m = 1.5;   // [m] ... and the longer box side is at least this
+  // Uniform-material rule (intensity spread, per sensor; 0 = off):
+  double uniform_max_intensity_std = 0.0;  // [input intensity units] reject below this spread
+  int uniform_min_points = 10;             // [-] ... when the object has at least this many
 };
 
 /// Empty when valid, else a message naming the first out-of-range field and its range.
@@ -65,7 +76,7 @@ struct ObjectFeatures {
 };
 
 /// Why an object was rejected.
-enum class RejectReason : std::uint8_t { kNone = 0, kPorous = 1, kBrightHedge = 2 };
+enum class RejectReason : std::uint8_t { kNone = 0, kPorous = 1, kBrightHedge = 2, kUniform = 3 };
 
 struct ObjectFilterStats {
   std::size_t input = 0;         // objects given to apply()
@@ -73,6 +84,7 @@ struct ObjectFilterStats {
   std::size_t vegetation = 0;    // rejected: porous + bright_hedge
   std::size_t porous = 0;        // rejected by the porosity rule
   std::size_t bright_hedge = 0;  // rejected by the bright-hedge rule
+  std::size_t uniform = 0;       // rejected by the uniform-material rule
   std::size_t not_judged = 0;    // kept because too small or too far
 };
 

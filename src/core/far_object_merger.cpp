@@ -1,0 +1,176 @@
+#include "urban_detection/core/far_object_merger.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace urban_detection {
+namespace core {
+
+namespace {
+
+// [min, max] of the projection of an object's oriented box on the unit
+// direction `d`.
+Eigen::Vector2f project(const DetectedObject& o, const Eigen::Vector2f& d) {
+  const float c = std::cos(o.obb_yaw_rad), s = std::sin(o.obb_yaw_rad);
+  const Eigen::Vector2f ax(c, s), ay(-s, c);
+  const float centre = o.obb_center.head<2>().dot(d);
+  const float half =
+      0.5f * (o.obb_size.x() * std::fabs(ax.dot(d)) + o.obb_size.y() * std::fabs(ay.dot(d)));
+  return Eigen::Vector2f(centre - half, centre + half);
+}
+
+float intervalGap(const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+  return std::max(0.0f, std::max(a.x(), b.x()) - std::min(a.y(), b.y()));
+}
+
+}  // namespace
+
+std::string validate(const FarObjectMergerParams& p) {
+  std::ostringstream err;
+  if (!(p.max_gap_m >= 0.0 && p.max_gap_m <= 10.0)) {
+    err << "far_merge.max_gap_m must be in [0, 10] m, got " << p.max_gap_m;
+  } else if (!(p.max_across_gap_m >= 0.0 && p.max_across_gap_m <= 10.0)) {
+    err << "far_merge.max_across_gap_m must be in [0, 10] m, got " << p.max_across_gap_m;
+  } else if (!(p.max_z_gap_m >= 0.0 && p.max_z_gap_m <= 10.0)) {
+    err << "far_merge.max_z_gap_m must be in [0, 10] m, got " << p.max_z_gap_m;
+  } else if (!(p.min_range_m >= 0.0 && p.min_range_m <= 1000.0)) {
+    err << "far_merge.min_range_m must be in [0, 1000] m, got " << p.min_range_m;
+  } else if (!(p.max_length_m > 0.0 && p.max_length_m <= 100.0)) {
+    err << "far_merge.max_length_m must be in (0, 100] m, got " << p.max_length_m;
+  } else if (!(p.max_width_m > 0.0 && p.max_width_m <= p.max_length_m)) {
+    err << "far_merge.max_width_m must be in (0, max_length_m] m, got " << p.max_width_m;
+  }
+  return err.str();
+}
+
+FarObjectMerger::FarObjectMerger(const FarObjectMergerParams& params) : params_(params) {
+  const std::string error = validate(params);
+  if (!error.empty()) throw std::invalid_argument(error);
+}
+
+std::uint32_t FarObjectMerger::find(std::uint32_t a) {
+  while (parent_[a] != a) a = parent_[a] = parent_[parent_[a]];
+  return a;
+}
+
+// The detectors copy `index` from the foreground in its order, and
+// extractForeground() writes the foreground in cloud order, so the indices are
+// sorted and a binary search finds a point. A foreground in any other order
+// (hand-made clouds) is searched linearly: only the few points of far candidate
+// objects are looked up.
+std::int32_t FarObjectMerger::positionOf(const LabeledCloud& foreground,
+                                         std::uint32_t index) const {
+  const auto& pts = foreground.points;
+  auto it = std::lower_bound(pts.begin(), pts.end(), index,
+                             [](const LabeledPoint& p, std::uint32_t i) { return p.index < i; });
+  if (it != pts.end() && it->index == index) return static_cast<std::int32_t>(it - pts.begin());
+  for (std::size_t k = 0; k < pts.size(); ++k) {
+    if (pts[k].index == index) return static_cast<std::int32_t>(k);
+  }
+  return -1;
+}
+
+// True when the groups of roots ra and rb, joined, fit the vehicle box; leaves
+// the joined group's members in members_ and its geometry in trial_.
+bool FarObjectMerger::fits(const LabeledCloud& foreground,
+                           const std::vector<DetectedObject>& objects, std::uint32_t ra,
+                           std::uint32_t rb) {
+  members_.clear();
+  for (const std::uint32_t k : far_) {
+    const std::uint32_t r = find(k);
+    if (r == ra || r == rb) members_.push_back(k);
+  }
+  positions_.clear();
+  for (const std::uint32_t k : members_) {
+    for (const std::uint32_t index : objects[k].indices) {
+      const std::int32_t pos = positionOf(foreground, index);
+      if (pos < 0) return false;  // not from this foreground: leave the objects alone
+      positions_.push_back(static_cast<std::uint32_t>(pos));
+    }
+  }
+  geometry_.compute(foreground, positions_, &trial_);
+  return trial_.obb_size.x() <= params_.max_length_m && trial_.obb_size.y() <= params_.max_width_m;
+}
+
+std::size_t FarObjectMerger::apply(const LabeledCloud& foreground,
+                                   std::vector<DetectedObject>* objects) {
+  if (params_.max_gap_m <= 0.0 || objects->size() < 2) return 0;
+  const std::size_t n = objects->size();
+  far_.clear();
+  const double min_range2 = params_.min_range_m * params_.min_range_m;
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::Vector3f& c = (*objects)[k].centroid;
+    if (double(c.x()) * c.x() + double(c.y()) * c.y() >= min_range2) {
+      far_.push_back(static_cast<std::uint32_t>(k));
+    }
+  }
+  if (far_.size() < 2) return 0;
+  pairs_.clear();
+  const float max_gap = static_cast<float>(params_.max_gap_m);
+  const float max_z_gap = static_cast<float>(params_.max_z_gap_m);
+  const float max_across = static_cast<float>(params_.max_across_gap_m);
+  for (std::size_t i = 0; i < far_.size(); ++i) {
+    const DetectedObject& a = (*objects)[far_[i]];
+    for (std::size_t j = i + 1; j < far_.size(); ++j) {
+      const DetectedObject& b = (*objects)[far_[j]];
+      // Gaps between the two oriented boxes along and across the line of sight
+      // to the pair's midpoint (0 where their projections overlap).
+      const Eigen::Vector2f mid = 0.5f * (a.centroid.head<2>() + b.centroid.head<2>());
+      const Eigen::Vector2f u = mid / std::max(mid.norm(), 1e-3f), v(-u.y(), u.x());
+      const float along = intervalGap(project(a, u), project(b, u));
+      const float across = intervalGap(project(a, v), project(b, v));
+      const float gap = std::hypot(along, across);
+      const float z_gap =
+          std::max(a.min_pt.z(), b.min_pt.z()) - std::min(a.max_pt.z(), b.max_pt.z());
+      if (along <= max_gap && across <= max_across && z_gap <= max_z_gap)
+        pairs_.push_back({gap, far_[i], far_[j]});
+    }
+  }
+  if (pairs_.empty()) return 0;
+  std::stable_sort(pairs_.begin(), pairs_.end(),
+                   [](const Pair& x, const Pair& y) { return x.gap < y.gap; });
+  parent_.resize(n);
+  for (std::size_t k = 0; k < n; ++k) parent_[k] = static_cast<std::uint32_t>(k);
+  std::size_t joins = 0;
+  for (const Pair& pr : pairs_) {
+    const std::uint32_t ra = find(pr.a), rb = find(pr.b);
+    if (ra == rb || !fits(foreground, *objects, ra, rb)) continue;
+    parent_[std::max(ra, rb)] = std::min(ra, rb);  // the first member keeps its place
+    ++joins;
+  }
+  if (joins == 0) return 0;
+
+  // Rebuild: each group at the place of its first member, points in the
+  // members' order.
+  out_.clear();
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t r = find(static_cast<std::uint32_t>(k));
+    if (r != k) continue;
+    DetectedObject& obj = (*objects)[k];
+    bool grouped = false;
+    for (const std::uint32_t m : far_) grouped = grouped || (m != k && find(m) == k);
+    if (grouped) {
+      fits(foreground, *objects, static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(k));
+      indices_.clear();
+      for (const std::uint32_t m : members_) {
+        const auto& idx = (*objects)[m].indices;
+        indices_.insert(indices_.end(), idx.begin(), idx.end());
+      }
+      trial_.indices.swap(indices_);
+      out_.push_back(std::move(trial_));
+      trial_ = DetectedObject();
+    } else {
+      out_.push_back(std::move(obj));
+    }
+  }
+  objects->swap(out_);
+  for (std::size_t k = 0; k < objects->size(); ++k) {
+    (*objects)[k].id = static_cast<std::uint32_t>(k + 1);
+  }
+  return joins;
+}
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,226 @@
+// Step 6 of the hierarchical grid (far_object_merger.h): far pieces of one
+// vehicle join; near pieces, pieces too far apart along or across the line of
+// sight, and groups that would be longer or wider than a vehicle stay apart.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <vector>
+
+#include "detection_test_utils.h"
+#include "urban_detection/core/far_object_merger.h"
+#include "urban_detection/core/hierarchical_grid_detector.h"
+#include "urban_detection/core/object_geometry.h"
+#include "urban_detection/core/point_types.h"
+
+namespace urban_detection {
+namespace {
+
+using core::DetectedObject;
+using core::FarObjectMerger;
+using core::FarObjectMergerParams;
+using test::addPoint;
+
+// A vertical face across the line of sight along +x: at distance x, y in [y0,
+// y1], z in [z0, z1] (sensor frame, road at -1.73), points every 0.1 m; label
+// `truth`.
+void addFace(LabeledCloud* cloud, float x, float y0, float y1, float z0, float z1,
+             std::uint32_t truth) {
+  const int ny = static_cast<int>(std::lround((y1 - y0) / 0.1f));
+  const int nz = static_cast<int>(std::lround((z1 - z0) / 0.1f));
+  for (int i = 0; i <= ny; ++i) {
+    for (int k = 0; k <= nz; ++k) {
+      addPoint(cloud, x, i == ny ? y1 : y0 + 0.1f * i, k == nz ? z1 : z0 + 0.1f * k, truth);
+    }
+  }
+}
+
+// One object per label (labels 1..), in label order, geometry by
+// ObjectGeometry.
+std::vector<DetectedObject> objectsByLabel(const LabeledCloud& cloud) {
+  std::vector<DetectedObject> objects;
+  core::ObjectGeometry geometry;
+  for (std::uint32_t label = 1;; ++label) {
+    std::vector<std::uint32_t> pos;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (cloud.points[i].label == label) pos.push_back(static_cast<std::uint32_t>(i));
+    }
+    if (pos.empty()) break;
+    DetectedObject o;
+    geometry.compute(cloud, pos, &o);
+    for (const std::uint32_t p : pos) o.indices.push_back(cloud.points[p].index);
+    o.id = label;
+    objects.push_back(o);
+  }
+  return objects;
+}
+
+// A car seen end-on from behind at distance x: the lower body's rear face (1.8
+// m wide, 0.6 m high) and, `gap_m` farther, the cabin's rear face (1.4 m wide,
+// above the body's top).
+void addEndOnCar(LabeledCloud* cloud, float x, float y, float gap_m, std::uint32_t body,
+                 std::uint32_t cabin) {
+  addFace(cloud, x, y - 0.9f, y + 0.9f, -1.7f, -1.1f, body);
+  addFace(cloud, x + gap_m, y - 0.7f, y + 0.7f, -0.8f, -0.45f, cabin);
+}
+
+std::size_t merge(const LabeledCloud& cloud, std::vector<DetectedObject>* objects,
+                  const FarObjectMergerParams& p = FarObjectMergerParams()) {
+  FarObjectMerger merger(p);
+  return merger.apply(cloud, objects);
+}
+
+TEST(FarObjectMerger, JoinsBodyAndCabinOfAFarCarSeenEndOn) {
+  LabeledCloud cloud;
+  addEndOnCar(&cloud, 45.0f, 0.0f, 1.1f, 1, 2);
+  std::vector<DetectedObject> objects = objectsByLabel(cloud);
+  ASSERT_EQ(objects.size(), 2u);
+  EXPECT_EQ(merge(cloud, &objects), 1u);
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].id, 1u);
+  EXPECT_EQ(objects[0].indices.size(), cloud.size());
+  // Geometry of the joined points: the box spans both faces.
+  EXPECT_NEAR(objects[0].min_pt.x(), 45.0f, 1e-4f);
+  EXPECT_NEAR(objects[0].max_pt.x(), 46.1f, 1e-4f);
+  EXPECT_NEAR(objects[0].max_pt.z(), -0.45f, 1e-4f);
+  EXPECT_NEAR(objects[0].obb_size.x(), 1.8f, 0.06f);
+  EXPECT_NEAR(objects[0].obb_size.y(), 1.1f, 0.06f);
+}
+
+TEST(FarObjectMerger, OffNearOrTooFarApartStaysApart) {
+  LabeledCloud far_car;
+  addEndOnCar(&far_car, 45.0f, 0.0f, 1.1f, 1, 2);
+  std::vector<DetectedObject> objects = objectsByLabel(far_car);
+  FarObjectMergerParams off;
+  off.max_gap_m = 0.0;
+  EXPECT_EQ(merge(far_car, &objects, off), 0u);
+  EXPECT_EQ(objects.size(), 2u);
+
+  LabeledCloud near_car;  // same car at 20 m: below min_range_m
+  addEndOnCar(&near_car, 20.0f, 0.0f, 1.1f, 1, 2);
+  objects = objectsByLabel(near_car);
+  EXPECT_EQ(merge(near_car, &objects), 0u);
+  EXPECT_EQ(objects.size(), 2u);
+
+  LabeledCloud long_gap;  // 1.6 m between the faces: more than max_gap_m (1.2)
+  addEndOnCar(&long_gap, 45.0f, 0.0f, 1.6f, 1, 2);
+  objects = objectsByLabel(long_gap);
+  EXPECT_EQ(merge(long_gap, &objects), 0u);
+  EXPECT_EQ(objects.size(), 2u);
+
+  LabeledCloud high;  // the second piece 0.8 m above the first's top: more than
+                      // max_z_gap_m
+  addFace(&high, 45.0f, -0.9f, 0.9f, -1.7f, -1.1f, 1);
+  addFace(&high, 46.0f, -0.7f, 0.7f, -0.3f, 0.0f, 2);
+  objects = objectsByLabel(high);
+  EXPECT_EQ(merge(high, &objects), 0u);
+}
+
+TEST(FarObjectMerger, EndOnCarsSideBySideStayApart) {
+  // Two cars seen end-on at 37 m, 1.0 m apart across the line of sight:
+  // together they would fit the vehicle box (4.6 m x 1.1 m), but the gap across
+  // is more than max_across_gap_m.
+  LabeledCloud cloud;
+  addEndOnCar(&cloud, 37.0f, -1.4f, 1.1f, 1, 2);
+  addEndOnCar(&cloud, 37.0f, 1.4f, 1.1f, 3, 4);
+  std::vector<DetectedObject> objects = objectsByLabel(cloud);
+  ASSERT_EQ(objects.size(), 4u);
+  EXPECT_EQ(merge(cloud, &objects), 2u);  // each car's body and cabin
+  ASSERT_EQ(objects.size(), 2u);
+  test::Partition cars;
+  for (std::uint32_t car = 0; car < 2; ++car) {
+    std::set<std::uint32_t> pts;
+    for (const LabeledPoint& q : cloud.points) {
+      if ((q.label + 1) / 2 == car + 1) pts.insert(q.index);
+    }
+    cars.insert(pts);
+  }
+  EXPECT_EQ(test::partitionOf(objects), cars);
+  for (const DetectedObject& o : objects) {
+    EXPECT_LT(o.obb_size.x(), 2.0f);  // one car each, not both
+  }
+  // With gaps across allowed up to 1.2 m, the pairs join into one 4.6 m wide
+  // group.
+  FarObjectMergerParams wide;
+  wide.max_across_gap_m = 1.2;
+  objects = objectsByLabel(cloud);
+  EXPECT_EQ(merge(cloud, &objects, wide), 3u);
+  EXPECT_EQ(objects.size(), 1u);
+}
+
+TEST(FarObjectMerger, GroupLongerThanAVehicleStaysApart) {
+  // Three 1.9 m long pieces along the line of sight, 1.1 m apart: two fit (4.9
+  // m), three do not.
+  LabeledCloud cloud;
+  for (std::uint32_t k = 0; k < 3; ++k) {
+    const float x0 = 40.0f + 3.0f * k;
+    for (int i = 0; i <= 19; ++i) {
+      for (int j = 0; j <= 4; ++j) {
+        addPoint(&cloud, x0 + 0.1f * i, 0.0f, -1.6f + 0.2f * j, k + 1);
+        addPoint(&cloud, x0 + 0.1f * i, 1.0f, -1.6f + 0.2f * j, k + 1);
+      }
+    }
+  }
+  std::vector<DetectedObject> objects = objectsByLabel(cloud);
+  ASSERT_EQ(objects.size(), 3u);
+  EXPECT_EQ(merge(cloud, &objects), 1u);
+  ASSERT_EQ(objects.size(), 2u);
+  EXPECT_NEAR(objects[0].obb_size.x(), 4.9f, 0.06f);  // pieces 1 and 2
+  EXPECT_NEAR(objects[1].obb_size.x(), 1.9f, 0.06f);  // piece 3 alone
+  EXPECT_EQ(objects[0].id, 1u);
+  EXPECT_EQ(objects[1].id, 2u);
+}
+
+TEST(FarObjectMerger, KeepsOrderAndNearObjects) {
+  LabeledCloud cloud;
+  addFace(&cloud, 8.0f, -0.3f, 0.3f, -1.7f, 0.0f,
+          1);  // a near pedestrian, first
+  addEndOnCar(&cloud, 45.0f, 0.0f, 1.1f, 2, 3);
+  addFace(&cloud, 9.0f, 2.0f, 2.5f, -1.7f, -0.5f, 4);  // a near bin, last
+  std::vector<DetectedObject> objects = objectsByLabel(cloud);
+  const std::vector<DetectedObject> before = objects;
+  ASSERT_EQ(merge(cloud, &objects), 1u);
+  ASSERT_EQ(objects.size(), 3u);
+  EXPECT_EQ(objects[0].indices, before[0].indices);
+  EXPECT_EQ(objects[1].indices.size(), before[1].indices.size() + before[2].indices.size());
+  EXPECT_EQ(objects[2].indices, before[3].indices);
+  for (std::size_t k = 0; k < objects.size(); ++k) EXPECT_EQ(objects[k].id, k + 1);
+}
+
+TEST(FarObjectMerger, ValidatesItsParameters) {
+  FarObjectMergerParams p;
+  EXPECT_EQ(core::validate(p), "");
+  p.max_gap_m = -0.1;
+  EXPECT_NE(core::validate(p).find("max_gap_m"), std::string::npos);
+  EXPECT_THROW(FarObjectMerger{p}, std::invalid_argument);
+  p = FarObjectMergerParams();
+  p.max_width_m = p.max_length_m + 1.0;
+  EXPECT_NE(core::validate(p).find("max_width_m"), std::string::npos);
+  core::HierarchicalGridDetectorParams h;
+  h.far_merge.max_z_gap_m = -1.0;
+  EXPECT_NE(core::validate(h).find("far_merge.max_z_gap_m"), std::string::npos);
+}
+
+TEST(FarObjectMerger, HierarchicalGridJoinsAFarCarSeenEndOn) {
+  // Through the detector (step 6): the car's two faces at 45 m are 1.1 m apart
+  // along the line of sight, farther than the far radial bridge reaches (3
+  // near-empty sub-cells).
+  LabeledCloud cloud;
+  addEndOnCar(&cloud, 45.0f, 0.0f, 1.1f, 1, 2);
+  core::HierarchicalGridDetectorParams p;
+  p.far_merge.max_gap_m = 0.0;
+  core::HierarchicalGridDetector off(p);
+  std::vector<DetectedObject> objects;
+  off.detect(cloud, &objects);
+  ASSERT_EQ(objects.size(), 2u);
+  EXPECT_EQ(off.stats().far_joins, 0u);
+  core::HierarchicalGridDetector shipped{core::HierarchicalGridDetectorParams()};
+  shipped.detect(cloud, &objects);
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].indices.size(), cloud.size());
+  EXPECT_EQ(shipped.stats().far_joins, 1u);
+  EXPECT_EQ(shipped.stats().objects, 1u);
+}
+
+}  // namespace
+}  // namespace urban_detection
