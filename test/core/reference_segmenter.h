@@ -7,8 +7,7 @@
 //    the cell), which is the summation order the segmenter specifies;
 //  - the terrain growing is a breadth-first search seeded in the order cells first receive a
 //    point (the ground height a cell gets depends on the neighbour it is reached from).
-// The Hough refinement is the library's HoughWallRefiner on the reference's cell classes, with
-// cv::HoughLinesP as its line detector (the segmenter uses the refiner's own, identical one).
+// The Hough refinement is the library's HoughWallRefiner on the reference's cell classes.
 #pragma once
 
 #include <algorithm>
@@ -219,7 +218,6 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
   }
   if (p.hough.enabled) {
     core::HoughWallRefiner hough(p.hough);
-    hough.setUseOpenCvHough(true);
     out.stats.hough = hough.refine(side, side, cell_m, &cls, &support);
   }
 

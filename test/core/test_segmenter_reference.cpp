@@ -15,13 +15,11 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgproc.hpp>
 
 #include "reference_segmenter.h"
 #include "segmentation_scene.h"
 #include "urban_detection/core/eval_datasets.h"
 #include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/hough_wall_refiner.h"
 #include "urban_detection/core/kitti_io.h"
 
 namespace urban_detection {
@@ -218,61 +216,6 @@ TEST(SimpleGridIndex, RowAndColumnEqualIntegerDivisionAtEveryRowBoundary) {
     }
     EXPECT_EQ(wrong, 0u) << "side " << side;
   }
-}
-
-}  // namespace
-}  // namespace urban_detection
-
-namespace urban_detection {
-namespace {
-
-// HoughWallRefiner::houghLinesP must return exactly cv::HoughLinesP's segments: random images
-// (scattered pixels and drawn line segments) of several sizes, densities, angle resolutions,
-// vote thresholds, lengths and gaps, all through one refiner (its accumulator and tables are
-// kept between calls and rebuilt when theta or the size changes: stale ones would show).
-TEST(HoughLinesP, SameSegmentsAsOpenCv) {
-  core::HoughWallRefiner refiner;
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::size_t total_lines = 0, images = 0;
-  const cv::Size sizes[] = {{80, 80}, {57, 33}, {40, 1}, {10, 120}, {80, 80}, {100, 64}};
-  const double thetas_deg[] = {2.0, 1.0, 3.0, 0.5, 7.0, 2.0};
-  const int thresholds[] = {1, 5, 8, 20};
-  const double lengths[] = {0.0, 5.0, 12.0};
-  const double gaps[] = {0.0, 2.0, 4.6};
-  for (int round = 0; round < 40; ++round) {
-    const cv::Size size = sizes[round % 6];
-    cv::Mat image = cv::Mat::zeros(size, CV_8UC1);
-    const double density = 0.01 + 0.15 * u(rng);
-    for (int r = 0; r < size.height; ++r) {
-      for (int c = 0; c < size.width; ++c) {
-        if (u(rng) < density) image.at<std::uint8_t>(r, c) = 255;
-      }
-    }
-    for (int l = 0; l < 4; ++l) {
-      const cv::Point a(static_cast<int>(u(rng) * size.width),
-                        static_cast<int>(u(rng) * size.height));
-      const cv::Point b(static_cast<int>(u(rng) * size.width),
-                        static_cast<int>(u(rng) * size.height));
-      cv::line(image, a, b, cv::Scalar(255), 1, 8);
-    }
-    for (const int threshold : thresholds) {
-      const double theta = thetas_deg[(round + threshold) % 6] * CV_PI / 180.0;
-      const double len = lengths[(round + threshold) % 3], gap = gaps[round % 3];
-      std::vector<cv::Vec4i> expected, got;
-      cv::HoughLinesP(image, expected, 1.0, theta, threshold, len, gap);
-      std::vector<std::uint8_t> mask(image.data, image.data + image.total());
-      refiner.houghLinesP(mask.data(), size.height, size.width, theta, threshold, len, gap, &got);
-      ASSERT_EQ(got.size(), expected.size()) << "round " << round << " threshold " << threshold;
-      for (std::size_t k = 0; k < got.size(); ++k) {
-        EXPECT_EQ(got[k], expected[k]) << "round " << round << " line " << k;
-      }
-      total_lines += expected.size();
-      ++images;
-    }
-  }
-  EXPECT_EQ(images, 160u);
-  EXPECT_GT(total_lines, 1000u);  // not vacuous
 }
 
 }  // namespace

@@ -68,37 +68,10 @@ class HoughWallRefiner {
   /// coordinates of the full grid (col, row).
   const std::vector<cv::Vec4i>& acceptedLines() const { return accepted_; }
 
-  /// Line detector of refine(): false (default) = this class's own progressive probabilistic
-  /// Hough transform, which returns exactly the segments of cv::HoughLinesP (same algorithm,
-  /// random point order and arithmetic; tests compare the two) without its per-call 115 kB
-  /// accumulator allocation (a 37 kB one of the reachable bins is kept) and with the votes'
-  /// rho bins computed four angles at a time;
-  /// true = cv::HoughLinesP itself (reference for tests and comparisons).
-  void setUseOpenCvHough(bool use) { use_opencv_ = use; }
-
-  /// The line detector alone: segments of the non-zero pixels of `mask` (rows x cols bytes,
-  /// row-major, 0 / non-zero), as cv::HoughLinesP(image, lines, 1.0, theta_rad, threshold,
-  /// min_line_length, max_line_gap) returns them for the same image (rho resolution 1 pixel).
-  /// `mask` is cleared on the way (pixels of found segments and processed pixels).
-  void houghLinesP(std::uint8_t* mask, int rows, int cols, double theta_rad, int threshold,
-                   double min_line_length, double max_line_gap, std::vector<cv::Vec4i>* lines);
-
  private:
   HoughWallRefinerParams params_;
-  bool use_opencv_ = false;
-  cv::Mat image_;                   // scratch: binary image for cv::HoughLinesP
-  std::vector<std::uint8_t> mask_;  // scratch: occupancy of the Hough window (own detector)
-  std::vector<cv::Vec4i> lines_;    // scratch: raw Hough output
-  // Scratch of houghLinesP, kept between calls: accumulator (the reachable rho bins of each
-  // angle, angle after angle), trigonometric tables and flat index of each angle's rho 0 for
-  // the last theta and window size, non-zero pixels, flat indices of one pixel's votes.
-  std::vector<std::int32_t> accum_;
-  std::vector<float> cos_, sin_;
-  std::vector<std::int32_t> row_base_;
-  std::vector<std::int32_t> vote_idx_;
-  std::vector<cv::Point> nz_;
-  double trig_theta_ = -1.0;
-  int trig_rows_ = 0, trig_cols_ = 0;
+  cv::Mat image_;                // scratch: binary occupancy image of the Hough window
+  std::vector<cv::Vec4i> lines_; // scratch: raw Hough output
   std::vector<cv::Vec4i> accepted_;
   struct LinePixel {
     int col, row;       // full-grid cell coordinates
