@@ -33,6 +33,8 @@ std::string validate(const FarObjectMergerParams& p) {
     err << "far_merge.max_gap_m must be in [0, 10] m, got " << p.max_gap_m;
   } else if (!(p.max_across_gap_m >= 0.0 && p.max_across_gap_m <= 10.0)) {
     err << "far_merge.max_across_gap_m must be in [0, 10] m, got " << p.max_across_gap_m;
+  } else if (!(p.min_across_overlap >= 0.0 && p.min_across_overlap <= 1.0)) {
+    err << "far_merge.min_across_overlap must be in [0, 1], got " << p.min_across_overlap;
   } else if (!(p.max_z_gap_m >= 0.0 && p.max_z_gap_m <= 10.0)) {
     err << "far_merge.max_z_gap_m must be in [0, 10] m, got " << p.max_z_gap_m;
   } else if (!(p.min_range_m >= 0.0 && p.min_range_m <= 1000.0)) {
@@ -111,6 +113,7 @@ std::size_t FarObjectMerger::apply(const LabeledCloud& foreground,
   const float max_gap = static_cast<float>(params_.max_gap_m);
   const float max_z_gap = static_cast<float>(params_.max_z_gap_m);
   const float max_across = static_cast<float>(params_.max_across_gap_m);
+  const float min_overlap = static_cast<float>(params_.min_across_overlap);
   for (std::size_t i = 0; i < far_.size(); ++i) {
     const DetectedObject& a = (*objects)[far_[i]];
     for (std::size_t j = i + 1; j < far_.size(); ++j) {
@@ -120,11 +123,17 @@ std::size_t FarObjectMerger::apply(const LabeledCloud& foreground,
       const Eigen::Vector2f mid = 0.5f * (a.centroid.head<2>() + b.centroid.head<2>());
       const Eigen::Vector2f u = mid / std::max(mid.norm(), 1e-3f), v(-u.y(), u.x());
       const float along = intervalGap(project(a, u), project(b, u));
-      const float across = intervalGap(project(a, v), project(b, v));
+      const Eigen::Vector2f pa = project(a, v), pb = project(b, v);
+      const float across = intervalGap(pa, pb);
       const float gap = std::hypot(along, across);
+      // Overlap across the line of sight, as a fraction of the narrower piece: a cabin lies
+      // behind its body, a neighbour beside it.
+      const float overlap = std::min(pa.y(), pb.y()) - std::max(pa.x(), pb.x());
+      const float narrower = std::min(pa.y() - pa.x(), pb.y() - pb.x());
+      const bool behind = across > 0.0f || overlap >= min_overlap * narrower;
       const float z_gap =
           std::max(a.min_pt.z(), b.min_pt.z()) - std::min(a.max_pt.z(), b.max_pt.z());
-      if (along <= max_gap && across <= max_across && z_gap <= max_z_gap)
+      if (along <= max_gap && across <= max_across && behind && z_gap <= max_z_gap)
         pairs_.push_back({gap, far_[i], far_[j]});
     }
   }

@@ -116,6 +116,7 @@ bool applyHierarchical(const YAML::Node& node, const std::string& where,
   FieldTable far_merge;
   far_merge.bind("max_gap_m", &fm.max_gap_m);
   far_merge.bind("max_across_gap_m", &fm.max_across_gap_m);
+  far_merge.bind("min_across_overlap", &fm.min_across_overlap);
   far_merge.bind("max_z_gap_m", &fm.max_z_gap_m);
   far_merge.bind("min_range_m", &fm.min_range_m);
   far_merge.bind("max_length_m", &fm.max_length_m);

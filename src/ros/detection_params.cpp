@@ -37,6 +37,7 @@ ParamTable hierarchicalGridTable(core::HierarchicalGridDetectorParams* p) {
       .add("weight/max_weight", &p->weight.max_weight, 1.0, 1e6)
       .add("far_merge/max_gap_m", &p->far_merge.max_gap_m, 0.0, 10.0, "m")
       .add("far_merge/max_across_gap_m", &p->far_merge.max_across_gap_m, 0.0, 10.0, "m")
+      .add("far_merge/min_across_overlap", &p->far_merge.min_across_overlap, 0.0, 1.0)
       .add("far_merge/max_z_gap_m", &p->far_merge.max_z_gap_m, 0.0, 10.0, "m")
       .add("far_merge/min_range_m", &p->far_merge.min_range_m, 0.0, 1000.0, "m")
       .add("far_merge/max_length_m", &p->far_merge.max_length_m, 0.01, 100.0, "m")

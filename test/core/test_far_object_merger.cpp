@@ -96,7 +96,7 @@ TEST(FarObjectMerger, OffNearOrTooFarApartStaysApart) {
   EXPECT_EQ(merge(far_car, &objects, off), 0u);
   EXPECT_EQ(objects.size(), 2u);
 
-  LabeledCloud near_car;  // same car at 20 m: below min_range_m
+  LabeledCloud near_car;  // same car at 20 m: below min_range_m (30 m)
   addEndOnCar(&near_car, 20.0f, 0.0f, 1.1f, 1, 2);
   objects = objectsByLabel(near_car);
   EXPECT_EQ(merge(near_car, &objects), 0u);
@@ -145,6 +145,23 @@ TEST(FarObjectMerger, EndOnCarsSideBySideStayApart) {
   wide.max_across_gap_m = 1.2;
   objects = objectsByLabel(cloud);
   EXPECT_EQ(merge(cloud, &objects, wide), 3u);
+  EXPECT_EQ(objects.size(), 1u);
+}
+
+TEST(FarObjectMerger, NeighbourBesideRatherThanBehindStaysApart) {
+  // A car's rear face at 40 m (y in [-0.9, 0.9]) and, 1 m farther, a person-sized object at
+  // y in [0.6, 1.4]: they overlap across the line of sight by 0.3 m, 0.375 of the narrower box,
+  // less than min_across_overlap (0.5): beside, not behind. Joined they would fit the box.
+  LabeledCloud cloud;
+  addFace(&cloud, 40.0f, -0.9f, 0.9f, -1.7f, -1.1f, 1);
+  addFace(&cloud, 41.0f, 0.6f, 1.4f, -1.7f, -0.2f, 2);
+  std::vector<DetectedObject> objects = objectsByLabel(cloud);
+  EXPECT_EQ(merge(cloud, &objects), 0u);
+  EXPECT_EQ(objects.size(), 2u);
+  FarObjectMergerParams any_overlap;
+  any_overlap.min_across_overlap = 0.0;
+  objects = objectsByLabel(cloud);
+  EXPECT_EQ(merge(cloud, &objects, any_overlap), 1u);
   EXPECT_EQ(objects.size(), 1u);
 }
 

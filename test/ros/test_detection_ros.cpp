@@ -175,6 +175,7 @@ TEST(DetectionConfig, YamlMirrorsTheParamsStructs) {
   const YAML::Node fm = g["far_merge"];
   EXPECT_DOUBLE_EQ(fm["max_gap_m"].as<double>(), h.far_merge.max_gap_m);
   EXPECT_DOUBLE_EQ(fm["max_across_gap_m"].as<double>(), h.far_merge.max_across_gap_m);
+  EXPECT_DOUBLE_EQ(fm["min_across_overlap"].as<double>(), h.far_merge.min_across_overlap);
   EXPECT_DOUBLE_EQ(fm["max_z_gap_m"].as<double>(), h.far_merge.max_z_gap_m);
   EXPECT_DOUBLE_EQ(fm["min_range_m"].as<double>(), h.far_merge.min_range_m);
   EXPECT_DOUBLE_EQ(fm["max_length_m"].as<double>(), h.far_merge.max_length_m);

@@ -1,27 +1,30 @@
 /// \file far_object_merger.h
-/// Joins far objects that are pieces of one vehicle (ours, after the
-/// hierarchical grid's step 5). ROS-free.
+/// Joins far objects that are pieces of one vehicle (ours, step 6 of the hierarchical grid, after
+/// its size filters). ROS-free.
 ///
-/// Far away a vehicle seen end-on falls apart along the line of sight: the
-/// sensor sees the rear (or front) face of its lower body and, ~1.1 m behind
-/// it, the face of its cabin, but the horizontal surface between them (boot
-/// lid, bonnet) lies about r^2 * dtheta / h from the ring below it (dtheta the
-/// ring step, h the surface's depth below the sensor): ~12 m at 45 m, so it
-/// gets no return at all. The sub-cell bridges of step 3 cannot span 1.1 m
-/// without joining neighbours elsewhere (5 far bridge sub-cells merged parked
-/// cars in a row on SemanticKITTI), so the pieces are joined as objects, where
-/// their shapes are known. Rule: two objects are joined when both centroids are
-/// at least `min_range_m` from the sensor (horizontally), the gap between their
-/// yaw-oriented boxes is at most `max_gap_m` along the line of sight (from the
-/// sensor to the midpoint of their centroids) and at most `max_across_gap_m`
-/// across it (0: the boxes overlap across it; across the line of sight the
-/// azimuth step, ~0.07 m at 45 m, leaves no holes that the gap bridge of step 3
-/// does not already span), the gap between their z ranges is at most
-/// `max_z_gap_m` (a car's lower body and its cabin need not overlap in height),
-/// and the joined object still fits a vehicle: its yaw-oriented box is at most
-/// `max_length_m` x `max_width_m`. Pairs are tried smallest gap first and joins
-/// are transitive (a third piece joins when the group still fits). Objects
-/// nearer than `min_range_m` are never touched.
+/// Far away a vehicle seen end-on falls apart along the line of sight: the sensor sees the rear
+/// (or front) face of its lower body and, ~1.1 m behind it, the face of its cabin, but the
+/// horizontal surface between them (boot lid, bonnet) lies about r^2 * dtheta / h from the ring
+/// below it (dtheta the ring step, h the surface's depth below the sensor): ~7 m at 30 m and
+/// ~12 m at 45 m, so it gets no return at all. The sub-cell bridges of step 3 cannot span 1.1 m
+/// without joining neighbours elsewhere (5 far bridge sub-cells merged parked cars in a row on
+/// SemanticKITTI), so the pieces are joined as objects, where their boxes are known.
+///
+/// Rule: two objects are joined when
+///   - both centroids are at least `min_range_m` from the sensor (horizontally);
+///   - the gap between their yaw-oriented boxes is at most `max_gap_m` along the line of sight
+///     (from the sensor to the midpoint of their centroids) and at most `max_across_gap_m`
+///     across it (0: the boxes overlap across it; there the azimuth step, ~0.07 m at 45 m,
+///     leaves no holes that the gap bridge of step 3 does not already span);
+///   - when they overlap across the line of sight, the overlap is at least
+///     `min_across_overlap` of the narrower box: one piece lies behind the other (a cabin
+///     behind its body), not beside it (a neighbour);
+///   - the gap between their z ranges is at most `max_z_gap_m` (a car's lower body and its
+///     cabin need not overlap in height);
+///   - and the joined object still fits a vehicle: its yaw-oriented box is at most
+///     `max_length_m` x `max_width_m`.
+/// Pairs are tried smallest gap first and joins are transitive (a third piece joins when the
+/// group still fits). Objects nearer than `min_range_m` are never touched.
 #pragma once
 
 #include <cstdint>
@@ -38,13 +41,15 @@ namespace core {
 /// Parameters of FarObjectMerger, mirrored in config/detection.yaml
 /// (`hierarchical_grid: far_merge:`).
 struct FarObjectMergerParams {
-  double max_gap_m = 1.2;         // [m] 0 = off; largest gap between the boxes of two pieces
-                                  //     along the line of sight
-  double max_across_gap_m = 0.0;  // [m] ... and across it
-  double max_z_gap_m = 0.5;       // [m] largest gap between the pieces' z ranges
-  double min_range_m = 35.0;      // [m] only objects whose centroid is at least this far
-  double max_length_m = 5.0;      // [m] the joined object's oriented box at most this long ...
-  double max_width_m = 2.2;       // [m] ... and this wide
+  double max_gap_m = 1.2;           // [m] 0 = off; largest gap between the boxes of two pieces
+                                    //     along the line of sight
+  double max_across_gap_m = 0.0;    // [m] ... and across it
+  double min_across_overlap = 0.5;  // [0..1] boxes overlapping across it: by at least this
+                                    //     fraction of the narrower one (a piece behind another)
+  double max_z_gap_m = 0.5;         // [m] largest gap between the pieces' z ranges
+  double min_range_m = 30.0;        // [m] only objects whose centroid is at least this far
+  double max_length_m = 5.0;        // [m] the joined object's oriented box at most this long ...
+  double max_width_m = 2.2;         // [m] ... and this wide
 };
 
 /// Returns "" when `p` is usable, else a message naming the first bad field and
