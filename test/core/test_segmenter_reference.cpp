@@ -8,6 +8,7 @@
 #include "urban_detection/core/point_types.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <string>
@@ -215,6 +216,56 @@ TEST(SimpleGridIndex, RowAndColumnEqualIntegerDivisionAtEveryRowBoundary) {
     }
     EXPECT_EQ(wrong, 0u) << "side " << side;
   }
+}
+
+}  // namespace
+}  // namespace urban_detection
+
+namespace urban_detection {
+namespace {
+
+// SimpleGrid::build's AVX2 cell pass (eight points at a time, chosen at run time) must give
+// bit for bit the SSE2 path's per-point slots and heights and per-cell statistics: synthetic
+// streets with invalid points, a clean one, odd lengths (tails of fewer than eight points) and
+// the real scans of ../shared/data.
+TEST(SimpleGridAvx2, SameGridAsTheSse2Path) {
+  core::SimpleGrid avx2, sse2;
+  sse2.setAllowAvx2(false);
+  EXPECT_FALSE(sse2.avx2Active());
+  if (!avx2.avx2Active()) GTEST_SKIP() << "this CPU has no AVX2";
+  std::vector<CloudXYZIRT> clouds = sharedFrames(3);
+  for (unsigned seed = 1; seed <= 3; ++seed) clouds.push_back(syntheticStreet(seed));
+  clouds.push_back(syntheticStreet(4, std::numeric_limits<std::size_t>::max()));
+  CloudXYZIRT odd = syntheticStreet(5);
+  odd.points.resize(3 * 1024 + 13);
+  clouds.push_back(odd);
+  std::size_t valid_points = 0, invalid_points = 0;
+  for (std::size_t f = 0; f < clouds.size(); ++f) {
+    const CloudXYZIRT& cloud = clouds[f];
+    avx2.build(cloud, 1.73f, 50.0f);
+    sse2.build(cloud, 1.73f, 50.0f);
+    ASSERT_EQ(avx2.pointSlots(), sse2.pointSlots()) << "cloud " << f;
+    ASSERT_EQ(avx2.pointHeights().size(), sse2.pointHeights().size());
+    EXPECT_EQ(std::memcmp(avx2.pointHeights().data(), sse2.pointHeights().data(),
+                          sizeof(float) * cloud.size()),
+              0)
+        << "cloud " << f;
+    ASSERT_EQ(avx2.occupiedCells(), sse2.occupiedCells()) << "cloud " << f;
+    const auto& a = avx2.occupiedStats();
+    const auto& b = sse2.occupiedStats();
+    ASSERT_EQ(a.size(), b.size());
+    std::size_t differ = 0;
+    for (std::size_t s = 0; s < a.size(); ++s) {
+      differ += a[s].count != b[s].count ||
+                std::memcmp(&a[s].z_min, &b[s].z_min, sizeof(float)) != 0 ||
+                std::memcmp(&a[s].z_max, &b[s].z_max, sizeof(float)) != 0 ||
+                std::memcmp(&a[s].z_sum, &b[s].z_sum, sizeof(float)) != 0;
+    }
+    EXPECT_EQ(differ, 0u) << "cloud " << f;
+    for (const std::int32_t s : avx2.pointSlots()) (s == 0 ? invalid_points : valid_points)++;
+  }
+  EXPECT_GT(valid_points, 100000u);
+  EXPECT_GT(invalid_points, 100u);
 }
 
 }  // namespace

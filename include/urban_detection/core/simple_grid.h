@@ -95,6 +95,13 @@ class SimpleGrid {
     return q;
   }
   int colOf(std::int32_t index) const { return index - rowOf(index) * side_; }
+  /// build() computes the cells of eight points at a time with AVX2 when the CPU has it
+  /// (checked at run time; same results as the SSE2 path). false forces the SSE2 path
+  /// (tests compare the two).
+  void setAllowAvx2(bool allow) { allow_avx2_ = allow; }
+  /// Whether build() uses the AVX2 path (allowed and supported by this CPU).
+  bool avx2Active() const;
+
   /// Cell of a metric position, or kNoCell when outside the grid or non-finite.
   std::int32_t cellAt(float x_m, float y_m) const;
   /// Centre of a cell in the sensor frame [m].
@@ -118,6 +125,7 @@ class SimpleGrid {
   std::vector<std::int32_t> point_slot_;  // per point: 1 + slot, 0 = no cell
   std::vector<float> point_z_;
   std::vector<std::int32_t> chunk_cell_;  // scratch: cell indices of one chunk of points
+  bool allow_avx2_ = true;
 };
 
 }  // namespace core
