@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
@@ -304,6 +305,157 @@ TEST(ObjectGeometry, ColumnHullEqualsAPlainSinglePassBitForBit) {
     EXPECT_EQ(o.obb_size.y(), s.y()) << trial;
     EXPECT_EQ(o.obb_yaw_rad, yaw) << trial;
   }
+}
+
+// Rotating calipers written plainly (every projection recomputed, branches), the reference for
+// the bit-for-bit check of the optimised minAreaRectangle (projections carried over, steps as
+// selects, the best edge's box recomputed at the end).
+void referenceCalipers(const std::vector<Eigen::Vector2f>& h, Eigen::Vector2f* center,
+                       Eigen::Vector2f* size, float* yaw_rad) {
+  *center = Eigen::Vector2f::Zero();
+  *size = Eigen::Vector2f::Zero();
+  *yaw_rad = 0.0f;
+  const std::size_t n = h.size();
+  if (n == 0) return;
+  *center = h[0];
+  auto next = [n](std::size_t k) { return (k + 1) % n; };
+  std::size_t a = 0, b = 0, c = 0;
+  bool init = false, found = false;
+  double best_area = std::numeric_limits<double>::infinity();
+  Eigen::Vector2f best_u(0.0f, 0.0f);
+  float best_lu = 0.0f, best_lv = 0.0f;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2f e = h[next(i)] - h[i];
+    const float len = e.norm();
+    if (len <= 0.0f) continue;
+    const Eigen::Vector2f u = e / len, v(-u.y(), u.x());
+    if (!init) {
+      for (std::size_t k = 0; k < n; ++k) {
+        if (h[k].dot(u) > h[a].dot(u)) a = k;
+        if (h[k].dot(v) > h[b].dot(v)) b = k;
+        if (h[k].dot(u) < h[c].dot(u)) c = k;
+      }
+      init = true;
+    } else {
+      for (std::size_t s = 0; s < n && h[next(a)].dot(u) >= h[a].dot(u); ++s) a = next(a);
+      for (std::size_t s = 0; s < n && h[next(b)].dot(v) >= h[b].dot(v); ++s) b = next(b);
+      for (std::size_t s = 0; s < n && h[next(c)].dot(u) <= h[c].dot(u); ++s) c = next(c);
+    }
+    const float umin = h[c].dot(u), umax = h[a].dot(u), vmin = h[i].dot(v), vmax = h[b].dot(v);
+    const double area = static_cast<double>(umax - umin) * static_cast<double>(vmax - vmin);
+    if (area < best_area - 1e-12) {
+      best_area = area;
+      *center = u * (0.5f * (umin + umax)) + v * (0.5f * (vmin + vmax));
+      best_u = u;
+      best_lu = umax - umin;
+      best_lv = vmax - vmin;
+      found = true;
+    }
+  }
+  if (!found) return;
+  float lu = best_lu, lv = best_lv, yaw = std::atan2(best_u.y(), best_u.x());
+  if (lv > lu) {
+    std::swap(lu, lv);
+    yaw += static_cast<float>(M_PI / 2);
+  }
+  while (yaw > static_cast<float>(M_PI / 2)) yaw -= static_cast<float>(M_PI);
+  while (yaw <= -static_cast<float>(M_PI / 2)) yaw += static_cast<float>(M_PI);
+  *size = Eigen::Vector2f(lu, lv);
+  *yaw_rad = yaw;
+}
+
+std::uint32_t bitsOf(float f) {
+  std::uint32_t u;
+  std::memcpy(&u, &f, sizeof(u));
+  return u;
+}
+
+// Polygons with many ties (lattice hulls: rectangles, equal projections of several vertices),
+// long thin ones, and hulls of random float points; 3..200 vertices, plus degenerate ones
+// (a repeated point, two points).
+TEST(ObjectGeometry, CalipersEqualAPlainImplementationBitForBit) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> lattice(-6, 6);
+  for (int trial = 0; trial < 3000; ++trial) {
+    std::vector<Eigen::Vector2f> pts, hull;
+    const int n = 2 + trial % 300;
+    const int kind = trial % 3;
+    const float r = 3.14159f * u(rng), sx = 0.1f + 4.0f * std::fabs(u(rng));
+    for (int i = 0; i < n; ++i) {
+      if (kind == 0) {  // lattice: ties everywhere
+        pts.emplace_back(0.25f * lattice(rng), 0.5f * (lattice(rng) % 3));
+      } else {  // rotated anisotropic blobs, near and far from the origin
+        const float a = sx * u(rng), b = 0.2f * u(rng), off = kind == 1 ? 0.0f : 60.0f;
+        pts.emplace_back(off + a * std::cos(r) - b * std::sin(r),
+                         -off + a * std::sin(r) + b * std::cos(r));
+      }
+    }
+    core::convexHull2d(&pts, &hull);
+    Eigen::Vector2f c, s, rc, rs;
+    float yaw = 0.0f, ryaw = 0.0f;
+    core::minAreaRectangle(hull, &c, &s, &yaw);
+    referenceCalipers(hull, &rc, &rs, &ryaw);
+    for (int d = 0; d < 2; ++d) {
+      EXPECT_EQ(bitsOf(c[d]), bitsOf(rc[d])) << trial;
+      EXPECT_EQ(bitsOf(s[d]), bitsOf(rs[d])) << trial;
+    }
+    EXPECT_EQ(bitsOf(yaw), bitsOf(ryaw)) << trial;
+  }
+  for (const std::vector<Eigen::Vector2f>& degenerate :
+       {std::vector<Eigen::Vector2f>{{1, 2}}, std::vector<Eigen::Vector2f>{{1, 2}, {1, 2}},
+        std::vector<Eigen::Vector2f>{{1, 2}, {3, 2}}}) {
+    Eigen::Vector2f c, s, rc, rs;
+    float yaw = 0.0f, ryaw = 0.0f;
+    core::minAreaRectangle(degenerate, &c, &s, &yaw);
+    referenceCalipers(degenerate, &rc, &rs, &ryaw);
+    EXPECT_EQ(c, rc);
+    EXPECT_EQ(s, rs);
+    EXPECT_EQ(yaw, ryaw);
+  }
+}
+
+// A column's extremes tie between -0 and +0 (equal as floats): the first point wins, as in a
+// plain pass, down to the sign bit of the box fields. Coordinates differing by a subnormal
+// amount (a column width that overflows to an infinite scale) give a finite box, not a column
+// outside the array.
+TEST(ObjectGeometry, SignedZeroTiesAndSubnormalExtentsAreSafe) {
+  for (int order = 0; order < 4; ++order) {
+    LabeledCloud cloud;
+    std::vector<Eigen::Vector2f> pts;
+    const float z1 = order & 1 ? -0.0f : 0.0f, z2 = order & 2 ? -0.0f : 0.0f;
+    // The lowest two points of the column of x = 1.01 and 1.03 m tie at y = 0; the one taken is
+    // a hull vertex and a corner of the box, which moves by 2 cm with it.
+    for (const Eigen::Vector2f& q :
+         {Eigen::Vector2f(0.5f, 0.6f), Eigen::Vector2f(1.01f, z1), Eigen::Vector2f(1.03f, z2),
+          Eigen::Vector2f(3.0f, 1.0f), Eigen::Vector2f(2.5f, 0.8f), Eigen::Vector2f(2.0f, 0.6f)}) {
+      test::addPoint(&cloud, q.x(), q.y(), 0.0f, 1);
+      pts.push_back(q);
+    }
+    std::vector<std::uint32_t> pos(cloud.size());
+    for (std::size_t i = 0; i < pos.size(); ++i) pos[i] = static_cast<std::uint32_t>(i);
+    core::ObjectGeometry g;
+    core::DetectedObject o;
+    g.compute(cloud, pos, &o);
+    Eigen::Vector2f c, s;
+    float yaw;
+    referenceColumnBox(pts, &c, &s, &yaw);
+    for (int d = 0; d < 2; ++d) {
+      EXPECT_EQ(bitsOf(o.obb_center[d]), bitsOf(c[d])) << order;
+      EXPECT_EQ(bitsOf(o.obb_size[d]), bitsOf(s[d])) << order;
+    }
+    EXPECT_EQ(bitsOf(o.obb_yaw_rad), bitsOf(yaw)) << order;
+  }
+  LabeledCloud tiny;
+  test::addPoint(&tiny, 0.0f, 0.0f, 0.0f, 1);
+  test::addPoint(&tiny, 1e-40f, 0.0f, 0.0f, 1);
+  test::addPoint(&tiny, 0.0f, 1e-41f, 0.0f, 1);
+  core::ObjectGeometry g;
+  core::DetectedObject o;
+  g.compute(tiny, {0, 1, 2}, &o);
+  EXPECT_TRUE(o.obb_center.allFinite());
+  EXPECT_TRUE(o.obb_size.allFinite());
+  EXPECT_LE(o.obb_size.x(), 1e-39f);
 }
 
 TEST(DistanceWeight, FitRecoversAKnownSixthDegreePolynomial) {

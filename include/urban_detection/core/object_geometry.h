@@ -73,8 +73,8 @@ class ObjectGeometry {
 
  private:
   static constexpr int kMaxColumns = 512;
-  std::vector<Eigen::Vector2f> pts_;  // xy of the object's points
-  std::vector<float> col_;  // per column: along and across of its lowest and highest point
+  std::vector<Eigen::Vector2f> pts_;   // xy of the object's points
+  std::vector<std::uint64_t> keys_;    // per column: keys of its lowest and highest point
   std::vector<Eigen::Vector2f> cand_;  // hull candidates: lower chain, then upper chain
   std::vector<Eigen::Vector2f> hull_;  // convex hull, counter-clockwise
 };
