@@ -11,10 +11,10 @@ namespace core {
 namespace {
 
 // [min, max] of the projection of an object's oriented box on the unit
-// direction `d`.
-Eigen::Vector2f project(const DetectedObject& o, const Eigen::Vector2f& d) {
-  const float c = std::cos(o.obb_yaw_rad), s = std::sin(o.obb_yaw_rad);
-  const Eigen::Vector2f ax(c, s), ay(-s, c);
+// direction `d`; `ax` = (cos yaw, sin yaw) of the box.
+Eigen::Vector2f project(const DetectedObject& o, const Eigen::Vector2f& ax,
+                        const Eigen::Vector2f& d) {
+  const Eigen::Vector2f ay(-ax.y(), ax.x());
   const float centre = o.obb_center.head<2>().dot(d);
   const float half =
       0.5f * (o.obb_size.x() * std::fabs(ax.dot(d)) + o.obb_size.y() * std::fabs(ay.dot(d)));
@@ -74,24 +74,46 @@ std::int32_t FarObjectMerger::positionOf(const LabeledCloud& foreground,
   return -1;
 }
 
+// Positions in `foreground` of the points of far object k (far_[slot]), looked up
+// once per apply() on first use; false when one is not in `foreground`.
+bool FarObjectMerger::positionsOf(const LabeledCloud& foreground,
+                                  const std::vector<DetectedObject>& objects, std::size_t slot) {
+  FarObject& f = far_info_[slot];
+  if (f.state == FarObject::kUnknown) {
+    f.begin = static_cast<std::uint32_t>(far_positions_.size());
+    f.state = FarObject::kFound;
+    for (const std::uint32_t index : objects[far_[slot]].indices) {
+      const std::int32_t pos = positionOf(foreground, index);
+      if (pos < 0) {
+        f.state = FarObject::kMissing;
+        break;
+      }
+      far_positions_.push_back(static_cast<std::uint32_t>(pos));
+    }
+    f.end = static_cast<std::uint32_t>(far_positions_.size());
+  }
+  return f.state == FarObject::kFound;
+}
+
 // True when the groups of roots ra and rb, joined, fit the vehicle box; leaves
 // the joined group's members in members_ and its geometry in trial_.
 bool FarObjectMerger::fits(const LabeledCloud& foreground,
                            const std::vector<DetectedObject>& objects, std::uint32_t ra,
                            std::uint32_t rb) {
   members_.clear();
-  for (const std::uint32_t k : far_) {
-    const std::uint32_t r = find(k);
-    if (r == ra || r == rb) members_.push_back(k);
-  }
   positions_.clear();
-  for (const std::uint32_t k : members_) {
-    for (const std::uint32_t index : objects[k].indices) {
-      const std::int32_t pos = positionOf(foreground, index);
-      if (pos < 0) return false;  // not from this foreground: leave the objects alone
-      positions_.push_back(static_cast<std::uint32_t>(pos));
-    }
+  bool found = true;
+  for (std::size_t slot = 0; slot < far_.size(); ++slot) {
+    const std::uint32_t r = find(far_[slot]);
+    if (r != ra && r != rb) continue;
+    members_.push_back(far_[slot]);
+    found = found && positionsOf(foreground, objects, slot);
+    if (!found) continue;
+    const FarObject& f = far_info_[slot];
+    positions_.insert(positions_.end(), far_positions_.begin() + f.begin,
+                      far_positions_.begin() + f.end);
   }
+  if (!found) return false;  // not from this foreground: leave the objects alone
   geometry_.compute(foreground, positions_, &trial_);
   return trial_.obb_size.x() <= params_.max_length_m && trial_.obb_size.y() <= params_.max_width_m;
 }
@@ -114,27 +136,56 @@ std::size_t FarObjectMerger::apply(const LabeledCloud& foreground,
   const float max_z_gap = static_cast<float>(params_.max_z_gap_m);
   const float max_across = static_cast<float>(params_.max_across_gap_m);
   const float min_overlap = static_cast<float>(params_.min_across_overlap);
+  // Per far object once: its box axes (the yaw's cosine and sine) and a bound on the half
+  // extent of its box along any direction (half its diagonal).
+  far_info_.resize(far_.size());
+  far_positions_.clear();
+  for (std::size_t i = 0; i < far_.size(); ++i) {
+    const DetectedObject& o = (*objects)[far_[i]];
+    FarObject& f = far_info_[i];
+    f.axis = Eigen::Vector2f(std::cos(o.obb_yaw_rad), std::sin(o.obb_yaw_rad));
+    f.radius = 0.5 * std::sqrt(static_cast<double>(o.obb_size.x()) * o.obb_size.x() +
+                               static_cast<double>(o.obb_size.y()) * o.obb_size.y());
+    f.state = FarObject::kUnknown;
+  }
   for (std::size_t i = 0; i < far_.size(); ++i) {
     const DetectedObject& a = (*objects)[far_[i]];
+    const FarObject& fa = far_info_[i];
     for (std::size_t j = i + 1; j < far_.size(); ++j) {
       const DetectedObject& b = (*objects)[far_[j]];
+      const FarObject& fb = far_info_[j];
+      const float z_gap =
+          std::max(a.min_pt.z(), b.min_pt.z()) - std::min(a.max_pt.z(), b.max_pt.z());
+      if (!(z_gap <= max_z_gap)) continue;
       // Gaps between the two oriented boxes along and across the line of sight
       // to the pair's midpoint (0 where their projections overlap).
       const Eigen::Vector2f mid = 0.5f * (a.centroid.head<2>() + b.centroid.head<2>());
+      // Along and across two orthogonal unit directions, the gaps are at least the distance
+      // of the box centres along them minus both half diagonals: boxes whose centres are
+      // farther apart than that allows (with 1 cm to spare for rounding) cannot pass the
+      // tests below, which are left for the few near pairs. (Not when the line of sight is
+      // shorter than 1 mm: its direction is then not scaled to unit length.)
+      const double dx = static_cast<double>(a.obb_center.x()) - b.obb_center.x();
+      const double dy = static_cast<double>(a.obb_center.y()) - b.obb_center.y();
+      const double reach = fa.radius + fb.radius + 0.01;
+      const double reach_along = reach + params_.max_gap_m;
+      const double reach_across = reach + params_.max_across_gap_m;
+      if (dx * dx + dy * dy > reach_along * reach_along + reach_across * reach_across &&
+          mid.squaredNorm() > 2e-6f) {
+        continue;
+      }
       const Eigen::Vector2f u = mid / std::max(mid.norm(), 1e-3f), v(-u.y(), u.x());
-      const float along = intervalGap(project(a, u), project(b, u));
-      const Eigen::Vector2f pa = project(a, v), pb = project(b, v);
+      const float along = intervalGap(project(a, fa.axis, u), project(b, fb.axis, u));
+      const Eigen::Vector2f pa = project(a, fa.axis, v), pb = project(b, fb.axis, v);
       const float across = intervalGap(pa, pb);
-      const float gap = std::hypot(along, across);
       // Overlap across the line of sight, as a fraction of the narrower piece: a cabin lies
       // behind its body, a neighbour beside it.
       const float overlap = std::min(pa.y(), pb.y()) - std::max(pa.x(), pb.x());
       const float narrower = std::min(pa.y() - pa.x(), pb.y() - pb.x());
       const bool behind = across > 0.0f || overlap >= min_overlap * narrower;
-      const float z_gap =
-          std::max(a.min_pt.z(), b.min_pt.z()) - std::min(a.max_pt.z(), b.max_pt.z());
-      if (along <= max_gap && across <= max_across && behind && z_gap <= max_z_gap)
-        pairs_.push_back({gap, far_[i], far_[j]});
+      if (along <= max_gap && across <= max_across && behind) {
+        pairs_.push_back({std::hypot(along, across), far_[i], far_[j]});
+      }
     }
   }
   if (pairs_.empty()) return 0;

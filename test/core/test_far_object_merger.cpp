@@ -3,7 +3,9 @@
 // sight, and groups that would be longer or wider than a vehicle stay apart.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 #include <set>
 #include <vector>
 
@@ -216,6 +218,93 @@ TEST(FarObjectMerger, ValidatesItsParameters) {
   core::HierarchicalGridDetectorParams h;
   h.far_merge.max_z_gap_m = -1.0;
   EXPECT_NE(core::validate(h).find("far_merge.max_z_gap_m"), std::string::npos);
+}
+
+// The pair rule of far_object_merger.h evaluated plainly, by projecting the four corners of
+// each oriented box on the line of sight and across it; `slack` receives how far the pair is
+// from the nearest threshold (its outcome is then unambiguous under rounding when > 1e-3).
+bool pairRule(const DetectedObject& a, const DetectedObject& b, const FarObjectMergerParams& p,
+              double* slack) {
+  const Eigen::Vector2d mid = 0.5 * (a.centroid.head<2>() + b.centroid.head<2>()).cast<double>();
+  const Eigen::Vector2d u = mid.normalized(), v(-u.y(), u.x());
+  auto interval = [](const DetectedObject& o, const Eigen::Vector2d& d) {
+    const Eigen::Vector2d ax(std::cos(o.obb_yaw_rad), std::sin(o.obb_yaw_rad)), ay(-ax.y(), ax.x());
+    double lo = 1e9, hi = -1e9;
+    for (const double sa : {-0.5, 0.5}) {
+      for (const double sb : {-0.5, 0.5}) {
+        const Eigen::Vector2d corner = o.obb_center.head<2>().cast<double>() +
+                                       sa * o.obb_size.x() * ax + sb * o.obb_size.y() * ay;
+        lo = std::min(lo, corner.dot(d));
+        hi = std::max(hi, corner.dot(d));
+      }
+    }
+    return Eigen::Vector2d(lo, hi);
+  };
+  const Eigen::Vector2d ua = interval(a, u), ub = interval(b, u);
+  const Eigen::Vector2d va = interval(a, v), vb = interval(b, v);
+  const double along = std::max(0.0, std::max(ua.x(), ub.x()) - std::min(ua.y(), ub.y()));
+  const double across_raw = std::max(va.x(), vb.x()) - std::min(va.y(), vb.y());
+  const double across = std::max(0.0, across_raw);
+  const double overlap = -across_raw;
+  const double narrower = std::min(va.y() - va.x(), vb.y() - vb.x());
+  const double z_gap = std::max(a.min_pt.z(), b.min_pt.z()) - std::min(a.max_pt.z(), b.max_pt.z());
+  *slack = std::min({std::fabs(along - p.max_gap_m), std::fabs(across_raw - p.max_across_gap_m),
+                     std::fabs(across_raw), std::fabs(overlap - p.min_across_overlap * narrower),
+                     std::fabs(z_gap - p.max_z_gap_m)});
+  const bool behind = across > 0.0 || overlap >= p.min_across_overlap * narrower;
+  return along <= p.max_gap_m && across <= p.max_across_gap_m && behind && z_gap <= p.max_z_gap_m;
+}
+
+// Two far pieces at random distances, bearings, sizes, yaws and offsets (some pairs far
+// apart, many near, rotated so that the boxes' corners reach towards each other): the merger
+// joins them exactly when the rule, evaluated plainly, accepts the pair and the joined box fits
+// a vehicle. Its shortcuts (axes computed once per object, pairs whose box centres are too far
+// apart for any gap within the limits skipped before any projection) change no decision.
+TEST(FarObjectMerger, JoinsExactlyThePairsThePlainRuleAccepts) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  int joined = 0, apart = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    FarObjectMergerParams p;
+    if (trial % 3 == 1) p.max_across_gap_m = 0.6;  // gaps across allowed too
+    if (trial % 3 == 2) p.max_gap_m = 2.5;
+    const float range = 32.0f + 30.0f * unit(rng), bearing = 6.2832f * unit(rng);
+    const float cx = range * std::cos(bearing), cy = range * std::sin(bearing);
+    const float offset = 4.5f * unit(rng), dir = 6.2832f * unit(rng);
+    LabeledCloud cloud;
+    for (std::uint32_t piece = 1; piece <= 2; ++piece) {
+      const float x = piece == 1 ? cx : cx + offset * std::cos(dir);
+      const float y = piece == 1 ? cy : cy + offset * std::sin(dir);
+      const float len = 0.3f + 2.2f * unit(rng), wid = 0.2f + 1.2f * unit(rng);
+      const float yaw = 3.1416f * unit(rng), z0 = -1.7f + 0.9f * unit(rng);
+      const float c = std::cos(yaw), s = std::sin(yaw);
+      for (int i = 0; i <= 8; ++i) {
+        for (int k = 0; k <= 4; ++k) {
+          const float a = len * (i / 8.0f - 0.5f), b = wid * (k / 4.0f - 0.5f);
+          addPoint(&cloud, x + a * c - b * s, y + a * s + b * c, z0 + 0.1f * ((i + k) % 5), piece);
+        }
+      }
+    }
+    std::vector<DetectedObject> objects = objectsByLabel(cloud);
+    ASSERT_EQ(objects.size(), 2u);
+    double slack = 0.0;
+    bool expected = pairRule(objects[0], objects[1], p, &slack);
+    if (expected) {  // the joined group must still fit a vehicle box
+      DetectedObject all;
+      std::vector<std::uint32_t> pos(cloud.size());
+      for (std::size_t i = 0; i < pos.size(); ++i) pos[i] = static_cast<std::uint32_t>(i);
+      core::ObjectGeometry().compute(cloud, pos, &all);
+      slack = std::min({slack, std::fabs(all.obb_size.x() - p.max_length_m),
+                        std::fabs(all.obb_size.y() - p.max_width_m)});
+      expected = all.obb_size.x() <= p.max_length_m && all.obb_size.y() <= p.max_width_m;
+    }
+    if (slack < 1e-3) continue;  // too close to a threshold for rounding to be ignored
+    EXPECT_EQ(merge(cloud, &objects, p), expected ? 1u : 0u) << "trial " << trial;
+    EXPECT_EQ(objects.size(), expected ? 1u : 2u) << "trial " << trial;
+    (expected ? joined : apart) += 1;
+  }
+  EXPECT_GT(joined, 50);  // both outcomes are well represented
+  EXPECT_GT(apart, 200);
 }
 
 TEST(FarObjectMerger, HierarchicalGridJoinsAFarCarSeenEndOn) {

@@ -75,17 +75,30 @@ class FarObjectMerger {
     float gap;
     std::uint32_t a, b;
   };
+  // Per far object (far_[k]): box axis, half diagonal, and its points' positions in the
+  // foreground (far_positions_[begin, end)), looked up on first use.
+  struct FarObject {
+    enum State : std::uint8_t { kUnknown, kFound, kMissing };
+    Eigen::Vector2f axis;  // (cos, sin) of obb_yaw_rad
+    double radius;         // [m] half the diagonal of the oriented box
+    std::uint32_t begin, end;
+    State state;
+  };
   bool fits(const LabeledCloud& foreground, const std::vector<DetectedObject>& objects,
             std::uint32_t ra, std::uint32_t rb);
+  bool positionsOf(const LabeledCloud& foreground, const std::vector<DetectedObject>& objects,
+                   std::size_t slot);
   std::int32_t positionOf(const LabeledCloud& foreground, std::uint32_t index) const;
   std::uint32_t find(std::uint32_t a);
 
   FarObjectMergerParams params_;
   ObjectGeometry geometry_;
-  std::vector<std::uint32_t> far_;      // objects far enough to be joined
-  std::vector<Pair> pairs_;             // candidate pairs, nearest first
-  std::vector<std::uint32_t> parent_;   // union-find over objects
-  std::vector<std::uint32_t> members_;  // scratch: objects of a group
+  std::vector<std::uint32_t> far_;            // objects far enough to be joined
+  std::vector<FarObject> far_info_;           // per far object, see FarObject
+  std::vector<std::uint32_t> far_positions_;  // their points' positions
+  std::vector<Pair> pairs_;                   // candidate pairs, nearest first
+  std::vector<std::uint32_t> parent_;         // union-find over objects
+  std::vector<std::uint32_t> members_;        // scratch: objects of a group
   std::vector<std::uint32_t> positions_;
   std::vector<std::uint32_t> indices_;
   std::vector<DetectedObject> out_;
