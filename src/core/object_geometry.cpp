@@ -36,56 +36,83 @@ inline std::uint32_t orderedBits(float across) {
   return u ^ (static_cast<std::uint32_t>(static_cast<std::int32_t>(u) >> 31) | 0x80000000u);
 }
 
-// Folds point i, (along, across) = (a, b), into its column's low and high keys.
-inline void foldPoint(std::uint32_t i, std::int32_t c, std::uint32_t ord, std::uint64_t* low,
-                      std::uint64_t* high) {
-  const std::uint64_t key = static_cast<std::uint64_t>(ord) << 32;
-  low[c] = std::min(low[c], key | i);
-  high[c] = std::max(high[c], key | static_cast<std::uint32_t>(~i));
+// Column keys, both kept as maxima. High key of point i: ordered across bits above, ~i below:
+// the maximum is the highest point, the first among equals. Low key: the same with the across
+// bits complemented (kFlipHigh), so the maximum is the lowest point, again the first among
+// equals. Every finite point's keys exceed kNoPoint, the empty column, whose point number
+// (~ of the low half) is 0, so reading a column's winner needs no branch.
+constexpr std::uint64_t kFlipHigh = std::uint64_t{0xffffffffu} << 32;
+constexpr std::uint64_t kNoPoint = 0xffffffffu;
+inline std::uint64_t highKey(std::uint32_t i, std::uint32_t ord) {
+  return static_cast<std::uint64_t>(ord) << 32 | static_cast<std::uint32_t>(~i);
+}
+inline std::uint32_t pointOf(std::uint64_t key) { return ~static_cast<std::uint32_t>(key); }
+
+// A column: its low and high keys side by side.
+struct ColumnKeys {
+  std::uint64_t low, high;
+};
+
+inline void foldPoint(std::uint64_t high_key, ColumnKeys* column) {
+  column->low = std::max(column->low, high_key ^ kFlipHigh);
+  column->high = std::max(column->high, high_key);
 }
 
-// Pass 2 of ObjectGeometry::finish: the low and high keys of every column, points of even
-// number into the *_even columns, odd into *_odd. kAlong = 0: along x, across y; 1: swapped.
+// Pass 2 of ObjectGeometry::finish: the keys of every column, and the first points whose
+// along coordinate equals `lo` and `hi` (n when there is none). kAlong = 0: along x, across y;
+// 1: swapped.
 template <int kAlong>
-void binColumns(const Eigen::Vector2f* pts, std::size_t n, float lo, float scale, int cols,
-                std::uint64_t* lo_even, std::uint64_t* lo_odd, std::uint64_t* hi_even,
-                std::uint64_t* hi_odd) {
+void binColumns(const Eigen::Vector2f* pts, std::size_t n, float lo, float hi, float scale,
+                int cols, ColumnKeys* columns, std::size_t* first_lo, std::size_t* first_hi) {
   const float last_col = static_cast<float>(cols - 1);
   std::size_t i = 0;
+  *first_lo = *first_hi = n;
 #if defined(__SSE2__)
-  // Four points per step: their columns and ordered across bits computed side by side (the
-  // same single-precision operations as columnOf and orderedBits, lane by lane), then four
-  // scalar folds.
+  // Four points per step: their columns and keys computed side by side (the same
+  // single-precision operations as columnOf and orderedBits, lane by lane), then four scalar
+  // folds. Points at either end along are rare: one predictable branch per step finds them.
   static_assert(sizeof(Eigen::Vector2f) == 2 * sizeof(float), "packed xy pairs");
+  static_assert(sizeof(ColumnKeys) == 16, "column keys of 16 bytes");
   const float* f = n ? pts[0].data() : nullptr;
-  const __m128 vlo = _mm_set1_ps(lo), vscale = _mm_set1_ps(scale), vlast = _mm_set1_ps(last_col);
-  const __m128 zero = _mm_setzero_ps();
+  const __m128 vlo = _mm_set1_ps(lo), vhi = _mm_set1_ps(hi), vscale = _mm_set1_ps(scale);
+  const __m128 vlast = _mm_set1_ps(last_col), zero = _mm_setzero_ps();
   const __m128i sign = _mm_set1_epi32(static_cast<int>(0x80000000u));
-  alignas(16) std::int32_t col[4];
-  alignas(16) std::uint32_t ord[4];
+  const __m128i four = _mm_set1_epi32(4);
+  __m128i not_i = _mm_setr_epi32(-1, -2, -3, -4);  // ~0, ~1, ~2, ~3
+  char* base = reinterpret_cast<char*>(columns);
+  alignas(16) std::uint32_t offset[4];
+  alignas(16) std::uint64_t key[4];
   for (; i + 4 <= n; i += 4) {
     const __m128 p01 = _mm_loadu_ps(f + 2 * i), p23 = _mm_loadu_ps(f + 2 * i + 4);
     const __m128 xs = _mm_shuffle_ps(p01, p23, _MM_SHUFFLE(2, 0, 2, 0));
     const __m128 ys = _mm_shuffle_ps(p01, p23, _MM_SHUFFLE(3, 1, 3, 1));
     const __m128 a = kAlong == 0 ? xs : ys, b = kAlong == 0 ? ys : xs;
     const __m128 c = _mm_max_ps(_mm_min_ps(_mm_mul_ps(_mm_sub_ps(a, vlo), vscale), vlast), zero);
-    _mm_store_si128(reinterpret_cast<__m128i*>(col), _mm_cvttps_epi32(c));
+    _mm_store_si128(reinterpret_cast<__m128i*>(offset), _mm_slli_epi32(_mm_cvttps_epi32(c), 4));
     const __m128i bits = _mm_castps_si128(_mm_add_ps(b, zero));
-    _mm_store_si128(reinterpret_cast<__m128i*>(ord),
-                    _mm_xor_si128(bits, _mm_or_si128(_mm_srai_epi32(bits, 31), sign)));
-    const std::uint32_t k = static_cast<std::uint32_t>(i);
-    foldPoint(k, col[0], ord[0], lo_even, hi_even);
-    foldPoint(k + 1, col[1], ord[1], lo_odd, hi_odd);
-    foldPoint(k + 2, col[2], ord[2], lo_even, hi_even);
-    foldPoint(k + 3, col[3], ord[3], lo_odd, hi_odd);
+    const __m128i ord = _mm_xor_si128(bits, _mm_or_si128(_mm_srai_epi32(bits, 31), sign));
+    _mm_store_si128(reinterpret_cast<__m128i*>(key), _mm_unpacklo_epi32(not_i, ord));
+    _mm_store_si128(reinterpret_cast<__m128i*>(key + 2), _mm_unpackhi_epi32(not_i, ord));
+    not_i = _mm_sub_epi32(not_i, four);
+    const unsigned at_lo = static_cast<unsigned>(_mm_movemask_ps(_mm_cmpeq_ps(a, vlo)));
+    const unsigned at_hi = static_cast<unsigned>(_mm_movemask_ps(_mm_cmpeq_ps(a, vhi)));
+    if (at_lo | at_hi) {
+      if (at_lo && *first_lo == n) *first_lo = i + static_cast<std::size_t>(__builtin_ctz(at_lo));
+      if (at_hi && *first_hi == n) *first_hi = i + static_cast<std::size_t>(__builtin_ctz(at_hi));
+    }
+    foldPoint(key[0], reinterpret_cast<ColumnKeys*>(base + offset[0]));
+    foldPoint(key[1], reinterpret_cast<ColumnKeys*>(base + offset[1]));
+    foldPoint(key[2], reinterpret_cast<ColumnKeys*>(base + offset[2]));
+    foldPoint(key[3], reinterpret_cast<ColumnKeys*>(base + offset[3]));
   }
 #endif
   for (; i < n; ++i) {
     const float a = kAlong == 0 ? pts[i].x() : pts[i].y(),
                 b = kAlong == 0 ? pts[i].y() : pts[i].x();
     const std::int32_t c = static_cast<std::int32_t>(columnOf(a, lo, scale, last_col));
-    foldPoint(static_cast<std::uint32_t>(i), c, orderedBits(b), i & 1 ? lo_odd : lo_even,
-              i & 1 ? hi_odd : hi_even);
+    foldPoint(highKey(static_cast<std::uint32_t>(i), orderedBits(b)), columns + c);
+    if (a == lo && *first_lo == n) *first_lo = i;
+    if (a == hi && *first_hi == n) *first_hi = i;
   }
 }
 
@@ -115,13 +142,14 @@ void calipers(const Eigen::Vector2f* h, std::size_t n, Eigen::Vector2f* center,
   auto pick = [](bool t, std::size_t x, std::size_t y) {
     return y ^ ((x ^ y) & (std::size_t{0} - static_cast<std::size_t>(t)));
   };
-  auto dot = [](const Eigen::Vector2f& a, const Eigen::Vector2f& b) { return a.dot(b); };
-  // The edge direction and its normal (inward for a counter-clockwise polygon).
-  auto axes = [&](std::size_t i, Eigen::Vector2f* u, Eigen::Vector2f* v) {
-    const Eigen::Vector2f e = h[next(i)] - h[i];
-    const float len = e.norm();
-    *u = e / len;
-    *v = Eigen::Vector2f(-u->y(), u->x());
+  // Projection of vertex k on (dx, dy): the same products and sum as Eigen's dot().
+  auto proj = [h](std::size_t k, float dx, float dy) { return h[k].x() * dx + h[k].y() * dy; };
+  // Unit direction of edge i (as Eigen's e.norm() and e / len); its length.
+  auto axis = [&](std::size_t i, float* ux, float* uy) {
+    const float ex = h[next(i)].x() - h[i].x(), ey = h[next(i)].y() - h[i].y();
+    const float len = std::sqrt(ex * ex + ey * ey);
+    *ux = ex / len;
+    *uy = ey / len;
     return len;
   };
   std::size_t a = 0, b = 0, c = 0;  // max along u, max along v (inward), min along u
@@ -130,48 +158,53 @@ void calipers(const Eigen::Vector2f* h, std::size_t n, Eigen::Vector2f* center,
   double best_area = std::numeric_limits<double>::infinity();
   const std::size_t steps = std::min<std::size_t>(n, 2);  // a caliper moves at most n per edge
   for (std::size_t i = 0; i < n; ++i) {
-    Eigen::Vector2f u, v;
-    if (axes(i, &u, &v) <= 0.0f) continue;
+    float ux, uy;
+    if (axis(i, &ux, &uy) <= 0.0f) continue;
+    const float vx = -uy, vy = ux;  // inward normal of a counter-clockwise polygon
     float umax, vmax, umin;
-    if (!init) {
-      for (std::size_t k = 0; k < n; ++k) {
-        if (dot(h[k], u) > dot(h[a], u)) a = k;
-        if (dot(h[k], v) > dot(h[b], v)) b = k;
-        if (dot(h[k], u) < dot(h[c], u)) c = k;
+    if (!init) {  // the first vertices with the largest (smallest) projections
+      umax = umin = proj(0, ux, uy);
+      vmax = proj(0, vx, vy);
+      for (std::size_t k = 1; k < n; ++k) {
+        const float du = proj(k, ux, uy), dv = proj(k, vx, vy);
+        a = pick(du > umax, k, a);
+        b = pick(dv > vmax, k, b);
+        c = pick(du < umin, k, c);
+        umax = du > umax ? du : umax;
+        vmax = dv > vmax ? dv : vmax;
+        umin = du < umin ? du : umin;
       }
       init = true;
-      umax = dot(h[a], u);
-      vmax = dot(h[b], v);
-      umin = dot(h[c], u);
     } else {
       // Advance while the next vertex is at least as far (<= for the minimum); the projection
       // of the vertex reached is carried over. x > y ? x : y keeps y on ties, as the step does.
-      umax = dot(h[a], u);
-      vmax = dot(h[b], v);
-      umin = dot(h[c], u);
+      umax = proj(a, ux, uy);
+      vmax = proj(b, vx, vy);
+      umin = proj(c, ux, uy);
       for (std::size_t s = 0; s < steps; ++s) {
-        const float du = dot(h[next(a)], u), dv = dot(h[next(b)], v), dc = dot(h[next(c)], u);
-        a = pick(du >= umax, next(a), a);
-        b = pick(dv >= vmax, next(b), b);
-        c = pick(dc <= umin, next(c), c);
+        const std::size_t na = next(a), nb = next(b), nc = next(c);
+        const float du = proj(na, ux, uy), dv = proj(nb, vx, vy), dc = proj(nc, ux, uy);
+        a = pick(du >= umax, na, a);
+        b = pick(dv >= vmax, nb, b);
+        c = pick(dc <= umin, nc, c);
         umax = umax > du ? umax : du;
         vmax = vmax > dv ? vmax : dv;
         umin = umin < dc ? umin : dc;
       }
-      for (std::size_t s = steps; s < n && dot(h[next(a)], u) >= umax; ++s) {
+      for (std::size_t s = steps; s < n && proj(next(a), ux, uy) >= umax; ++s) {
         a = next(a);
-        umax = dot(h[a], u);
+        umax = proj(a, ux, uy);
       }
-      for (std::size_t s = steps; s < n && dot(h[next(b)], v) >= vmax; ++s) {
+      for (std::size_t s = steps; s < n && proj(next(b), vx, vy) >= vmax; ++s) {
         b = next(b);
-        vmax = dot(h[b], v);
+        vmax = proj(b, vx, vy);
       }
-      for (std::size_t s = steps; s < n && dot(h[next(c)], u) <= umin; ++s) {
+      for (std::size_t s = steps; s < n && proj(next(c), ux, uy) <= umin; ++s) {
         c = next(c);
-        umin = dot(h[c], u);
+        umin = proj(c, ux, uy);
       }
     }
-    const float vmin = dot(h[i], v);
+    const float vmin = proj(i, vx, vy);
     const double area = static_cast<double>(umax - umin) * static_cast<double>(vmax - vmin);
     const bool better = area < best_area - 1e-12;
 #if defined(__SSE2__)
@@ -187,13 +220,14 @@ void calipers(const Eigen::Vector2f* h, std::size_t n, Eigen::Vector2f* center,
     best_c = pick(better, c, best_c);
   }
   if (best_i == n) return;
-  Eigen::Vector2f u, v;
-  axes(best_i, &u, &v);
-  const float umax = dot(h[best_a], u), vmax = dot(h[best_b], v), umin = dot(h[best_c], u);
-  const float vmin = dot(h[best_i], v);
+  float ux, uy;
+  axis(best_i, &ux, &uy);
+  const Eigen::Vector2f u(ux, uy), v(-uy, ux);
+  const float umax = proj(best_a, ux, uy), vmax = proj(best_b, v.x(), v.y());
+  const float umin = proj(best_c, ux, uy), vmin = proj(best_i, v.x(), v.y());
   *center = u * (0.5f * (umin + umax)) + v * (0.5f * (vmin + vmax));
   float lu = umax - umin, lv = vmax - vmin;
-  float yaw = std::atan2(u.y(), u.x());
+  float yaw = std::atan2(uy, ux);
   if (lv > lu) {
     std::swap(lu, lv);
     yaw += static_cast<float>(M_PI / 2);
@@ -284,61 +318,36 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   const float lo = along_x ? mnx : mny, len = along_x ? mxx - mnx : mxy - mny;
   const int cols = std::clamp(static_cast<int>(std::ceil(len / kHullTolerance)), 1, kMaxColumns);
   const float scale = len > 0.0f ? cols / len : 0.0f;
-  // A column's extremes are kept as 64-bit keys: the across coordinate mapped to an unsigned
-  // integer of the same order (sign bit flipped for >= 0, all bits for < 0; -0 is made +0
-  // first, as float comparison treats them alike) in the high half, the point number in the
-  // low half: the minimum key is the lowest point and, among equal ones, the first, as a
-  // strict float comparison in point order would keep; the maximum key with the point number
-  // complemented is the highest point, first among equals. One integer min or max per point
-  // and column (a cmov), the point itself is read back only for the column's winner. Points
-  // of even and odd number go to two sets of columns, merged when the candidates are read:
-  // consecutive points often share a column, and two sets halve the chain of store-to-load
-  // dependencies through it.
-  const std::size_t ncols = static_cast<std::size_t>(cols);
-  if (keys_.size() < 4 * ncols) keys_.resize(4 * ncols);
-  std::uint64_t* lo_even = keys_.data();
-  std::uint64_t* lo_odd = lo_even + ncols;
-  std::uint64_t* hi_even = lo_odd + ncols;
-  std::uint64_t* hi_odd = hi_even + ncols;
-  // Empty-column sentinels: above (below) every key of a finite point, and naming point 0 (the
-  // low half of kNoHigh complemented is 0), so reading a column's winner needs no branch.
-  constexpr std::uint64_t kNoLow = std::uint64_t{0xffffffffu} << 32, kNoHigh = 0xffffffffu;
-  std::fill(lo_even, hi_even, kNoLow);
-  std::fill(hi_even, hi_odd + ncols, kNoHigh);
-  if (along_x) {
-    binColumns<0>(pts, n, lo, scale, cols, lo_even, lo_odd, hi_even, hi_odd);
-  } else {
-    binColumns<1>(pts, n, lo, scale, cols, lo_even, lo_odd, hi_even, hi_odd);
-  }
-  // The extremes along: the first points whose along coordinate is the box's minimum and
+  // A column's extremes are kept as 64-bit keys (see highKey): one integer maximum per point,
+  // column and side (a cmov); the point itself is read back only for the column's winner.
+  // (A second set of columns for every other point, splitting the store-to-load chains of
+  // consecutive points in one column, measured no faster and costs a merge per column.)
+  // The extremes along are the first points whose along coordinate is the box's minimum and
   // maximum (pass 1 found the values; min/max of floats are exact).
+  const std::size_t ncols = static_cast<std::size_t>(cols);
+  if (keys_.size() < 2 * ncols) keys_.resize(2 * ncols);
+  ColumnKeys* columns = reinterpret_cast<ColumnKeys*>(keys_.data());
+#if defined(__SSE2__)
+  const __m128i empty = _mm_set1_epi64x(static_cast<long long>(kNoPoint));
+  for (std::size_t c = 0; c < ncols; ++c) {
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(columns + c), empty);
+  }
+#else
+  std::fill(columns, columns + ncols, ColumnKeys{kNoPoint, kNoPoint});
+#endif
   const float hi = along_x ? mxx : mxy;
+  std::size_t first_lo, first_hi;
+  if (along_x) {
+    binColumns<0>(pts, n, lo, hi, scale, cols, columns, &first_lo, &first_hi);
+  } else {
+    binColumns<1>(pts, n, lo, hi, scale, cols, columns, &first_lo, &first_hi);
+  }
   auto ab = [along_x](const Eigen::Vector2f& q) {
     return along_x ? q : Eigen::Vector2f(q.y(), q.x());
   };
-  auto firstWith = [&](float value) {
-    std::size_t i = 0;
-#if defined(__SSE2__)
-    // Four points (eight floats) per step, comparing the along lanes only; the first equal
-    // point is the same as the scalar loop's.
-    static_assert(sizeof(Eigen::Vector2f) == 2 * sizeof(float), "packed xy pairs");
-    const float* f = pts[0].data();
-    const __m128 v = _mm_set1_ps(value);
-    const int lanes = along_x ? 0x55 : 0xaa;
-    for (; i + 4 <= n; i += 4) {
-      const int m = (_mm_movemask_ps(_mm_cmpeq_ps(_mm_loadu_ps(f + 2 * i), v)) |
-                     _mm_movemask_ps(_mm_cmpeq_ps(_mm_loadu_ps(f + 2 * i + 4), v)) << 4) &
-                    lanes;
-      if (m) {
-        i += static_cast<std::size_t>(__builtin_ctz(static_cast<unsigned>(m)) / 2);
-        break;
-      }
-    }
-#endif
-    while (i + 1 < n && (along_x ? pts[i].x() : pts[i].y()) != value) ++i;
-    return ab(pts[i]);
-  };
-  const Eigen::Vector2f first = firstWith(lo), last = firstWith(hi);
+  // (None equal only if the moments were not of these points; the last point then stands in.)
+  const Eigen::Vector2f first = ab(pts[std::min(first_lo, n - 1)]);
+  const Eigen::Vector2f last = ab(pts[std::min(first_hi, n - 1)]);
   // Andrew's monotone chain without sorting: with one candidate per column, each chain is
   // already ordered along the long side. Work in (along, across) coordinates.
   const std::size_t cand_size = 2 * ncols + 4;
@@ -348,19 +357,17 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   std::size_t nc = 0;
   cand[nc++] = first;
   for (std::size_t c = 0; c < ncols; ++c) {
-    const std::uint64_t k = std::min(lo_even[c], lo_odd[c]);
-    const bool used = k != kNoLow;
-    cand[nc] = ab(pts[static_cast<std::uint32_t>(k)]);  // kept only if used
-    nc += used;
+    const std::uint64_t k = columns[c].low;
+    cand[nc] = ab(pts[pointOf(k)]);  // kept only if the column has a point
+    nc += k != kNoPoint;
   }
   cand[nc++] = last;
   const std::size_t lower_end = nc;
   cand[nc++] = last;
   for (std::size_t c = ncols; c-- > 0;) {
-    const std::uint64_t k = std::max(hi_even[c], hi_odd[c]);
-    const bool used = k != kNoHigh;
-    cand[nc] = ab(pts[~static_cast<std::uint32_t>(k)]);
-    nc += used;
+    const std::uint64_t k = columns[c].high;
+    cand[nc] = ab(pts[pointOf(k)]);
+    nc += k != kNoPoint;
   }
   cand[nc++] = first;
   Eigen::Vector2f* hull = hull_.data();
