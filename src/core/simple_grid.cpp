@@ -116,6 +116,8 @@ SimpleGrid::SimpleGrid(const SimpleGridParams& params) : params_(params) {
   origin_m_ = static_cast<float>(-0.5 * side_ * cell);
   cell_m_ = static_cast<float>(cell);
   slot_.assign(static_cast<std::size_t>(side_) * side_, -1);
+  occupied_.assign(slot_.size() + 1, kNoCell);
+  occupied_cells_.assign(slot_.size() + 1, GridCell());
 }
 
 std::int32_t SimpleGrid::cellAt(float x_m, float y_m) const {
@@ -130,9 +132,7 @@ std::int32_t SimpleGrid::cellAt(float x_m, float y_m) const {
 }
 
 void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs_height_m) {
-  for (const std::int32_t c : occupied_) slot_[c] = -1;
-  occupied_.clear();
-  occupied_cells_.clear();
+  for (std::size_t s = 0; s < num_occupied_; ++s) slot_[occupied_[s]] = -1;
   const std::size_t n = cloud.size();
   point_slot_.resize(n);
   point_z_.resize(n);
@@ -160,12 +160,15 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
   std::int32_t* ps = point_slot_.data();
   float* pz = point_z_.data();
   const PointXYZIRT* pts = cloud.points.data();
+  std::int32_t* occ = occupied_.data();
+  GridCell* occ_stats = occupied_cells_.data();
+  std::int32_t num_occ = 0;
   std::int32_t run_cell = kNoCell, run_slot = -1;
   std::uint32_t run_count = 0;
   float run_min = 0.0f, run_max = 0.0f, run_sum = 0.0f;
   auto flush = [&]() {
     if (run_cell == kNoCell) return;
-    GridCell& cell = occupied_cells_[run_slot];
+    GridCell& cell = occ_stats[run_slot];
     cell.count += run_count;
     cell.z_min = std::min(cell.z_min, run_min);
     cell.z_max = std::max(cell.z_max, run_max);
@@ -182,15 +185,17 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
     }
     return static_cast<std::int32_t>(fr) * side + static_cast<std::int32_t>(fc);
   };
-  // Slot of cell c, given one when it is new.
+  // Slot of cell c, given one when it is new. Without a branch on newness (about a third of
+  // the runs start a new cell, in no predictable pattern): the next slot's entries are written
+  // for every run and kept only when the cell is new.
   auto slotFor = [&](std::int32_t c) {
-    std::int32_t slot = slot_of[c];
-    if (slot < 0) {
-      slot = static_cast<std::int32_t>(occupied_.size());
-      slot_of[c] = slot;
-      occupied_.push_back(c);
-      occupied_cells_.emplace_back();
-    }
+    const std::int32_t old = slot_of[c];
+    const std::int32_t is_new = old < 0;
+    const std::int32_t slot = is_new ? num_occ : old;
+    slot_of[c] = slot;
+    occ[num_occ] = c;
+    occ_stats[num_occ] = GridCell();
+    num_occ += is_new;
     return slot;
   };
   // One point of pass 2 (cc holds the cell indices of the current chunk).
@@ -361,6 +366,7 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
     for (; j < end; ++j) step(j);
   }
   flush();
+  num_occupied_ = static_cast<std::size_t>(num_occ);
 }
 
 }  // namespace core
