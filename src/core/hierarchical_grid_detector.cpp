@@ -31,6 +31,14 @@ inline std::int32_t findRoot(std::int32_t* parent, std::int32_t i) {
   return i;
 }
 
+// The largest float <= t. For every float f (NaN included), f <= t compared in double holds
+// exactly when f <= floatAtMost(t) in float: the psi tests run in float without a conversion.
+float floatAtMost(double t) {
+  float f = static_cast<float>(t);
+  if (static_cast<double>(f) > t) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
+
 const HierarchicalGridDetectorParams& checked(const HierarchicalGridDetectorParams& p) {
   const std::string err = validate(p);
   if (!err.empty()) throw std::invalid_argument("HierarchicalGridDetector: " + err);
@@ -101,7 +109,8 @@ HierarchicalGridDetector::HierarchicalGridDetector(const HierarchicalGridDetecto
     : params_(checked(params)),
       weight_(params.weight, (params.grid_half_extent_m + params.coarse_cell_m) * M_SQRT2 + 1.0),
       far_merger_(params.far_merge),
-      dense_cell_m_(params.coarse_cell_m / params.xi) {
+      dense_cell_m_(params.coarse_cell_m / params.xi),
+      psi_max_f_(floatAtMost(params.psi_max_m)) {
   // An even number of super-cells with the sensor on a cell corner: cell borders lie on
   // multiples of W_S (and of W_S / xi), independent of the extent.
   const int half = static_cast<int>(std::ceil(params_.grid_half_extent_m / params_.coarse_cell_m));
@@ -167,7 +176,7 @@ void HierarchicalGridDetector::buildBridgeTables() {
 }
 
 inline bool HierarchicalGridDetector::linked(std::int32_t a, std::int32_t b) const {
-  return a == b || std::fabs(coarse_zmax_[a] - coarse_zmax_[b]) <= params_.psi_max_m;
+  return a == b || std::fabs(coarse_zmax_[a] - coarse_zmax_[b]) <= psi_max_f_;
 }
 
 void HierarchicalGridDetector::resetGrid() {
@@ -390,7 +399,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   {
     const float* ckey = coarse_key_.data() + 1;
     std::int32_t* cparent = coarse_parent_.data();
-    const double psi_max = params_.psi_max_m;
+    const float psi_max = psi_max_f_;
     std::int32_t croot = 0;
     auto uniteCoarse = [cparent, &croot](std::int32_t r) {
       r = findRoot(cparent, r);
@@ -455,7 +464,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   // super-cell when the sub-cell is dense, NaN otherwise (every comparison with NaN fails).
   // |za - zb| <= psi_max is linked(): equal super-cells give 0 <= psi_max. Slot -1 (an empty
   // sub-cell) has a key too, NaN: a probe needs no test for it.
-  const double psi_max = params_.psi_max_m;
+  const float psi_max = psi_max_f_;
   dense_key_.resize(nds + 1);
   dense_key_[0] = std::numeric_limits<float>::quiet_NaN();
   for (std::int32_t s = 0; s < nds; ++s) {

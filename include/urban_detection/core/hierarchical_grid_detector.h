@@ -173,6 +173,7 @@ class HierarchicalGridDetector : public ObjectDetector {
   FarObjectMerger far_merger_;
   HierarchicalGridStats stats_;
   double dense_cell_m_;
+  float psi_max_f_;  // [m] the largest float <= psi_max_m (the psi tests compare floats)
   int nd_;           // sub-cells per grid side
   int nc_;           // super-cells per grid side
   double origin_m_;  // [m] x and y of the grid's lower corner (a multiple of W_S)
