@@ -181,6 +181,7 @@ class HierarchicalGridDetector : public ObjectDetector {
   // Grid -> slot maps (-1 = untouched), reset through the touched slot lists.
   std::vector<std::int32_t> dense_slot_;   // nd_ * nd_
   std::vector<std::int32_t> coarse_slot_;  // nc_ * nc_
+  std::vector<std::uint64_t> dense_bits_;  // nd_ * nd_ bits: dense sub-cell (rho >= threshold)
   std::vector<std::int32_t> coarse_of_;    // sub-cell column or row -> super-cell's (i / xi)
   struct CellXY {
     std::int32_t x, y;
