@@ -73,8 +73,8 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   stats_.cells_occupied = static_cast<std::uint32_t>(grid_.occupiedCells().size());
 
   const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
-  const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
-  const std::vector<GridCell>& stats = grid_.occupiedStats();
+  const ConstArrayView<std::int32_t> occupied = grid_.occupiedCells();
+  const ConstArrayView<GridCell> stats = grid_.occupiedStats();
   // Per cell: clutter, or dense (and flat); per slot: the elevation the terrain growing
   // compares (the mean of a flat cell, the lowest point of a mixed one).
   const float flat = static_cast<float>(params_.ground_max_range_m);
@@ -217,7 +217,7 @@ void GridSegmenter::growGround() {
   const float seed_r2 = static_cast<float>(params_.seed_radius_m * params_.seed_radius_m);
   const int rows = grid_.rows(), cols = grid_.cols();
 
-  const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
+  const ConstArrayView<std::int32_t> occupied = grid_.occupiedCells();
   // Every cell given a terrain here is also set in fillTerrain's bit map (bit k + 64 of its
   // row: one zero word of padding left of each row).
   std::uint64_t* bits = terrain_bits_.data();
@@ -436,8 +436,8 @@ void GridSegmenter::classifyCells() {
   const float sensor_h = static_cast<float>(params_.sensor_height_m);
   const float tan_top = static_cast<float>(std::tan(params_.fov_top_elevation_deg * M_PI / 180.0));
   const float half_diag = static_cast<float>(params_.cell_size_m * M_SQRT1_2);
-  const std::vector<std::int32_t>& occupied = grid_.occupiedCells();
-  const std::vector<GridCell>& stats = grid_.occupiedStats();
+  const ConstArrayView<std::int32_t> occupied = grid_.occupiedCells();
+  const ConstArrayView<GridCell> stats = grid_.occupiedStats();
   for (std::size_t s = 0; s < occupied.size(); ++s) {
     const std::int32_t c = occupied[s];
     if (cell_class_[c] == SegmentClass::kClutter) continue;

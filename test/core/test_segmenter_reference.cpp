@@ -250,9 +250,9 @@ TEST(SimpleGridAvx2, SameGridAsTheSse2Path) {
                           sizeof(float) * cloud.size()),
               0)
         << "cloud " << f;
-    ASSERT_EQ(avx2.occupiedCells(), sse2.occupiedCells()) << "cloud " << f;
-    const auto& a = avx2.occupiedStats();
-    const auto& b = sse2.occupiedStats();
+    ASSERT_EQ(avx2.occupiedCells().toVector(), sse2.occupiedCells().toVector()) << "cloud " << f;
+    const auto a = avx2.occupiedStats();
+    const auto b = sse2.occupiedStats();
     ASSERT_EQ(a.size(), b.size());
     std::size_t differ = 0;
     for (std::size_t s = 0; s < a.size(); ++s) {

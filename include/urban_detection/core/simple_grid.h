@@ -3,6 +3,7 @@
 /// the sensor's horizontal plane holding per-cell height statistics. ROS-free.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -17,6 +18,25 @@ struct SimpleGridParams {
   double cell_size_m = 0.5;   // [m] side W_S of a square cell
   double max_range_m = 80.0;  // [m] half side of the square grid centred on the sensor;
                               //     points outside it are not gridded
+};
+
+/// A read-only view of a contiguous array (the grid's per-slot tables, which are kept at their
+/// full size between frames and only partly valid).
+template <typename T>
+class ConstArrayView {
+ public:
+  ConstArrayView(const T* data, std::size_t size) : data_(data), size_(size) {}
+  const T* data() const { return data_; }
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  const T* begin() const { return data_; }
+  const T* end() const { return data_ + size_; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+  std::vector<T> toVector() const { return std::vector<T>(begin(), end()); }
+
+ private:
+  const T* data_;
+  std::size_t size_;
 };
 
 /// Height statistics of one cell. Heights are referenced to the ground below the sensor
@@ -78,9 +98,13 @@ class SimpleGrid {
   const GridCell& cell(int row, int col) const { return cell(row * side_ + col); }
   /// Linear indices of the cells holding at least one point, in first-touch order; a cell's
   /// position in this list is its slot.
-  const std::vector<std::int32_t>& occupiedCells() const { return occupied_; }
+  ConstArrayView<std::int32_t> occupiedCells() const {
+    return ConstArrayView<std::int32_t>(occupied_.data(), num_occupied_);
+  }
   /// Statistics of the occupied cells, by slot (same order as occupiedCells()).
-  const std::vector<GridCell>& occupiedStats() const { return occupied_cells_; }
+  ConstArrayView<GridCell> occupiedStats() const {
+    return ConstArrayView<GridCell>(occupied_cells_.data(), num_occupied_);
+  }
   /// Slot of a cell, or -1 when it holds no point.
   std::int32_t slotOf(std::int32_t index) const { return slot_[index]; }
 
@@ -120,8 +144,11 @@ class SimpleGrid {
   float origin_m_ = 0.0f;  // [m] coordinate of the grid's lower-left corner (both axes)
   float cell_m_ = 1.0f;    // [m] cell side as a float (cellCenter)
   std::vector<std::int32_t> slot_;        // per cell: slot, or -1 (reset on occupied_ only)
+  // Per slot, numCells() + 1 entries (the first num_occupied_ valid): build() writes the entry
+  // of the next slot for every run, new cell or not, so that it needs no branch on newness.
   std::vector<std::int32_t> occupied_;    // per slot: cell index
   std::vector<GridCell> occupied_cells_;  // per slot: statistics
+  std::size_t num_occupied_ = 0;
   std::vector<std::int32_t> point_slot_;  // per point: 1 + slot, 0 = no cell
   std::vector<float> point_z_;
   std::vector<std::int32_t> chunk_cell_;  // scratch: cell indices of one chunk of points
