@@ -99,26 +99,14 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
                                  &cell_class_, &wall_support_);
   }
 
-  // Per point: mixed cells are split by the height above the local ground. The split height
-  // and class are tabulated once per occupied cell, by slot + 1 (the grid's per-point index)
-  // so that a point without a cell reads the sentinel entry 0 (never ground, kUnknown): the
-  // per-point loop is then two lookups in small tables and a compare without a branch
-  // (consecutive points often change cells, at range almost always, so a branch on the cell
-  // mispredicts). "No split" is -inf, not lowest(): a point without a cell may have z = -inf,
-  // which must not compare below it.
-  const float tol = static_cast<float>(params_.ground_tolerance_m);
-  const bool sparse_ground = params_.ground_in_sparse_cells;
-  constexpr float kNoSplit = -std::numeric_limits<float>::infinity();
-  slot_label_.resize(occupied.size() + 1);
-  slot_label_[0] = SlotLabel{kNoSplit, static_cast<std::uint32_t>(SegmentClass::kUnknown)};
-  for (std::size_t s = 0; s < occupied.size(); ++s) {
-    const std::int32_t c = occupied[s];
-    const SegmentClass cls = cell_class_[c];
-    const bool split = (cls == SegmentClass::kShort || cls == SegmentClass::kTall ||
-                        (cls == SegmentClass::kClutter && sparse_ground)) &&
-                       ground_state_[c] != kNoGround;
-    slot_label_[s + 1] = SlotLabel{split ? ground_z_[c] + tol : kNoSplit,
-                                   static_cast<std::uint32_t>(cls)};
+  // Per point: mixed cells are split by the height above the local ground, with the table of
+  // split heights and classes by slot + 1 that classifyCells filled (see there). The Hough
+  // refinement turned some short cells tall: same split, new class.
+  if (params_.hough.enabled) {
+    for (const std::int32_t c : hough_.relabeledCells()) {
+      slot_label_[static_cast<std::size_t>(grid_.slotOf(c)) + 1].label =
+          static_cast<std::uint32_t>(SegmentClass::kTall);
+    }
   }
   const std::size_t n = cloud.size();
   labels->resize(n);
@@ -438,9 +426,27 @@ void GridSegmenter::classifyCells() {
   const float half_diag = static_cast<float>(params_.cell_size_m * M_SQRT1_2);
   const ConstArrayView<std::int32_t> occupied = grid_.occupiedCells();
   const ConstArrayView<GridCell> stats = grid_.occupiedStats();
+  // Also the per-point pass's table, by slot + 1 (the grid's per-point index), so that a point
+  // without a cell reads the sentinel entry 0 (never ground, kUnknown): the split height (points
+  // below it are ground) and the class of each cell. The per-point loop is then two lookups in
+  // small tables and a compare without a branch (consecutive points often change cells, at
+  // range almost always, so a branch on the cell mispredicts). "No split" is -inf, not
+  // lowest(): a point without a cell may have z = -inf, which must not compare below it.
+  // Ground-bearing short and tall cells are split; clutter (sparse) cells too when
+  // ground_in_sparse_cells is set.
+  const bool sparse_ground = params_.ground_in_sparse_cells;
+  constexpr float kNoSplit = -std::numeric_limits<float>::infinity();
+  slot_label_.resize(occupied.size() + 1);
+  slot_label_[0] = SlotLabel{kNoSplit, static_cast<std::uint32_t>(SegmentClass::kUnknown)};
+  SlotLabel* table = slot_label_.data() + 1;
   for (std::size_t s = 0; s < occupied.size(); ++s) {
     const std::int32_t c = occupied[s];
-    if (cell_class_[c] == SegmentClass::kClutter) continue;
+    if (cell_class_[c] == SegmentClass::kClutter) {
+      const bool split = sparse_ground && ground_state_[c] != kNoGround;
+      table[s] = SlotLabel{split ? ground_z_[c] + tol : kNoSplit,
+                           static_cast<std::uint32_t>(SegmentClass::kClutter)};
+      continue;
+    }
     const GridCell& cell = stats[s];
     const std::uint8_t state = ground_state_[c];
     // Without any terrain estimate the plane below the sensor is the reference.
@@ -468,6 +474,10 @@ void GridSegmenter::classifyCells() {
       wall_support_[c] = cell.z_max - sensor_h >= d * tan_top ? 1 : 0;
     }
     cell_class_[c] = cls;
+    // A ground cell is never split; the others keep the state and ground read above.
+    const bool split =
+        (cls == SegmentClass::kShort || cls == SegmentClass::kTall) && state != kNoGround;
+    table[s] = SlotLabel{split ? g + tol : kNoSplit, static_cast<std::uint32_t>(cls)};
   }
 }
 

@@ -20,6 +20,7 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
                                         const std::vector<std::uint8_t>* wall_support) {
   HoughWallStats stats;
   accepted_.clear();
+  relabeled_.clear();
   if (rows <= 0 || cols <= 0 || cell_size_m <= 0.0 ||
       cell_classes->size() != static_cast<std::size_t>(rows) * cols ||
       (wall_support && wall_support->size() != cell_classes->size())) {
@@ -119,6 +120,7 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
             const std::size_t idx = static_cast<std::size_t>(r) * cols + c;
             if (isShort(idx)) {
               cls[idx] = SegmentClass::kTall;
+              relabeled_.push_back(static_cast<std::int32_t>(idx));
               ++stats.cells_relabeled;
             }
           }

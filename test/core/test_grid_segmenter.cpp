@@ -1,7 +1,9 @@
 // Tests of the simple-grid segmentation (paper Sec. 3.1) on synthetic scenes.
 #include "urban_detection/core/point_types.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
@@ -375,17 +377,29 @@ TEST(HoughWallRefiner, AsciiWallRunIsRelabelledAndCarsAreNot) {
   p.line_half_width_cells = 0;
   p.min_tall_fraction = 0.8;
   core::HoughWallRefiner refiner(p);
+  const std::vector<SegmentClass> before = g.classes;
   const core::HoughWallStats st = refiner.refine(g.rows, g.cols, 1.0, &g.classes, &g.support);
   EXPECT_EQ(g.row(1), "TTTTTTTTTTTTTTTTTTTTTTTTTT......");
   EXPECT_EQ(g.row(4), "TTTTTTTTTTTTTT....sss...........");
   EXPECT_EQ(g.row(7), "ssss.ssss.ssss.ssss.ssss........");
   EXPECT_EQ(st.cells_relabeled, 14);
+  // relabeledCells() lists exactly the cells that changed (the segmenter patches its per-point
+  // table with it): the 14 '!' cells of row 1, each once.
+  std::vector<std::int32_t> changed;
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    if (before[i] != g.classes[i]) changed.push_back(static_cast<std::int32_t>(i));
+  }
+  std::vector<std::int32_t> listed = refiner.relabeledCells();
+  std::sort(listed.begin(), listed.end());
+  EXPECT_EQ(listed, changed);
+  EXPECT_EQ(changed.size(), 14u);
   // Without the wall-support evidence the middle of row 1 is 14 short of 21 cells: rejected.
   AsciiGrid h({"................................",
                "TTTTT!!!!!!!!!!!!!!TTTTTTT......",
                "................................"});
   refiner.refine(h.rows, h.cols, 1.0, &h.classes);
   EXPECT_EQ(h.row(1), "TTTTTssssssssssssssTTTTTTT......");
+  EXPECT_TRUE(refiner.relabeledCells().empty());
 }
 
 TEST(HoughWallRefiner, RejectsInconsistentInput) {

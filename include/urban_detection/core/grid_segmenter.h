@@ -141,7 +141,8 @@ class GridSegmenter {
   std::vector<std::uint64_t> terrain_near_;  // terrain_bits_ ORed over the rows within
                                              //     terrain_fill_iterations (overwritten)
   // Per slot + 1 (entry 0: points without a cell) for the per-point pass: points below
-  // split_z [m] are ground, the others get `label` (a SegmentClass).
+  // split_z [m] are ground, the others get `label` (a SegmentClass). Filled by
+  // classifyCells, then the cells the Hough refiner turned tall are patched.
   struct SlotLabel {
     float split_z;
     std::uint32_t label;

@@ -67,12 +67,15 @@ class HoughWallRefiner {
   /// Line segments accepted by the last refine() call, as (x0, y0, x1, y1) in cell
   /// coordinates of the full grid (col, row).
   const std::vector<cv::Vec4i>& acceptedLines() const { return accepted_; }
+  /// Row-major indices of the cells the last refine() call turned from kShort into kTall.
+  const std::vector<std::int32_t>& relabeledCells() const { return relabeled_; }
 
  private:
   HoughWallRefinerParams params_;
   cv::Mat image_;                // scratch: binary occupancy image of the Hough window
   std::vector<cv::Vec4i> lines_; // scratch: raw Hough output
   std::vector<cv::Vec4i> accepted_;
+  std::vector<std::int32_t> relabeled_;
   struct LinePixel {
     int col, row;       // full-grid cell coordinates
     bool occupied;      // a tall or short cell within the half width
