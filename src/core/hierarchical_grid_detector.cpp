@@ -31,6 +31,14 @@ inline std::int32_t findRoot(std::int32_t* parent, std::int32_t i) {
   return i;
 }
 
+// The largest float <= t. For every float f (NaN included), f <= t compared in double holds
+// exactly when f <= floatAtMost(t) in float: the psi tests run in float without a conversion.
+float floatAtMost(double t) {
+  float f = static_cast<float>(t);
+  if (static_cast<double>(f) > t) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
+
 const HierarchicalGridDetectorParams& checked(const HierarchicalGridDetectorParams& p) {
   const std::string err = validate(p);
   if (!err.empty()) throw std::invalid_argument("HierarchicalGridDetector: " + err);
@@ -101,7 +109,8 @@ HierarchicalGridDetector::HierarchicalGridDetector(const HierarchicalGridDetecto
     : params_(checked(params)),
       weight_(params.weight, (params.grid_half_extent_m + params.coarse_cell_m) * M_SQRT2 + 1.0),
       far_merger_(params.far_merge),
-      dense_cell_m_(params.coarse_cell_m / params.xi) {
+      dense_cell_m_(params.coarse_cell_m / params.xi),
+      psi_max_f_(floatAtMost(params.psi_max_m)) {
   // An even number of super-cells with the sensor on a cell corner: cell borders lie on
   // multiples of W_S (and of W_S / xi), independent of the extent.
   const int half = static_cast<int>(std::ceil(params_.grid_half_extent_m / params_.coarse_cell_m));
@@ -109,6 +118,7 @@ HierarchicalGridDetector::HierarchicalGridDetector(const HierarchicalGridDetecto
   nd_ = nc_ * params_.xi;
   origin_m_ = -half * params_.coarse_cell_m;
   dense_slot_.assign(static_cast<std::size_t>(nd_) * nd_, -1);
+  dense_bits_.assign((static_cast<std::size_t>(nd_) * nd_ + 63) / 64, 0);
   coarse_of_.resize(nd_);
   for (int i = 0; i < nd_; ++i) coarse_of_[i] = i / params_.xi;
   coarse_slot_.assign(static_cast<std::size_t>(nc_) * nc_, -1);
@@ -167,11 +177,14 @@ void HierarchicalGridDetector::buildBridgeTables() {
 }
 
 inline bool HierarchicalGridDetector::linked(std::int32_t a, std::int32_t b) const {
-  return a == b || std::fabs(coarse_zmax_[a] - coarse_zmax_[b]) <= params_.psi_max_m;
+  return a == b || std::fabs(coarse_zmax_[a] - coarse_zmax_[b]) <= psi_max_f_;
 }
 
 void HierarchicalGridDetector::resetGrid() {
-  for (const std::int32_t cell : dense_cell_) dense_slot_[cell] = -1;
+  for (const std::int32_t cell : dense_cell_) {
+    dense_slot_[cell] = -1;
+    dense_bits_[cell >> 6] = 0;  // only the last frame's sub-cells have bits set
+  }
   for (const std::int32_t cell : coarse_cell_) coarse_slot_[cell] = -1;
   dense_cell_.clear();
   coarse_cell_.clear();
@@ -224,12 +237,22 @@ void HierarchicalGridDetector::roofBridges() {
     const float inv_d = 1.0f / std::sqrt(db2);
     const std::int32_t* begin =
         &bridge_begin_[kRoofTable * (kDirectionBins + 1) + directionBin(cx, cy)];
+    const std::int32_t cell = dense_cell_[b];
+    const bool inside = ix >= probe_margin_ && iy >= probe_margin_ && ix < nd_ - probe_margin_ &&
+                        iy < nd_ - probe_margin_;
     for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
       const int ox = bridge_offsets_[k].x, oy = bridge_offsets_[k].y;
-      const int x = ix - ox, y = iy - oy;
-      if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
-      const std::int32_t a = dense_slot_[y * nd_ + x];
-      if (a < 0 || !dense_occupied_[a]) continue;
+      std::int32_t a_cell;
+      if (inside) {
+        a_cell = cell - bridge_flat_[k];
+      } else {
+        const int x = ix - ox, y = iy - oy;
+        if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
+        a_cell = y * nd_ + x;
+      }
+      // Dense sub-cells only (the bit map of detect()), then their slot.
+      if (!((dense_bits_[a_cell >> 6] >> (a_cell & 63)) & 1u)) continue;
+      const std::int32_t a = dense_slot_[a_cell];
       const std::int32_t ca = dense_coarse_[a];
       if (std::fabs(zb - coarse_zmax_[ca]) > step || !linked(ca, cb)) continue;
       // Two rings land d^2 * dtheta / h apart on a horizontal surface h below the sensor at
@@ -268,22 +291,79 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   const float nd_f = static_cast<float>(nd_);
   const float max_abs_z = static_cast<float>(params_.max_abs_z_m);
   const LabeledPoint* points = foreground.points.data();
-  // A point outside the grid or the z range; inside implies finite (comparisons with NaN and
-  // inf fail), so the finiteness tests only run for the rejected points.
-  auto reject = [&](std::size_t i) {
-    const LabeledPoint& p = points[i];
-    point_slot_[i] = -1;
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      ++stats_.invalid_points;
-    } else {
-      ++stats_.outside_points;
+  // Two passes. The first computes each point's sub-cell (flat index iy * nd_ + ix, or -1
+  // outside the grid or the z range) into point_slot_ and prefetches its slot-map entry: the
+  // map is 2.6 MB and the entries come from the outer caches, many at a time instead of one
+  // dependent load per point. The second turns the sub-cells into slots in point order.
+  std::int32_t* const point_cell = point_slot_.data();
+  const std::int32_t* const slot_map_base = dense_slot_.data();
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  // Four points at a time: the same float operations as the scalar loop below (subtract,
+  // multiply, ordered comparisons, truncation), so the same cells.
+  {
+    const __m128 v_origin = _mm_set1_ps(origin), v_inv = _mm_set1_ps(inv_dense);
+    const __m128 v_nd = _mm_set1_ps(nd_f), v_zero = _mm_setzero_ps();
+    const __m128 v_max_z = _mm_set1_ps(max_abs_z);
+    const __m128 v_abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128i v_nd_i = _mm_set1_epi32(nd_);
+    for (; i + 4 <= n; i += 4) {
+      __m128 x = _mm_loadu_ps(&points[i].x), y = _mm_loadu_ps(&points[i + 1].x);
+      __m128 z = _mm_loadu_ps(&points[i + 2].x), w = _mm_loadu_ps(&points[i + 3].x);
+      _MM_TRANSPOSE4_PS(x, y, z, w);
+      const __m128 fx = _mm_mul_ps(_mm_sub_ps(x, v_origin), v_inv);
+      const __m128 fy = _mm_mul_ps(_mm_sub_ps(y, v_origin), v_inv);
+      const __m128 ok =
+          _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpge_ps(fx, v_zero), _mm_cmplt_ps(fx, v_nd)),
+                                _mm_and_ps(_mm_cmpge_ps(fy, v_zero), _mm_cmplt_ps(fy, v_nd))),
+                     _mm_cmple_ps(_mm_and_ps(z, v_abs), v_max_z));
+      const __m128i ix = _mm_cvttps_epi32(fx), iy = _mm_cvttps_epi32(fy);
+      // iy * nd_ + ix; SSE2 multiplies 32-bit lanes pairwise into 64 bits (even, then odd).
+      const __m128i even = _mm_mul_epu32(iy, v_nd_i);
+      const __m128i odd = _mm_mul_epu32(_mm_srli_si128(iy, 4), v_nd_i);
+      const __m128i prod = _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
+                                              _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
+      // Rejected lanes: -1 (all bits set).
+      const __m128i ok_i = _mm_castps_si128(ok);
+      const __m128i cell = _mm_or_si128(_mm_and_si128(_mm_add_epi32(prod, ix), ok_i),
+                                        _mm_andnot_si128(ok_i, _mm_set1_epi32(-1)));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(point_cell + i), cell);
+      // (Entry -1 lies before the map; a prefetch never faults.)
+      for (int j = 0; j < 4; ++j) __builtin_prefetch(slot_map_base + point_cell[i + j]);
     }
-  };
-  // A point inside, in sub-cell (ix, iy), flat index cell = iy * nd_ + ix.
-  auto place = [&](std::size_t i, std::int32_t cell, int ix, int iy) {
-    const float z = points[i].z;
+  }
+#endif
+  for (; i < n; ++i) {
+    const LabeledPoint& p = points[i];
+    const float fx = (p.x - origin) * inv_dense;
+    const float fy = (p.y - origin) * inv_dense;
+    if (fx >= 0.0f && fx < nd_f && fy >= 0.0f && fy < nd_f && std::fabs(p.z) <= max_abs_z) {
+      const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);  // fx, fy < nd_ exactly
+      point_cell[i] = iy * nd_ + ix;
+    } else {
+      point_cell[i] = -1;
+    }
+  }
+  // Second pass. Inside implies finite (comparisons with NaN and inf fail), so the finiteness
+  // tests only run for the rejected points. The column and row of a new sub-cell come back
+  // from its flat index: (cell + 0.5) / nd_ in double is at least 0.5 / nd_ from the next
+  // integer and exact to far better than that, so the truncation is the integer division.
+  const double inv_nd = 1.0 / nd_;
+  for (i = 0; i < n; ++i) {
+    const std::int32_t cell = point_cell[i];
+    const LabeledPoint& p = points[i];
+    if (cell < 0) {
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+        ++stats_.invalid_points;
+      } else {
+        ++stats_.outside_points;
+      }
+      continue;
+    }
+    const float z = p.z;
     std::int32_t slot = dense_slot_[cell];
     if (slot < 0) {
+      const int iy = static_cast<int>((cell + 0.5) * inv_nd), ix = cell - iy * nd_;
       slot = static_cast<std::int32_t>(dense_cell_.size());
       dense_slot_[cell] = slot;
       dense_cell_.push_back(cell);
@@ -306,67 +386,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     ++dense_count_[slot];
     dense_zmax_[slot] = std::max(dense_zmax_[slot], z);
     dense_zmin_[slot] = std::min(dense_zmin_[slot], z);
-    point_slot_[i] = slot;
-  };
-  std::size_t i = 0;
-#if defined(__SSE2__)
-  // Four points at a time: the same float operations as the scalar loop below (subtract,
-  // multiply, ordered comparisons, truncation), so the same cells, in a quarter of the
-  // instructions; the table lookups stay scalar.
-  {
-    const __m128 v_origin = _mm_set1_ps(origin), v_inv = _mm_set1_ps(inv_dense);
-    const __m128 v_nd = _mm_set1_ps(nd_f), v_zero = _mm_setzero_ps();
-    const __m128 v_max_z = _mm_set1_ps(max_abs_z);
-    const __m128 v_abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-    const __m128i v_nd_i = _mm_set1_epi32(nd_);
-    alignas(16) std::int32_t bx[4], by[4], bc[4];
-    for (; i + 4 <= n; i += 4) {
-      __m128 x = _mm_loadu_ps(&points[i].x), y = _mm_loadu_ps(&points[i + 1].x);
-      __m128 z = _mm_loadu_ps(&points[i + 2].x), w = _mm_loadu_ps(&points[i + 3].x);
-      _MM_TRANSPOSE4_PS(x, y, z, w);
-      const __m128 fx = _mm_mul_ps(_mm_sub_ps(x, v_origin), v_inv);
-      const __m128 fy = _mm_mul_ps(_mm_sub_ps(y, v_origin), v_inv);
-      const __m128 ok =
-          _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpge_ps(fx, v_zero), _mm_cmplt_ps(fx, v_nd)),
-                                _mm_and_ps(_mm_cmpge_ps(fy, v_zero), _mm_cmplt_ps(fy, v_nd))),
-                     _mm_cmple_ps(_mm_and_ps(z, v_abs), v_max_z));
-      const __m128i ix = _mm_cvttps_epi32(fx), iy = _mm_cvttps_epi32(fy);
-      // iy * nd_ + ix; SSE2 multiplies 32-bit lanes pairwise into 64 bits (even, then odd).
-      const __m128i even = _mm_mul_epu32(iy, v_nd_i);
-      const __m128i odd = _mm_mul_epu32(_mm_srli_si128(iy, 4), v_nd_i);
-      const __m128i prod = _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
-                                              _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
-      _mm_store_si128(reinterpret_cast<__m128i*>(bx), ix);
-      _mm_store_si128(reinterpret_cast<__m128i*>(by), iy);
-      _mm_store_si128(reinterpret_cast<__m128i*>(bc), _mm_add_epi32(prod, ix));
-      const int mask = _mm_movemask_ps(ok);
-      if (mask == 0xf) {
-        place(i, bc[0], bx[0], by[0]);
-        place(i + 1, bc[1], bx[1], by[1]);
-        place(i + 2, bc[2], bx[2], by[2]);
-        place(i + 3, bc[3], bx[3], by[3]);
-        continue;
-      }
-      for (int j = 0; j < 4; ++j) {
-        if (mask & (1 << j)) {
-          place(i + j, bc[j], bx[j], by[j]);
-        } else {
-          reject(i + j);
-        }
-      }
-    }
-  }
-#endif
-  for (; i < n; ++i) {
-    const LabeledPoint& p = points[i];
-    const float fx = (p.x - origin) * inv_dense;
-    const float fy = (p.y - origin) * inv_dense;
-    if (fx >= 0.0f && fx < nd_f && fy >= 0.0f && fy < nd_f && std::fabs(p.z) <= max_abs_z) {
-      const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);  // fx, fy < nd_ exactly
-      place(i, iy * nd_ + ix, ix, iy);
-    } else {
-      reject(i);
-    }
+    point_cell[i] = slot;
   }
   const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
   const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
@@ -390,7 +410,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   {
     const float* ckey = coarse_key_.data() + 1;
     std::int32_t* cparent = coarse_parent_.data();
-    const double psi_max = params_.psi_max_m;
+    const float psi_max = psi_max_f_;
     std::int32_t croot = 0;
     auto uniteCoarse = [cparent, &croot](std::int32_t r) {
       r = findRoot(cparent, r);
@@ -447,6 +467,8 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     dense_parent_[s] = s;
     if (rho[s] >= thr) {
       dense_occupied_[s] = 1;
+      const std::int32_t cell = dense_cell_[s];
+      dense_bits_[cell >> 6] |= std::uint64_t{1} << (cell & 63);
       ++stats_.dense_occupied;
     }
   }
@@ -455,7 +477,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   // super-cell when the sub-cell is dense, NaN otherwise (every comparison with NaN fails).
   // |za - zb| <= psi_max is linked(): equal super-cells give 0 <= psi_max. Slot -1 (an empty
   // sub-cell) has a key too, NaN: a probe needs no test for it.
-  const double psi_max = params_.psi_max_m;
+  const float psi_max = psi_max_f_;
   dense_key_.resize(nds + 1);
   dense_key_[0] = std::numeric_limits<float>::quiet_NaN();
   for (std::int32_t s = 0; s < nds; ++s) {
@@ -464,6 +486,13 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   }
   const float* key = dense_key_.data() + 1;
   const std::int32_t* slot_map = dense_slot_.data();
+  // Dense sub-cells as one bit per grid cell (80 kB for the default grid, mostly cached, where
+  // the slot map is 2.6 MB): most probes land on empty or near-empty sub-cells and end at the
+  // bit; only the dense ones read the slot map and the key.
+  const std::uint64_t* dense_bits = dense_bits_.data();
+  auto denseBit = [dense_bits](std::int32_t cell) {
+    return static_cast<unsigned>(dense_bits[cell >> 6] >> (cell & 63)) & 1u;
+  };
   auto psiOk = [psi_max](float za, float zb) { return std::fabs(za - zb) <= psi_max; };
   // Sub-cells at least probe_margin_ from the grid border probe through flat offsets without
   // bounds checks; the others (never on real data with the default extent) check each probe.
@@ -501,17 +530,17 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
       const float ks = key[s];
       const bool inside = interior(ix, iy);
-      const std::int32_t* here = slot_map + dense_cell_[s];
+      const std::int32_t cell = dense_cell_[s];
+      const std::int32_t* here = slot_map + cell;
       root = findRoot(parent, s);
       if (inside) {
-        // All four psi tests first, without branches (their outcomes are data-dependent), then
-        // the links in the same order.
-        unsigned linked_forward = 0;
-        for (int f = 0; f < 4; ++f) {
-          linked_forward |= static_cast<unsigned>(psiOk(ks, key[here[forward_flat[f]]])) << f;
-        }
-        for (; linked_forward; linked_forward &= linked_forward - 1) {
-          unite(here[forward_flat[__builtin_ctz(linked_forward)]]);
+        // Which of the four are dense first, without branches (their outcomes are
+        // data-dependent), then the psi tests and links of those in the same order.
+        unsigned dense_forward = 0;
+        for (int f = 0; f < 4; ++f) dense_forward |= denseBit(cell + forward_flat[f]) << f;
+        for (; dense_forward; dense_forward &= dense_forward - 1) {
+          const std::int32_t r = here[forward_flat[__builtin_ctz(dense_forward)]];
+          if (psiOk(ks, key[r])) unite(r);
         }
       } else {
         for (int f = 0; f < 4; ++f) {
@@ -534,12 +563,13 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
         for (std::int32_t k0 = begin[0]; k0 < begin[1]; k0 += 64) {
           const std::int32_t* flat = bridge_flat_.data() + k0;
           const int m = std::min<std::int32_t>(64, begin[1] - k0);
-          std::uint64_t linked_bridge = 0;
+          std::uint64_t dense_bridge = 0;
           for (int j = 0; j < m; ++j) {
-            linked_bridge |= static_cast<std::uint64_t>(psiOk(ks, key[here[flat[j]]])) << j;
+            dense_bridge |= static_cast<std::uint64_t>(denseBit(cell + flat[j])) << j;
           }
-          for (; linked_bridge; linked_bridge &= linked_bridge - 1) {
-            if (unite(here[flat[__builtin_ctzll(linked_bridge)]])) ++stats_.bridges;
+          for (; dense_bridge; dense_bridge &= dense_bridge - 1) {
+            const std::int32_t r = here[flat[__builtin_ctzll(dense_bridge)]];
+            if (psiOk(ks, key[r]) && unite(r)) ++stats_.bridges;
           }
         }
         continue;

@@ -2,7 +2,7 @@
 //
 //   taskset -c 0 urban_detection_bench_detection [--data DIR]... [--passes N]
 //                                                [--kdtree-passes N] [--digest [--dump FILE]]
-//                                                [benchmark flags]
+//                                                [--stats] [benchmark flags]
 //
 // Every sweep of DIR (default: ../shared/data/kitti_raw/drive_0005 and drive_0048, KITTI .bin
 // or PCD) goes through the segmentation (GridSegmenter with default parameters,
@@ -19,6 +19,8 @@
 // --dump FILE (with --digest): also writes every hierarchical object as one text line (frame,
 // id, point count, then the 16 box floats with 9 significant digits) to compare two builds
 // field by field when the digests differ.
+// --stats: instead of timing, prints the hierarchical grid's stats (HierarchicalGridStats)
+// averaged per revolution: how many cells, links and objects the timed work handles.
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <algorithm>
@@ -143,12 +145,33 @@ std::uint64_t digestOf(core::ObjectDetector* det, std::FILE* dump = nullptr) {
   return d.value();
 }
 
+void printStats() {
+  core::HierarchicalGridDetector det;
+  std::vector<core::DetectedObject> objects;
+  double sum[15] = {};
+  const char* names[15] = {"input_points",  "invalid_points", "outside_points", "coarse_cells",
+                           "coarse_blobs",  "dense_cells",    "dense_occupied", "bridges",
+                           "roof_bridges",  "noise_points",   "components",     "dropped_small",
+                           "dropped_large", "far_joins",      "objects"};
+  for (const LabeledCloud& f : g_frames) {
+    det.detect(f, &objects);
+    const core::HierarchicalGridStats& s = det.stats();
+    const std::size_t v[15] = {s.input_points,  s.invalid_points, s.outside_points, s.coarse_cells,
+                               s.coarse_blobs,  s.dense_cells,    s.dense_occupied, s.bridges,
+                               s.roof_bridges,  s.noise_points,   s.components,     s.dropped_small,
+                               s.dropped_large, s.far_joins,      s.objects};
+    for (int k = 0; k < 15; ++k) sum[k] += static_cast<double>(v[k]);
+  }
+  std::printf("hierarchical_grid stats, mean per revolution:\n");
+  for (int k = 0; k < 15; ++k) std::printf("  %-15s %10.1f\n", names[k], sum[k] / g_frames.size());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<std::string> dirs;
   int passes = 20, kd_passes = 1;
-  bool digest = false;
+  bool digest = false, stats = false;
   std::string dump_path;
   std::vector<char*> bench_args = {argv[0]};
   for (int i = 1; i < argc; ++i) {
@@ -160,6 +183,8 @@ int main(int argc, char** argv) {
       kd_passes = std::max(0, std::atoi(argv[++i]));  // 0: skip
     } else if (!std::strcmp(argv[i], "--digest")) {
       digest = true;
+    } else if (!std::strcmp(argv[i], "--stats")) {
+      stats = true;
     } else if (!std::strcmp(argv[i], "--dump") && i + 1 < argc) {
       dump_path = argv[++i];
     } else {
@@ -197,6 +222,10 @@ int main(int argc, char** argv) {
               g_frames.size(), static_cast<double>(points) / g_frames.size(),
               static_cast<double>(fg_points) / g_frames.size());
 
+  if (stats) {
+    printStats();
+    return 0;
+  }
   if (digest) {
     core::HierarchicalGridDetector grid;
     std::FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");

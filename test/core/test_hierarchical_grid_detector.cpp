@@ -221,6 +221,26 @@ TEST(HierarchicalGridCoarse, NeighboursWithDifferentZmaxAreNotMerged) {
   EXPECT_EQ(run(cloud, p).size(), 1u);
 }
 
+TEST(HierarchicalGridCoarse, PsiThresholdIsExactForFloatHeights) {
+  // psi_max_m = 0.3 is not a float: 0.3f is 0.30000001 > 0.3. Zmax values 0 and 0.3f differ
+  // by more than psi_max_m (not linked: two objects), 0 and the next float below 0.3f by less
+  // (linked: one object), at both levels. Rounding the threshold to the nearest float instead
+  // of down would link the first pair.
+  const float below = std::nextafter(0.3f, 0.0f);
+  ASSERT_GT(static_cast<double>(0.3f), 0.3);
+  ASSERT_LT(static_cast<double>(below), 0.3);
+  const std::vector<std::string> art = {"LLLTTT", "LLLTTT", "LLLTTT"};
+  for (const bool refine : {false, true}) {
+    HierarchicalGridDetectorParams p = asciiParams(refine);
+    p.psi_max_m = 0.3;
+    EXPECT_EQ(run(fromAsciiArt(art, {{'L', 0.0f}, {'T', 0.3f}}), p).size(), 2u) << refine;
+    EXPECT_EQ(run(fromAsciiArt(art, {{'L', 0.0f}, {'T', below}}), p).size(), 1u) << refine;
+    // The same pairs the other way round (T lower than L).
+    EXPECT_EQ(run(fromAsciiArt(art, {{'L', 0.3f}, {'T', 0.0f}}), p).size(), 2u) << refine;
+    EXPECT_EQ(run(fromAsciiArt(art, {{'L', below}, {'T', 0.0f}}), p).size(), 1u) << refine;
+  }
+}
+
 TEST(HierarchicalGridDense, IsolatedNearEmptySubCellsAreNoise) {
   const std::vector<std::string> art = {"AAA....", "AAA...x", "AAA...."};
   const LabeledCloud cloud = fromAsciiArt(art, {{'A', 1.0f}, {'X', 1.0f}});

@@ -173,6 +173,7 @@ class HierarchicalGridDetector : public ObjectDetector {
   FarObjectMerger far_merger_;
   HierarchicalGridStats stats_;
   double dense_cell_m_;
+  float psi_max_f_;  // [m] the largest float <= psi_max_m (the psi tests compare floats)
   int nd_;           // sub-cells per grid side
   int nc_;           // super-cells per grid side
   double origin_m_;  // [m] x and y of the grid's lower corner (a multiple of W_S)
@@ -180,6 +181,7 @@ class HierarchicalGridDetector : public ObjectDetector {
   // Grid -> slot maps (-1 = untouched), reset through the touched slot lists.
   std::vector<std::int32_t> dense_slot_;   // nd_ * nd_
   std::vector<std::int32_t> coarse_slot_;  // nc_ * nc_
+  std::vector<std::uint64_t> dense_bits_;  // nd_ * nd_ bits: dense sub-cell (rho >= threshold)
   std::vector<std::int32_t> coarse_of_;    // sub-cell column or row -> super-cell's (i / xi)
   struct CellXY {
     std::int32_t x, y;
