@@ -270,6 +270,17 @@ void referenceColumnBox(const std::vector<Eigen::Vector2f>& pts, Eigen::Vector2f
   core::minAreaRectangle(hull, center, size, yaw);
 }
 
+// ObjectGeometry's box of all points of `cloud` (in order) and referenceColumnBox() of their xy.
+void boxAndReference(const LabeledCloud& cloud, const std::vector<Eigen::Vector2f>& pts,
+                     core::DetectedObject* object, Eigen::Vector2f* center, Eigen::Vector2f* size,
+                     float* yaw) {
+  std::vector<std::uint32_t> pos(cloud.size());
+  for (std::size_t i = 0; i < pos.size(); ++i) pos[i] = static_cast<std::uint32_t>(i);
+  core::ObjectGeometry g;
+  g.compute(cloud, pos, object);
+  referenceColumnBox(pts, center, size, yaw);
+}
+
 // Coordinates on a 1 cm lattice: many points tie for a column's extreme, in both halves of the
 // point list, and for the box's minimum and maximum; odd and even point counts, both axes.
 TEST(ObjectGeometry, ColumnHullEqualsAPlainSinglePassBitForBit) {
@@ -291,14 +302,10 @@ TEST(ObjectGeometry, ColumnHullEqualsAPlainSinglePassBitForBit) {
       test::addPoint(&cloud, x, y, 0.01f * cm(rng), 1);
       pts.emplace_back(x, y);
     }
-    std::vector<std::uint32_t> pos(n);
-    for (int i = 0; i < n; ++i) pos[i] = i;
-    core::ObjectGeometry g;
     core::DetectedObject o;
-    g.compute(cloud, pos, &o);
     Eigen::Vector2f c, s;
     float yaw;
-    referenceColumnBox(pts, &c, &s, &yaw);
+    boxAndReference(cloud, pts, &o, &c, &s, &yaw);
     EXPECT_EQ(o.obb_center.x(), c.x()) << trial;
     EXPECT_EQ(o.obb_center.y(), c.y()) << trial;
     EXPECT_EQ(o.obb_size.x(), s.x()) << trial;
@@ -432,14 +439,10 @@ TEST(ObjectGeometry, SignedZeroTiesAndSubnormalExtentsAreSafe) {
       test::addPoint(&cloud, q.x(), q.y(), 0.0f, 1);
       pts.push_back(q);
     }
-    std::vector<std::uint32_t> pos(cloud.size());
-    for (std::size_t i = 0; i < pos.size(); ++i) pos[i] = static_cast<std::uint32_t>(i);
-    core::ObjectGeometry g;
     core::DetectedObject o;
-    g.compute(cloud, pos, &o);
     Eigen::Vector2f c, s;
     float yaw;
-    referenceColumnBox(pts, &c, &s, &yaw);
+    boxAndReference(cloud, pts, &o, &c, &s, &yaw);
     for (int d = 0; d < 2; ++d) {
       EXPECT_EQ(bitsOf(o.obb_center[d]), bitsOf(c[d])) << order;
       EXPECT_EQ(bitsOf(o.obb_size[d]), bitsOf(s[d])) << order;
