@@ -61,10 +61,16 @@ std::uint32_t FarObjectMerger::find(std::uint32_t a) {
 // extractForeground() writes the foreground in cloud order, so the indices are
 // sorted and a binary search finds a point. A foreground in any other order
 // (hand-made clouds) is searched linearly: only the few points of far candidate
-// objects are looked up.
-std::int32_t FarObjectMerger::positionOf(const LabeledCloud& foreground,
-                                         std::uint32_t index) const {
+// objects are looked up. An object's points mostly come in runs of consecutive
+// positions, so `hint` (the position after the previous point's) is tried first; it
+// is taken only where the binary search would stop too on a sorted foreground (the
+// first point with this index: the one before it has a smaller one).
+std::int32_t FarObjectMerger::positionOf(const LabeledCloud& foreground, std::uint32_t index,
+                                         std::size_t hint) const {
   const auto& pts = foreground.points;
+  if (hint < pts.size() && pts[hint].index == index && (hint == 0 || pts[hint - 1].index < index)) {
+    return static_cast<std::int32_t>(hint);
+  }
   auto it = std::lower_bound(pts.begin(), pts.end(), index,
                              [](const LabeledPoint& p, std::uint32_t i) { return p.index < i; });
   if (it != pts.end() && it->index == index) return static_cast<std::int32_t>(it - pts.begin());
@@ -82,13 +88,15 @@ bool FarObjectMerger::positionsOf(const LabeledCloud& foreground,
   if (f.state == FarObject::kUnknown) {
     f.begin = static_cast<std::uint32_t>(far_positions_.size());
     f.state = FarObject::kFound;
+    std::size_t hint = 0;
     for (const std::uint32_t index : objects[far_[slot]].indices) {
-      const std::int32_t pos = positionOf(foreground, index);
+      const std::int32_t pos = positionOf(foreground, index, hint);
       if (pos < 0) {
         f.state = FarObject::kMissing;
         break;
       }
       far_positions_.push_back(static_cast<std::uint32_t>(pos));
+      hint = static_cast<std::size_t>(pos) + 1;
     }
     f.end = static_cast<std::uint32_t>(far_positions_.size());
   }

@@ -116,6 +116,39 @@ void binColumns(const Eigen::Vector2f* pts, std::size_t n, float lo, float hi, f
   }
 }
 
+// One chain of Andrew's monotone chain: appends the candidates c[0..m) to the stack
+// hull[0..k) (k >= 1), first popping the top hull[k-1] while k >= bottom + 2 and
+// cross(hull[k-2], hull[k-1], c) <= 0 (the same float operations as cross()); returns the new
+// k. The two top points are kept in registers: the point just pushed is the next top, and a pop
+// reloads only the one below the new top.
+inline std::size_t chain(const Eigen::Vector2f* c, std::size_t m, Eigen::Vector2f* hull,
+                         std::size_t k, std::size_t bottom) {
+  float ax = hull[k - 1].x(), ay = hull[k - 1].y();  // top
+  float ox = 0.0f, oy = 0.0f;                        // the point below it, when k >= 2
+  if (k >= 2) {
+    ox = hull[k - 2].x();
+    oy = hull[k - 2].y();
+  }
+  const std::size_t min_k = bottom + 2;
+  for (std::size_t i = 0; i < m; ++i) {
+    const float bx = c[i].x(), by = c[i].y();
+    while (k >= min_k && (ax - ox) * (by - oy) - (ay - oy) * (bx - ox) <= 0.0f) {
+      --k;
+      ax = ox;
+      ay = oy;
+      const Eigen::Vector2f& o = hull[k >= 2 ? k - 2 : 0];
+      ox = o.x();
+      oy = o.y();
+    }
+    hull[k++] = c[i];
+    ox = ax;
+    oy = ay;
+    ax = bx;
+    ay = by;
+  }
+  return k;
+}
+
 // Rotating calipers over the convex polygon h[0..n) (counter-clockwise): the minimum-area
 // rectangle has a side on a hull edge; going round the edges, the vertices extreme along the
 // edge, across it and against it only move forward, so all edges are tried in O(n). The yaw
@@ -372,15 +405,10 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   cand[nc++] = first;
   Eigen::Vector2f* hull = hull_.data();
   std::size_t k = 0;
-  for (std::size_t i = 0; i < lower_end; ++i) {  // lower chain, first .. last
-    while (k >= 2 && cross(hull[k - 2], hull[k - 1], cand[i]) <= 0.0f) --k;
-    hull[k++] = cand[i];
-  }
-  const std::size_t t = k + 1;  // upper chain, last .. first ('last' is on top)
-  for (std::size_t i = lower_end + 1; i < nc; ++i) {
-    while (k >= t && cross(hull[k - 2], hull[k - 1], cand[i]) <= 0.0f) --k;
-    hull[k++] = cand[i];
-  }
+  hull[k++] = cand[0];
+  k = chain(cand + 1, lower_end - 1, hull, k, 0);  // lower chain, first .. last
+  // Upper chain, last .. first: 'last' is on top and stays (pops need two points above it).
+  k = chain(cand + lower_end + 1, nc - lower_end - 1, hull, k, k - 1);
   const std::size_t nh = k - 1;  // 'first' again
   if (!along_x) {                // (y, x) is a reflection: restore x, y and counter-clockwise order
     for (std::size_t i = 0; i < nh; ++i) hull[i] = Eigen::Vector2f(hull[i].y(), hull[i].x());

@@ -206,6 +206,56 @@ TEST(FarObjectMerger, KeepsOrderAndNearObjects) {
   for (std::size_t k = 0; k < objects.size(); ++k) EXPECT_EQ(objects[k].id, k + 1);
 }
 
+// The joined object's geometry is that of the members' points, found by their `index` in the
+// foreground, whether the foreground is in index order with gaps (the positions are looked up
+// from the previous point's, then by binary search) or shuffled (searched linearly).
+TEST(FarObjectMerger, JoinedGeometryReadsThePointsByIndexInAnyForegroundOrder) {
+  for (const bool shuffled : {false, true}) {
+    LabeledCloud car;
+    addFace(&car, 8.0f, -0.3f, 0.3f, -1.7f, 0.0f, 3);  // a near pedestrian between the pieces
+    addEndOnCar(&car, 45.0f, 0.0f, 1.1f, 1, 2);
+    // Indices with gaps; the pedestrian's points come first in index order.
+    for (std::size_t i = 0; i < car.size(); ++i) {
+      car.points[i].index = static_cast<std::uint32_t>(3 * i + 7);
+    }
+    std::vector<LabeledPoint> pts(car.points.begin(), car.points.end());
+    std::mt19937 rng(11);
+    if (shuffled) {
+      std::shuffle(pts.begin(), pts.end(), rng);
+    } else {
+      std::sort(pts.begin(), pts.end(),
+                [](const LabeledPoint& a, const LabeledPoint& b) { return a.index < b.index; });
+    }
+    LabeledCloud cloud;
+    for (const LabeledPoint& p : pts) cloud.push_back(p);
+    std::vector<DetectedObject> objects = objectsByLabel(cloud);
+    ASSERT_EQ(objects.size(), 3u);
+    const std::vector<std::uint32_t> body = objects[0].indices, cabin = objects[1].indices;
+    ASSERT_EQ(merge(cloud, &objects), 1u) << shuffled;
+    ASSERT_EQ(objects.size(), 2u);
+    // The same points, in the members' order, by position.
+    std::vector<std::uint32_t> pos;
+    for (const std::vector<std::uint32_t>* member : {&body, &cabin}) {
+      for (const std::uint32_t index : *member) {
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+          if (cloud.points[i].index == index) pos.push_back(static_cast<std::uint32_t>(i));
+        }
+      }
+    }
+    ASSERT_EQ(pos.size(), body.size() + cabin.size());
+    DetectedObject expected;
+    core::ObjectGeometry().compute(cloud, pos, &expected);
+    const DetectedObject& joined = objects[0];
+    EXPECT_EQ(joined.indices.size(), pos.size());
+    EXPECT_EQ(joined.centroid, expected.centroid) << shuffled;
+    EXPECT_EQ(joined.min_pt, expected.min_pt) << shuffled;
+    EXPECT_EQ(joined.max_pt, expected.max_pt) << shuffled;
+    EXPECT_EQ(joined.obb_center, expected.obb_center) << shuffled;
+    EXPECT_EQ(joined.obb_size, expected.obb_size) << shuffled;
+    EXPECT_EQ(joined.obb_yaw_rad, expected.obb_yaw_rad) << shuffled;
+  }
+}
+
 TEST(FarObjectMerger, ValidatesItsParameters) {
   FarObjectMergerParams p;
   EXPECT_EQ(core::validate(p), "");

@@ -88,7 +88,8 @@ class FarObjectMerger {
             std::uint32_t ra, std::uint32_t rb);
   bool positionsOf(const LabeledCloud& foreground, const std::vector<DetectedObject>& objects,
                    std::size_t slot);
-  std::int32_t positionOf(const LabeledCloud& foreground, std::uint32_t index) const;
+  std::int32_t positionOf(const LabeledCloud& foreground, std::uint32_t index,
+                          std::size_t hint) const;
   std::uint32_t find(std::uint32_t a);
 
   FarObjectMergerParams params_;
