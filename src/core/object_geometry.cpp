@@ -157,7 +157,8 @@ inline std::size_t chain(const Eigen::Vector2f* c, std::size_t m, Eigen::Vector2
 //   step 2: d = t1 ? p2 : p1, t2 = d >= m1, m2 = m1 > d ? m1 : d,
 // with the comparisons as masks and the vertex picked by them.
 template <bool kMax>
-inline void twoSteps(float p1, float p2, std::size_t k1, std::size_t k2, std::size_t* k, float* p) {
+inline void twoSteps(float p1, float p2, std::size_t k1, std::size_t k2, std::size_t* k,
+                     float* p) {
   const __m128 vp = _mm_set_ss(*p), v1 = _mm_set_ss(p1), v2 = _mm_set_ss(p2);
   const __m128 t1 = kMax ? _mm_cmpge_ss(v1, vp) : _mm_cmple_ss(v1, vp);
   const __m128 m1 = kMax ? _mm_max_ss(vp, v1) : _mm_min_ss(vp, v1);
@@ -165,10 +166,10 @@ inline void twoSteps(float p1, float p2, std::size_t k1, std::size_t k2, std::si
   const __m128 t2 = kMax ? _mm_cmpge_ss(d, m1) : _mm_cmple_ss(d, m1);
   *p = _mm_cvtss_f32(kMax ? _mm_max_ss(m1, d) : _mm_min_ss(m1, d));
   // All-ones or zero masks, widened with their sign.
-  const std::size_t mask1 =
-      static_cast<std::size_t>(static_cast<std::int64_t>(_mm_cvtsi128_si32(_mm_castps_si128(t1))));
-  const std::size_t mask2 =
-      static_cast<std::size_t>(static_cast<std::int64_t>(_mm_cvtsi128_si32(_mm_castps_si128(t2))));
+  const std::size_t mask1 = static_cast<std::size_t>(
+      static_cast<std::int64_t>(_mm_cvtsi128_si32(_mm_castps_si128(t1))));
+  const std::size_t mask2 = static_cast<std::size_t>(
+      static_cast<std::int64_t>(_mm_cvtsi128_si32(_mm_castps_si128(t2))));
   const std::size_t after1 = *k ^ ((k1 ^ *k) & mask1);  // t1 ? k1 : k
   const std::size_t next1 = k1 ^ ((k2 ^ k1) & mask1);   // the vertex after it: t1 ? k2 : k1
   *k = after1 ^ ((next1 ^ after1) & mask2);             // t2 ? next1 : after1
