@@ -149,33 +149,6 @@ inline std::size_t chain(const Eigen::Vector2f* c, std::size_t m, Eigen::Vector2
   return k;
 }
 
-#if defined(__SSE2__)
-// Two steps of a caliper standing at vertex *k with projection *p (kMax: it advances while the
-// next vertex's projection is >= the current one, else while it is <=), given the projections
-// p1, p2 of the next two vertices k1, k2. Exactly the steps of calipers() one at a time:
-//   step 1: t1 = p1 >= p, m1 = p > p1 ? p : p1 (maxss; minss and <= for the minimum),
-//   step 2: d = t1 ? p2 : p1, t2 = d >= m1, m2 = m1 > d ? m1 : d,
-// with the comparisons as masks and the vertex picked by them.
-template <bool kMax>
-inline void twoSteps(float p1, float p2, std::size_t k1, std::size_t k2, std::size_t* k,
-                     float* p) {
-  const __m128 vp = _mm_set_ss(*p), v1 = _mm_set_ss(p1), v2 = _mm_set_ss(p2);
-  const __m128 t1 = kMax ? _mm_cmpge_ss(v1, vp) : _mm_cmple_ss(v1, vp);
-  const __m128 m1 = kMax ? _mm_max_ss(vp, v1) : _mm_min_ss(vp, v1);
-  const __m128 d = _mm_or_ps(_mm_and_ps(t1, v2), _mm_andnot_ps(t1, v1));
-  const __m128 t2 = kMax ? _mm_cmpge_ss(d, m1) : _mm_cmple_ss(d, m1);
-  *p = _mm_cvtss_f32(kMax ? _mm_max_ss(m1, d) : _mm_min_ss(m1, d));
-  // All-ones or zero masks, widened with their sign.
-  const std::size_t mask1 = static_cast<std::size_t>(
-      static_cast<std::int64_t>(_mm_cvtsi128_si32(_mm_castps_si128(t1))));
-  const std::size_t mask2 = static_cast<std::size_t>(
-      static_cast<std::int64_t>(_mm_cvtsi128_si32(_mm_castps_si128(t2))));
-  const std::size_t after1 = *k ^ ((k1 ^ *k) & mask1);  // t1 ? k1 : k
-  const std::size_t next1 = k1 ^ ((k2 ^ k1) & mask1);   // the vertex after it: t1 ? k2 : k1
-  *k = after1 ^ ((next1 ^ after1) & mask2);             // t2 ? next1 : after1
-}
-#endif
-
 // Rotating calipers over the convex polygon h[0..n) (counter-clockwise): the minimum-area
 // rectangle has a side on a hull edge; going round the edges, the vertices extreme along the
 // edge, across it and against it only move forward, so all edges are tried in O(n). The yaw
@@ -241,18 +214,6 @@ void calipers(const Eigen::Vector2f* h, std::size_t n, Eigen::Vector2f* center,
       umax = proj(a, ux, uy);
       vmax = proj(b, vx, vy);
       umin = proj(c, ux, uy);
-#if defined(__SSE2__)
-      // The two steps at once: the projections of the next two vertices of each caliper are
-      // computed side by side, and the steps (the same comparisons and maxima as below) wait
-      // only on comparisons and selects, not on loads whose address a comparison gives.
-      {
-        const std::size_t a1 = next(a), a2 = next(a1), b1 = next(b), b2 = next(b1);
-        const std::size_t c1 = next(c), c2 = next(c1);
-        twoSteps<true>(proj(a1, ux, uy), proj(a2, ux, uy), a1, a2, &a, &umax);
-        twoSteps<true>(proj(b1, vx, vy), proj(b2, vx, vy), b1, b2, &b, &vmax);
-        twoSteps<false>(proj(c1, ux, uy), proj(c2, ux, uy), c1, c2, &c, &umin);
-      }
-#else
       for (std::size_t s = 0; s < steps; ++s) {
         const std::size_t na = next(a), nb = next(b), nc = next(c);
         const float du = proj(na, ux, uy), dv = proj(nb, vx, vy), dc = proj(nc, ux, uy);
@@ -263,7 +224,6 @@ void calipers(const Eigen::Vector2f* h, std::size_t n, Eigen::Vector2f* center,
         vmax = vmax > dv ? vmax : dv;
         umin = umin < dc ? umin : dc;
       }
-#endif
       for (std::size_t s = steps; s < n && proj(next(a), ux, uy) >= umax; ++s) {
         a = next(a);
         umax = proj(a, ux, uy);
