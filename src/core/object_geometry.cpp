@@ -116,6 +116,7 @@ void binColumns(const Eigen::Vector2f* pts, std::size_t n, float lo, float hi, f
   }
 }
 
+#if !defined(__SSE2__)
 // One chain of Andrew's monotone chain: appends the candidates c[0..m) to the stack
 // hull[0..k) (k >= 1), first popping the top hull[k-1] while k >= bottom + 2 and
 // cross(hull[k-2], hull[k-1], c) <= 0 (the same float operations as cross()); returns the new
@@ -148,6 +149,84 @@ inline std::size_t chain(const Eigen::Vector2f* c, std::size_t m, Eigen::Vector2
   }
   return k;
 }
+#endif
+
+#if defined(__SSE2__)
+// The two chains of Andrew's monotone chain (lower and upper; each starts from one point that
+// stays), interleaved so that their dependency chains overlap, and without a branch for the
+// usual number of pops (0, 1 or 2; 3 or more take a branch). A chain is a stack S[0..k) whose
+// four bottom entries are NaN sentinels: a turn test against a sentinel is false, no pop, as
+// the plain chain does not test with fewer than two points. Its top four entries are mirrored
+// in registers, so the three tests that decide 0, 1, 2 or more pops run side by side: pop while
+// cross(S[k-2], S[k-1], b) <= 0 pops S[k-1] exactly when the tests (o, a), (p, o), (q, p)
+// against b are true in that order. The same float operations as cross().
+struct Chain {
+  Eigen::Vector2f* s;
+  std::size_t k;
+  __m128 a, o, p, q;  // S[k-1], S[k-2], S[k-3], S[k-4]: x in lane 0, y in lane 1
+};
+
+inline __m128 loadPoint(const Eigen::Vector2f& v) {
+  return _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(v.data())));
+}
+
+// cross(o, a, b) in lane 0: (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x).
+inline __m128 crossPs(__m128 o, __m128 a, __m128 b) {
+  const __m128 d1 = _mm_sub_ps(a, o), d2 = _mm_sub_ps(b, o);
+  const __m128 m = _mm_mul_ps(d1, _mm_shuffle_ps(d2, d2, _MM_SHUFFLE(3, 2, 0, 1)));
+  return _mm_sub_ss(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(3, 2, 1, 1)));
+}
+
+inline __m128 selectPs(__m128 mask, __m128 x, __m128 y) {  // mask ? x : y, lane by lane
+  return _mm_or_ps(_mm_and_ps(mask, x), _mm_andnot_ps(mask, y));
+}
+
+void startChain(Eigen::Vector2f* s, const Eigen::Vector2f& bottom, Chain* c) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int i = 0; i < 4; ++i) s[i] = Eigen::Vector2f(nan, nan);
+  s[4] = bottom;
+  c->s = s;
+  c->k = 5;
+  c->a = loadPoint(bottom);
+  c->o = c->p = c->q = loadPoint(s[0]);
+}
+
+inline void pushChain(const Eigen::Vector2f& point, Chain* c) {
+  const __m128 b = loadPoint(point), zero = _mm_setzero_ps();
+  const __m128 t1 = _mm_cmple_ss(crossPs(c->o, c->a, b), zero);
+  const __m128 t2 = _mm_cmple_ss(crossPs(c->p, c->o, b), zero);
+  const __m128 t3 = _mm_cmple_ss(crossPs(c->q, c->p, b), zero);
+  const int tests = _mm_movemask_ps(_mm_movelh_ps(_mm_unpacklo_ps(t1, t2), t3)) & 7;
+  std::size_t k = c->k;
+  if (tests == 7) {  // three pops or more: the plain loop on the stack
+    Eigen::Vector2f* s = c->s;
+    k -= 3;
+    while (cross(s[k - 2], s[k - 1], point) <= 0.0f) --k;
+    s[k++] = point;
+    c->k = k;
+    c->a = b;
+    c->o = loadPoint(s[k - 2]);
+    c->p = loadPoint(s[k - 3]);
+    c->q = loadPoint(s[k - 4]);
+    return;
+  }
+  // pops: 0 (t1 false), 1 (t1, not t2), 2 (t1, t2, not t3).
+  const std::size_t pops = static_cast<std::size_t>((tests & 1) + ((tests & 3) == 3));
+  const __m128 m1 = _mm_shuffle_ps(t1, t1, 0);
+  const __m128 m2 = _mm_and_ps(m1, _mm_shuffle_ps(t2, t2, 0));
+  const __m128 below = loadPoint(c->s[k - 5]);
+  const __m128 o = selectPs(m1, selectPs(m2, c->p, c->o), c->a);
+  const __m128 p = selectPs(m1, selectPs(m2, c->q, c->p), c->o);
+  const __m128 q = selectPs(m1, selectPs(m2, below, c->q), c->p);
+  k -= pops;
+  c->s[k] = point;
+  c->k = k + 1;
+  c->a = b;
+  c->o = o;
+  c->p = p;
+  c->q = q;
+}
+#endif
 
 // Rotating calipers over the convex polygon h[0..n) (counter-clockwise): the minimum-area
 // rectangle has a side on a hull edge; going round the edges, the vertices extreme along the
@@ -403,6 +482,29 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
     nc += k != kNoPoint;
   }
   cand[nc++] = first;
+#if defined(__SSE2__)
+  // The lower chain (first .. last) and the upper chain (last .. first; as a continuation of
+  // the lower one it never pops 'last') on their own stacks, interleaved; then the upper one's
+  // points above 'last' are appended to the lower one's, without 'first' again.
+  if (hull_.size() < cand_size + 8) hull_.resize(cand_size + 8);
+  Chain lower, upper;
+  startChain(hull_.data(), cand[0], &lower);
+  startChain(hull_.data() + 4 + lower_end, last, &upper);
+  const Eigen::Vector2f* lc = cand + 1;
+  const Eigen::Vector2f* uc = cand + lower_end + 1;
+  const std::size_t nl = lower_end - 1, nu = nc - lower_end - 1;
+  std::size_t i = 0;
+  for (; i < std::min(nl, nu); ++i) {
+    pushChain(lc[i], &lower);
+    pushChain(uc[i], &upper);
+  }
+  for (; i < nl; ++i) pushChain(lc[i], &lower);
+  for (; i < nu; ++i) pushChain(uc[i], &upper);
+  Eigen::Vector2f* hull = hull_.data() + 4;
+  const std::size_t nlow = lower.k - 4;
+  std::copy(upper.s + 5, upper.s + upper.k - 1, hull + nlow);
+  const std::size_t nh = nlow + (upper.k - 6);
+#else
   Eigen::Vector2f* hull = hull_.data();
   std::size_t k = 0;
   hull[k++] = cand[0];
@@ -410,7 +512,8 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   // Upper chain, last .. first: 'last' is on top and stays (pops need two points above it).
   k = chain(cand + lower_end + 1, nc - lower_end - 1, hull, k, k - 1);
   const std::size_t nh = k - 1;  // 'first' again
-  if (!along_x) {                // (y, x) is a reflection: restore x, y and counter-clockwise order
+#endif
+  if (!along_x) {  // (y, x) is a reflection: restore x, y and counter-clockwise order
     for (std::size_t i = 0; i < nh; ++i) hull[i] = Eigen::Vector2f(hull[i].y(), hull[i].x());
     std::reverse(hull, hull + nh);
   }

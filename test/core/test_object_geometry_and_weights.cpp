@@ -314,6 +314,43 @@ TEST(ObjectGeometry, ColumnHullEqualsAPlainSinglePassBitForBit) {
   }
 }
 
+// Chains with long runs of pops (the hull chains pop up to two points per candidate without a
+// branch and take a loop beyond): arcs of a parabola, whose every candidate pops its
+// predecessor, ended by an outlier that pops the whole run, and zig-zags; along x and along y,
+// with and without the outliers; the box equals the plain reference bit for bit.
+TEST(ObjectGeometry, ColumnHullWithDeepPopsEqualsAPlainSinglePassBitForBit) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> jitter(-0.02f, 0.02f);
+  for (int trial = 0; trial < 64; ++trial) {
+    const bool swap = trial % 2, outliers = (trial / 2) % 2, zigzag = (trial / 4) % 2;
+    const int n = 20 + 7 * trial;
+    LabeledCloud cloud;
+    std::vector<Eigen::Vector2f> pts;
+    auto add = [&](float a, float b) {
+      const float x = 5.0f + (swap ? b : a), y = 2.0f + (swap ? a : b);
+      test::addPoint(&cloud, x, y, 0.0f, 1);
+      pts.emplace_back(x, y);
+    };
+    if (outliers) add(-0.01f, 3.0f);  // before the first column: pops the upper chain's run
+    for (int i = 0; i < n; ++i) {
+      const float a = 0.05f * i + (trial > 32 ? jitter(rng) : 0.0f);
+      const float arc = 0.2f * (a - 1.0f) * (a - 1.0f);
+      add(a, zigzag ? (i % 2 ? arc : -arc) : -arc);  // lower run, popping one by one
+      add(a, zigzag ? (i % 3 ? -arc : arc) : arc);   // upper run
+    }
+    if (outliers) add(0.05f * n, -3.0f);  // past the last column: pops the lower chain's run
+    core::DetectedObject o;
+    Eigen::Vector2f c, s;
+    float yaw;
+    boxAndReference(cloud, pts, &o, &c, &s, &yaw);
+    EXPECT_EQ(o.obb_center.x(), c.x()) << trial;
+    EXPECT_EQ(o.obb_center.y(), c.y()) << trial;
+    EXPECT_EQ(o.obb_size.x(), s.x()) << trial;
+    EXPECT_EQ(o.obb_size.y(), s.y()) << trial;
+    EXPECT_EQ(o.obb_yaw_rad, yaw) << trial;
+  }
+}
+
 // Rotating calipers written plainly (every projection recomputed, branches), the reference for
 // the bit-for-bit check of the optimised minAreaRectangle (projections carried over, steps as
 // selects, the best edge's box recomputed at the end).
