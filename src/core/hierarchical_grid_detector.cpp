@@ -31,6 +31,13 @@ inline std::int32_t findRoot(std::int32_t* parent, std::int32_t i) {
   return i;
 }
 
+// Every union of this file links the larger root under the smaller and path halving only
+// moves a parent to its own parent, so a parent is never larger than its child: one ascending
+// pass makes every entry its root, where a findRoot() per entry would loop.
+inline void flattenRoots(std::int32_t* parent, std::int32_t n) {
+  for (std::int32_t s = 0; s < n; ++s) parent[s] = parent[parent[s]];
+}
+
 // The largest float <= t. For every float f (NaN included), f <= t compared in double holds
 // exactly when f <= floatAtMost(t) in float: the psi tests run in float without a conversion.
 float floatAtMost(double t) {
@@ -199,9 +206,10 @@ void HierarchicalGridDetector::roofBridges() {
   const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
   root_zmin_.resize(nds);
   root_zmax_.resize(nds);
+  flattenRoots(dense_parent_.data(), nds);
   for (std::int32_t s = 0; s < nds; ++s) {
     if (!dense_occupied_[s]) continue;
-    const std::int32_t root = findRoot(dense_parent_.data(), s);
+    const std::int32_t root = dense_parent_[s];
     if (root == s) {
       root_zmin_[s] = dense_zmin_[s];
       root_zmax_[s] = dense_zmax_[s];
@@ -221,7 +229,7 @@ void HierarchicalGridDetector::roofBridges() {
   dense_flat_.clear();
   for (std::int32_t s = 0; s < nds; ++s) {
     if (dense_occupied_[s] && dense_zmax_[s] - dense_zmin_[s] <= step) {
-      const std::int32_t root = findRoot(dense_parent_.data(), s);
+      const std::int32_t root = dense_parent_[s];
       if (root_zmax_[root] - root_zmin_[root] <= step) dense_flat_.push_back(s);
     }
   }
@@ -448,9 +456,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       }
     }
   }
-  for (std::int32_t s = 0; s < ncs; ++s) {
-    if (findRoot(coarse_parent_.data(), s) == s) ++stats_.coarse_blobs;
-  }
+  for (std::int32_t s = 0; s < ncs; ++s) stats_.coarse_blobs += coarse_parent_[s] == s;
 
   // --- Dense level: weighted densities; dense sub-cells are the nodes of the components. ----
   dense_occupied_.assign(nds, 0);
@@ -590,10 +596,14 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   dense_object_.assign(nds, -1);
   root_object_.assign(params_.dense_refinement ? nds : ncs, -1);
   std::int32_t ncomp = 0;
+  if (params_.dense_refinement) {
+    flattenRoots(dense_parent_.data(), nds);
+  } else {
+    flattenRoots(coarse_parent_.data(), ncs);
+  }
   auto componentOf = [&](std::int32_t s) -> std::int32_t {
-    const std::int32_t root = params_.dense_refinement
-                                  ? findRoot(dense_parent_.data(), s)
-                                  : findRoot(coarse_parent_.data(), dense_coarse_[s]);
+    const std::int32_t root =
+        params_.dense_refinement ? dense_parent_[s] : coarse_parent_[dense_coarse_[s]];
     if (root_object_[root] < 0) root_object_[root] = ncomp++;
     return root_object_[root];
   };
