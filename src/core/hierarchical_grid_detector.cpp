@@ -31,6 +31,13 @@ inline std::int32_t findRoot(std::int32_t* parent, std::int32_t i) {
   return i;
 }
 
+// Every union of this file links the larger root under the smaller and path halving only
+// moves a parent to its own parent, so a parent is never larger than its child: one ascending
+// pass makes every entry its root, where a findRoot() per entry would loop.
+inline void flattenRoots(std::int32_t* parent, std::int32_t n) {
+  for (std::int32_t s = 0; s < n; ++s) parent[s] = parent[parent[s]];
+}
+
 // The largest float <= t. For every float f (NaN included), f <= t compared in double holds
 // exactly when f <= floatAtMost(t) in float: the psi tests run in float without a conversion.
 float floatAtMost(double t) {
@@ -174,6 +181,33 @@ void HierarchicalGridDetector::buildBridgeTables() {
     bridge_flat_.push_back(o.y * nd_ + o.x);
     probe_margin_ = std::max({probe_margin_, std::abs(o.x), std::abs(o.y)});
   }
+  // Probe rows of step 3 for interior sub-cells: per table and direction bin, the four
+  // forward neighbours, then that bin's bridge offsets, padded with offset 0 to the table's
+  // longest row (so every row of a table has the same length and the probe loop the same
+  // trip count), and a mask of the row's real entries.
+  probe_flat_.clear();
+  probe_mask_.clear();
+  probe_rows_ok_ = true;
+  for (int table = 0; table < 3; ++table) {
+    int longest = 0;
+    for (int bin = 0; bin < kDirectionBins; ++bin) {
+      const int b = table * (kDirectionBins + 1) + bin;
+      longest = std::max(longest, bridge_begin_[b + 1] - bridge_begin_[b]);
+    }
+    probe_row_len_[table] = 4 + longest;
+    probe_row_begin_[table] = static_cast<std::int32_t>(probe_flat_.size());
+    probe_rows_ok_ = probe_rows_ok_ && 4 + longest <= 64;
+    for (int bin = 0; bin < kDirectionBins; ++bin) {
+      const int b = table * (kDirectionBins + 1) + bin;
+      for (const auto& o : kForward) probe_flat_.push_back(o[1] * nd_ + o[0]);
+      for (int k = bridge_begin_[b]; k < bridge_begin_[b + 1]; ++k) {
+        probe_flat_.push_back(bridge_flat_[k]);
+      }
+      const int len = 4 + bridge_begin_[b + 1] - bridge_begin_[b];
+      probe_flat_.resize(probe_flat_.size() + (4 + longest - len), 0);
+      probe_mask_.push_back(len >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << len) - 1);
+    }
+  }
 }
 
 inline bool HierarchicalGridDetector::linked(std::int32_t a, std::int32_t b) const {
@@ -199,9 +233,10 @@ void HierarchicalGridDetector::roofBridges() {
   const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
   root_zmin_.resize(nds);
   root_zmax_.resize(nds);
+  flattenRoots(dense_parent_.data(), nds);
   for (std::int32_t s = 0; s < nds; ++s) {
     if (!dense_occupied_[s]) continue;
-    const std::int32_t root = findRoot(dense_parent_.data(), s);
+    const std::int32_t root = dense_parent_[s];
     if (root == s) {
       root_zmin_[s] = dense_zmin_[s];
       root_zmax_[s] = dense_zmax_[s];
@@ -221,7 +256,7 @@ void HierarchicalGridDetector::roofBridges() {
   dense_flat_.clear();
   for (std::int32_t s = 0; s < nds; ++s) {
     if (dense_occupied_[s] && dense_zmax_[s] - dense_zmin_[s] <= step) {
-      const std::int32_t root = findRoot(dense_parent_.data(), s);
+      const std::int32_t root = dense_parent_[s];
       if (root_zmax_[root] - root_zmin_[root] <= step) dense_flat_.push_back(s);
     }
   }
@@ -448,9 +483,7 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       }
     }
   }
-  for (std::int32_t s = 0; s < ncs; ++s) {
-    if (findRoot(coarse_parent_.data(), s) == s) ++stats_.coarse_blobs;
-  }
+  for (std::int32_t s = 0; s < ncs; ++s) stats_.coarse_blobs += coarse_parent_[s] == s;
 
   // --- Dense level: weighted densities; dense sub-cells are the nodes of the components. ----
   dense_occupied_.assign(nds, 0);
@@ -533,6 +566,31 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       const std::int32_t cell = dense_cell_[s];
       const std::int32_t* here = slot_map + cell;
       root = findRoot(parent, s);
+      if (inside && probe_rows_ok_) {
+        // Interior sub-cell: one row of probes (the four forward neighbours, then the
+        // bridges of its table and direction bin; only the forward ones for the sensor's own
+        // sub-cells), which of them are dense without branches, then the psi tests and links
+        // of those in the row's order: the same links in the same order as one loop for the
+        // neighbours and one for the bridges.
+        const float cx = (ix + 0.5f) * dcell + origin, cy = (iy + 0.5f) * dcell + origin;
+        const float d2 = cx * cx + cy * cy;
+        const int table = d2 > gap_range2 ? 2 : d2 > bridge_range2 ? 1 : 0;
+        const int bin = directionBin(cx, cy);
+        const int len = probe_row_len_[table];
+        const std::int32_t* row = probe_flat_.data() + probe_row_begin_[table] + bin * len;
+        const std::uint64_t mask =
+            d2 < dcell * dcell ? std::uint64_t{0xf} : probe_mask_[table * kDirectionBins + bin];
+        std::uint64_t dense_row = 0;
+        for (int j = 0; j < len; ++j) {
+          dense_row |= static_cast<std::uint64_t>(denseBit(cell + row[j])) << j;
+        }
+        for (dense_row &= mask; dense_row; dense_row &= dense_row - 1) {
+          const int j = __builtin_ctzll(dense_row);
+          const std::int32_t r = here[row[j]];
+          if (psiOk(ks, key[r]) && unite(r) && j >= 4) ++stats_.bridges;
+        }
+        continue;
+      }
       if (inside) {
         // Which of the four are dense first, without branches (their outcomes are
         // data-dependent), then the psi tests and links of those in the same order.
@@ -590,10 +648,14 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   dense_object_.assign(nds, -1);
   root_object_.assign(params_.dense_refinement ? nds : ncs, -1);
   std::int32_t ncomp = 0;
+  if (params_.dense_refinement) {
+    flattenRoots(dense_parent_.data(), nds);
+  } else {
+    flattenRoots(coarse_parent_.data(), ncs);
+  }
   auto componentOf = [&](std::int32_t s) -> std::int32_t {
-    const std::int32_t root = params_.dense_refinement
-                                  ? findRoot(dense_parent_.data(), s)
-                                  : findRoot(coarse_parent_.data(), dense_coarse_[s]);
+    const std::int32_t root =
+        params_.dense_refinement ? dense_parent_[s] : coarse_parent_[dense_coarse_[s]];
     if (root_object_[root] < 0) root_object_[root] = ncomp++;
     return root_object_[root];
   };

@@ -628,6 +628,47 @@ TEST(HierarchicalGridInput, ObjectsAtTheGridBorderAreFoundAsInALargerGrid) {
   }
 }
 
+// The same with the far and farthest bridge tables (step 3) in use inside the 10 m grid and
+// the longest bridges: interior sub-cells probe one padded row per table and direction bin,
+// border ones probe the neighbours and bridges one by one; both make the same links in the
+// same order (same objects, same number of bridges).
+TEST(HierarchicalGridInput, FarBridgeTablesAtTheGridBorderGiveTheSameLinksAsInside) {
+  LabeledCloud cloud;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const float centres[][2] = {{9.8f, 0.3f}, {-9.8f, -2.0f}, {3.0f, 9.8f}, {-1.0f, -9.8f},
+                              {9.8f, 9.8f}, {-9.8f, 9.8f},  {5.0f, 2.0f}, {2.5f, -1.0f}};
+  for (const auto& c : centres) {
+    for (int i = 0; i < 120; ++i) {
+      const float a = u(rng), b = u(rng);
+      if ((a > 0.3f && a < 0.5f) || (b > 0.4f && b < 0.55f)) continue;  // holes both ways
+      test::addPoint(&cloud, std::clamp(c[0] - 0.4f + 0.8f * a, -10.19f, 10.19f),
+                     std::clamp(c[1] - 0.8f + 1.6f * b, -10.19f, 10.19f), 1.5f * u(rng), 1);
+    }
+  }
+  for (const double gap_range : {4.0, 100.0}) {
+    HierarchicalGridDetectorParams small;
+    small.grid_half_extent_m = 10.0;
+    small.bridge_range_m = 2.0;
+    small.gap_bridge_range_m = gap_range;
+    small.far_radial_bridge_subcells = 8;
+    small.dense_min_weighted_points = 2.0;
+    small.min_weighted_points = 0.0;
+    HierarchicalGridDetectorParams large = small;
+    large.grid_half_extent_m = 20.0;
+    HierarchicalGridDetector det_small(small), det_large(large);
+    std::vector<DetectedObject> a, b;
+    det_small.detect(cloud, &a);
+    det_large.detect(cloud, &b);
+    EXPECT_GT(det_small.stats().bridges, 0u);
+    EXPECT_EQ(det_small.stats().bridges, det_large.stats().bridges);
+    EXPECT_EQ(det_small.stats().components, det_large.stats().components);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_GE(a.size(), 4u);
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].indices, b[i].indices);
+  }
+}
+
 TEST(HierarchicalGridParams, ValidateNamesTheBadField) {
   HierarchicalGridDetectorParams p;
   EXPECT_EQ(core::validate(p), "");

@@ -190,6 +190,12 @@ class HierarchicalGridDetector : public ObjectDetector {
   std::vector<std::int32_t> bridge_begin_;  // [near, far][direction bin] -> offsets begin
   std::vector<std::int32_t> bridge_flat_;   // bridge_offsets_ as flat grid index offsets
   int probe_margin_ = 1;  // [sub-cells] largest probe offset: farther from the border, no checks
+  // Step 3's probes per table (near, far, farthest) and direction bin, see buildBridgeTables().
+  std::vector<std::int32_t> probe_flat_;   // rows of flat offsets: 4 forward, bridges, padding
+  std::vector<std::uint64_t> probe_mask_;  // [table][bin]: the row's real entries
+  std::int32_t probe_row_begin_[3] = {0, 0, 0};
+  int probe_row_len_[3] = {0, 0, 0};  // per table: the length of all its rows
+  bool probe_rows_ok_ = false;        // rows fit one 64-bit mask (else the loops per kind)
   // Per touched sub-cell (slot).
   std::vector<std::int32_t> dense_cell_;    // flat grid index
   std::vector<CellXY> dense_xy_;            // grid column and row
