@@ -335,13 +335,46 @@ void GridSegmenter::fillTerrain() {
   const std::uint64_t window_mask = (std::uint64_t{1} << (2 * max_ring + 1)) - 1;
   const std::size_t bw = bit_words_;
   if (use_bits) {
-    for (int r = 0; r < rows; ++r) {
-      std::uint64_t* near = terrain_near_.data() + static_cast<std::size_t>(r) * bw;
-      std::fill(near, near + bw, std::uint64_t{0});
-      for (int rr = std::max(0, r - max_ring); rr <= std::min(rows - 1, r + max_ring); ++rr) {
-        const std::uint64_t* w = terrain_bits_.data() + static_cast<std::size_t>(rr) * bw;
-        for (std::size_t i = 0; i < bw; ++i) near[i] |= w[i];
+    // The OR over the rows r - max_ring .. r + max_ring, for every r, with three ORs per word
+    // instead of 2 * max_ring + 1: the rows, padded with max_ring zero rows on both sides, are cut
+    // into blocks of 2 * max_ring + 1; `fwd` ORs each block from its start, `bwd` from its end.
+    // A window of that many rows is either one whole block or the end of one block and the start
+    // of the next: bwd at its first row | fwd at its last row.
+    const int span = 2 * max_ring + 1;
+    const int total = rows + 2 * max_ring;  // padded rows; padded row v is row v - max_ring
+    const std::size_t words = static_cast<std::size_t>(total) * bw;
+    near_fwd_.resize(words);
+    near_bwd_.resize(words);
+    zero_row_.assign(bw, 0);
+    auto rowBits = [&](int v) {
+      const int rr = v - max_ring;
+      return rr < 0 || rr >= rows ? zero_row_.data()
+                                  : terrain_bits_.data() + static_cast<std::size_t>(rr) * bw;
+    };
+    for (int v = 0; v < total; ++v) {
+      const std::uint64_t* w = rowBits(v);
+      std::uint64_t* f = near_fwd_.data() + static_cast<std::size_t>(v) * bw;
+      if (v % span == 0) {
+        std::copy(w, w + bw, f);
+      } else {
+        for (std::size_t i = 0; i < bw; ++i) f[i] = f[i - bw] | w[i];
       }
+    }
+    for (int v = total - 1; v >= 0; --v) {
+      const std::uint64_t* w = rowBits(v);
+      std::uint64_t* b = near_bwd_.data() + static_cast<std::size_t>(v) * bw;
+      if (v % span == span - 1 || v == total - 1) {
+        std::copy(w, w + bw, b);
+      } else {
+        for (std::size_t i = 0; i < bw; ++i) b[i] = b[i + bw] | w[i];
+      }
+    }
+    for (int r = 0; r < rows; ++r) {
+      // Rows r - max_ring .. r + max_ring are padded rows r .. r + 2 * max_ring.
+      std::uint64_t* near = terrain_near_.data() + static_cast<std::size_t>(r) * bw;
+      const std::uint64_t* b = near_bwd_.data() + static_cast<std::size_t>(r) * bw;
+      const std::uint64_t* f = near_fwd_.data() + static_cast<std::size_t>(r + 2 * max_ring) * bw;
+      for (std::size_t i = 0; i < bw; ++i) near[i] = b[i] | f[i];
     }
   }
   // Terrain bits of columns k - max_ring .. k + max_ring of row rr of `map`.

@@ -101,7 +101,7 @@ void expectSameAsReference(core::GridSegmenter* seg, const CloudXYZIRT& cloud,
 }
 
 std::vector<core::GridSegmenterParams> variants() {
-  std::vector<core::GridSegmenterParams> v(5);
+  std::vector<core::GridSegmenterParams> v(7);
   v[1].hough.enabled = false;
   v[2].ground_in_sparse_cells = false;
   v[2].min_points_per_cell = 6;
@@ -109,6 +109,10 @@ std::vector<core::GridSegmenterParams> variants() {
   v[3].max_range_m = 50.0;
   v[3].terrain_fill_iterations = 3;
   v[4].terrain_fill_iterations = 30;  // beyond the terrain bit windows: plain ring scan
+  // The smallest and largest bit windows (fillTerrain ORs the terrain rows in blocks of
+  // 2 * terrain_fill_iterations + 1 rows; 3 and 57 do not divide the padded row count).
+  v[5].terrain_fill_iterations = 1;
+  v[6].terrain_fill_iterations = 28;
   return v;
 }
 

@@ -140,6 +140,8 @@ class GridSegmenter {
   std::size_t bit_words_ = 0;                // 64-bit words per row of terrain_bits_
   std::vector<std::uint64_t> terrain_near_;  // terrain_bits_ ORed over the rows within
                                              //     terrain_fill_iterations (overwritten)
+  std::vector<std::uint64_t> near_fwd_, near_bwd_;  // scratch of terrain_near_: block-wise ORs
+  std::vector<std::uint64_t> zero_row_;              // one row of zero words (outside the grid)
   // Per slot + 1 (entry 0: points without a cell) for the per-point pass: points below
   // split_z [m] are ground, the others get `label` (a SegmentClass). Filled by
   // classifyCells, then the cells the Hough refiner turned tall are patched.
