@@ -357,7 +357,8 @@ void GridSegmenter::fillTerrain() {
       if (v % span == 0) {
         std::copy(w, w + bw, f);
       } else {
-        for (std::size_t i = 0; i < bw; ++i) f[i] = f[i - bw] | w[i];
+        const std::uint64_t* prev = f - bw;  // the previous padded row (v >= 1 here)
+        for (std::size_t i = 0; i < bw; ++i) f[i] = prev[i] | w[i];
       }
     }
     for (int v = total - 1; v >= 0; --v) {
