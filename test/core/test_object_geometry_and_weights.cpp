@@ -281,6 +281,20 @@ void boxAndReference(const LabeledCloud& cloud, const std::vector<Eigen::Vector2
   referenceColumnBox(pts, center, size, yaw);
 }
 
+// The two boxes of boxAndReference() are equal (centre, size, yaw).
+void expectBoxEqualsReference(const LabeledCloud& cloud, const std::vector<Eigen::Vector2f>& pts,
+                              int trial) {
+  core::DetectedObject o;
+  Eigen::Vector2f c, s;
+  float yaw;
+  boxAndReference(cloud, pts, &o, &c, &s, &yaw);
+  EXPECT_EQ(o.obb_center.x(), c.x()) << trial;
+  EXPECT_EQ(o.obb_center.y(), c.y()) << trial;
+  EXPECT_EQ(o.obb_size.x(), s.x()) << trial;
+  EXPECT_EQ(o.obb_size.y(), s.y()) << trial;
+  EXPECT_EQ(o.obb_yaw_rad, yaw) << trial;
+}
+
 // Coordinates on a 1 cm lattice: many points tie for a column's extreme, in both halves of the
 // point list, and for the box's minimum and maximum; odd and even point counts, both axes.
 TEST(ObjectGeometry, ColumnHullEqualsAPlainSinglePassBitForBit) {
@@ -302,15 +316,7 @@ TEST(ObjectGeometry, ColumnHullEqualsAPlainSinglePassBitForBit) {
       test::addPoint(&cloud, x, y, 0.01f * cm(rng), 1);
       pts.emplace_back(x, y);
     }
-    core::DetectedObject o;
-    Eigen::Vector2f c, s;
-    float yaw;
-    boxAndReference(cloud, pts, &o, &c, &s, &yaw);
-    EXPECT_EQ(o.obb_center.x(), c.x()) << trial;
-    EXPECT_EQ(o.obb_center.y(), c.y()) << trial;
-    EXPECT_EQ(o.obb_size.x(), s.x()) << trial;
-    EXPECT_EQ(o.obb_size.y(), s.y()) << trial;
-    EXPECT_EQ(o.obb_yaw_rad, yaw) << trial;
+    expectBoxEqualsReference(cloud, pts, trial);
   }
 }
 
@@ -339,15 +345,7 @@ TEST(ObjectGeometry, ColumnHullWithDeepPopsEqualsAPlainSinglePassBitForBit) {
       add(a, zigzag ? (i % 3 ? -arc : arc) : arc);   // upper run
     }
     if (outliers) add(0.05f * n, -3.0f);  // past the last column: pops the lower chain's run
-    core::DetectedObject o;
-    Eigen::Vector2f c, s;
-    float yaw;
-    boxAndReference(cloud, pts, &o, &c, &s, &yaw);
-    EXPECT_EQ(o.obb_center.x(), c.x()) << trial;
-    EXPECT_EQ(o.obb_center.y(), c.y()) << trial;
-    EXPECT_EQ(o.obb_size.x(), s.x()) << trial;
-    EXPECT_EQ(o.obb_size.y(), s.y()) << trial;
-    EXPECT_EQ(o.obb_yaw_rad, yaw) << trial;
+    expectBoxEqualsReference(cloud, pts, trial);
   }
 }
 
