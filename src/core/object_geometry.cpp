@@ -228,6 +228,39 @@ inline void pushChain(const Eigen::Vector2f& point, Chain* c) {
 }
 #endif
 
+// Edge i of the polygon h[0..n) (to h[i + 1], the last one to h[0]): its length len[i] and
+// unit direction (ux[i], uy[i]) = e / len[i] (not finite when len[i] is 0), by the operations
+// of Eigen's e.norm() and e / len. Computed for all edges before the calipers, four per step:
+// one square root and two divisions per edge were the calipers' longest instructions, and
+// packed they cost what one scalar one does (IEEE square root and division are exact to the
+// last bit either way).
+void edgeAxes(const Eigen::Vector2f* h, std::size_t n, float* ux, float* uy, float* len) {
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  static_assert(sizeof(Eigen::Vector2f) == 2 * sizeof(float), "packed xy pairs");
+  const float* f = n ? h[0].data() : nullptr;
+  for (; i + 5 <= n; i += 4) {  // edges i .. i + 3 read points i .. i + 4
+    const __m128 p01 = _mm_loadu_ps(f + 2 * i), p23 = _mm_loadu_ps(f + 2 * i + 4);
+    const __m128 q01 = _mm_loadu_ps(f + 2 * i + 2), q23 = _mm_loadu_ps(f + 2 * i + 6);
+    const __m128 ex = _mm_sub_ps(_mm_shuffle_ps(q01, q23, _MM_SHUFFLE(2, 0, 2, 0)),
+                                 _mm_shuffle_ps(p01, p23, _MM_SHUFFLE(2, 0, 2, 0)));
+    const __m128 ey = _mm_sub_ps(_mm_shuffle_ps(q01, q23, _MM_SHUFFLE(3, 1, 3, 1)),
+                                 _mm_shuffle_ps(p01, p23, _MM_SHUFFLE(3, 1, 3, 1)));
+    const __m128 l = _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(ex, ex), _mm_mul_ps(ey, ey)));
+    _mm_storeu_ps(len + i, l);
+    _mm_storeu_ps(ux + i, _mm_div_ps(ex, l));
+    _mm_storeu_ps(uy + i, _mm_div_ps(ey, l));
+  }
+#endif
+  for (; i < n; ++i) {
+    const std::size_t j = i + 1 < n ? i + 1 : 0;
+    const float ex = h[j].x() - h[i].x(), ey = h[j].y() - h[i].y();
+    len[i] = std::sqrt(ex * ex + ey * ey);
+    ux[i] = ex / len[i];
+    uy[i] = ey / len[i];
+  }
+}
+
 // Rotating calipers over the convex polygon h[0..n) (counter-clockwise): the minimum-area
 // rectangle has a side on a hull edge; going round the edges, the vertices extreme along the
 // edge, across it and against it only move forward, so all edges are tried in O(n). The yaw
@@ -238,7 +271,8 @@ inline void pushChain(const Eigen::Vector2f& point, Chain* c) {
 // takes two steps as selects (a step that fails leaves it where it is, so a further step fails
 // the same way) and only a third one as a loop, rarely entered; the best edge is kept as
 // indices and its box recomputed at the end from the same floats by the same operations.
-void calipers(const Eigen::Vector2f* h, std::size_t n, Eigen::Vector2f* center,
+// `scratch` holds at least 3 * n floats.
+void calipers(const Eigen::Vector2f* h, std::size_t n, float* scratch, Eigen::Vector2f* center,
               Eigen::Vector2f* size, float* yaw_rad) {
   *center = Eigen::Vector2f::Zero();
   *size = Eigen::Vector2f::Zero();
@@ -256,22 +290,18 @@ void calipers(const Eigen::Vector2f* h, std::size_t n, Eigen::Vector2f* center,
   };
   // Projection of vertex k on (dx, dy): the same products and sum as Eigen's dot().
   auto proj = [h](std::size_t k, float dx, float dy) { return h[k].x() * dx + h[k].y() * dy; };
-  // Unit direction of edge i (as Eigen's e.norm() and e / len); its length.
-  auto axis = [&](std::size_t i, float* ux, float* uy) {
-    const float ex = h[next(i)].x() - h[i].x(), ey = h[next(i)].y() - h[i].y();
-    const float len = std::sqrt(ex * ex + ey * ey);
-    *ux = ex / len;
-    *uy = ey / len;
-    return len;
-  };
+  float* const edge_ux = scratch;
+  float* const edge_uy = scratch + n;
+  float* const edge_len = scratch + 2 * n;
+  edgeAxes(h, n, edge_ux, edge_uy, edge_len);
   std::size_t a = 0, b = 0, c = 0;  // max along u, max along v (inward), min along u
   std::size_t best_i = n, best_a = 0, best_b = 0, best_c = 0;
   bool init = false;
   double best_area = std::numeric_limits<double>::infinity();
-  const std::size_t steps = std::min<std::size_t>(n, 2);  // a caliper moves at most n per edge
+  const std::size_t steps = 2;  // taken as selects; a caliper moves at most n per edge
   for (std::size_t i = 0; i < n; ++i) {
-    float ux, uy;
-    if (axis(i, &ux, &uy) <= 0.0f) continue;
+    if (edge_len[i] <= 0.0f) continue;
+    const float ux = edge_ux[i], uy = edge_uy[i];
     const float vx = -uy, vy = ux;  // inward normal of a counter-clockwise polygon
     float umax, vmax, umin;
     if (!init) {  // the first vertices with the largest (smallest) projections
@@ -288,21 +318,28 @@ void calipers(const Eigen::Vector2f* h, std::size_t n, Eigen::Vector2f* center,
       }
       init = true;
     } else {
-      // Advance while the next vertex is at least as far (<= for the minimum); the projection
-      // of the vertex reached is carried over. x > y ? x : y keeps y on ties, as the step does.
+      // Advance while the next vertex is at least as far (<= for the minimum). The first two
+      // steps of each caliper are decided together from the projections of the vertex it is at
+      // (d0) and of the next two (d1, d2), all loaded as soon as the caliper's index is known:
+      // step 1 is taken when d1 >= d0, step 2 when step 1 is and d2 >= d1 (a failed step 1
+      // would test d1 against d0 again). So the index, carried from edge to edge, waits for one
+      // load-project-compare per edge, not two in a row. (n >= 2 here: an edge of nonzero
+      // length has two vertices; so steps == 2.) The projection of the vertex reached is
+      // recomputed from its index, off that chain, with the same operations.
+      {
+        const std::size_t a1 = next(a), a2 = next(a1);
+        const std::size_t b1 = next(b), b2 = next(b1);
+        const std::size_t c1 = next(c), c2 = next(c1);
+        const float a0p = proj(a, ux, uy), a1p = proj(a1, ux, uy), a2p = proj(a2, ux, uy);
+        const float b0p = proj(b, vx, vy), b1p = proj(b1, vx, vy), b2p = proj(b2, vx, vy);
+        const float c0p = proj(c, ux, uy), c1p = proj(c1, ux, uy), c2p = proj(c2, ux, uy);
+        a = pick(a1p >= a0p, pick(a2p >= a1p, a2, a1), a);
+        b = pick(b1p >= b0p, pick(b2p >= b1p, b2, b1), b);
+        c = pick(c1p <= c0p, pick(c2p <= c1p, c2, c1), c);
+      }
       umax = proj(a, ux, uy);
       vmax = proj(b, vx, vy);
       umin = proj(c, ux, uy);
-      for (std::size_t s = 0; s < steps; ++s) {
-        const std::size_t na = next(a), nb = next(b), nc = next(c);
-        const float du = proj(na, ux, uy), dv = proj(nb, vx, vy), dc = proj(nc, ux, uy);
-        a = pick(du >= umax, na, a);
-        b = pick(dv >= vmax, nb, b);
-        c = pick(dc <= umin, nc, c);
-        umax = umax > du ? umax : du;
-        vmax = vmax > dv ? vmax : dv;
-        umin = umin < dc ? umin : dc;
-      }
       for (std::size_t s = steps; s < n && proj(next(a), ux, uy) >= umax; ++s) {
         a = next(a);
         umax = proj(a, ux, uy);
@@ -332,8 +369,7 @@ void calipers(const Eigen::Vector2f* h, std::size_t n, Eigen::Vector2f* center,
     best_c = pick(better, c, best_c);
   }
   if (best_i == n) return;
-  float ux, uy;
-  axis(best_i, &ux, &uy);
+  const float ux = edge_ux[best_i], uy = edge_uy[best_i];
   const Eigen::Vector2f u(ux, uy), v(-uy, ux);
   const float umax = proj(best_a, ux, uy), vmax = proj(best_b, v.x(), v.y());
   const float umin = proj(best_c, ux, uy), vmin = proj(best_i, v.x(), v.y());
@@ -380,7 +416,8 @@ void convexHull2d(std::vector<Eigen::Vector2f>* points, std::vector<Eigen::Vecto
 
 void minAreaRectangle(const std::vector<Eigen::Vector2f>& hull, Eigen::Vector2f* center,
                       Eigen::Vector2f* size, float* yaw_rad) {
-  calipers(hull.data(), hull.size(), center, size, yaw_rad);
+  std::vector<float> scratch(3 * hull.size());
+  calipers(hull.data(), hull.size(), scratch.data(), center, size, yaw_rad);
 }
 
 void ObjectGeometry::compute(const LabeledCloud& cloud,
@@ -519,7 +556,8 @@ void ObjectGeometry::finish(const ObjectMoments& m, const Eigen::Vector2f* pts,
   }
   Eigen::Vector2f c, s;
   float yaw = 0.0f;
-  calipers(hull, nh, &c, &s, &yaw);
+  if (axes_.size() < 3 * nh) axes_.resize(3 * nh);
+  calipers(hull, nh, axes_.data(), &c, &s, &yaw);
   object->obb_center = Eigen::Vector3f(c.x(), c.y(), 0.5f * (mnz + mxz));
   object->obb_size = Eigen::Vector3f(s.x(), s.y(), mxz - mnz);
   object->obb_yaw_rad = yaw;

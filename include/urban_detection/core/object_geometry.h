@@ -77,6 +77,7 @@ class ObjectGeometry {
   std::vector<std::uint64_t> keys_;    // per column: keys of its lowest and highest point
   std::vector<Eigen::Vector2f> cand_;  // hull candidates: lower chain, then upper chain
   std::vector<Eigen::Vector2f> hull_;  // convex hull, counter-clockwise
+  std::vector<float> axes_;            // its edges' directions and lengths, see calipers()
 };
 
 /// Convex hull of 2-D points (Andrew's monotone chain), counter-clockwise, no collinear points;
