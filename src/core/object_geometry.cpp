@@ -157,28 +157,33 @@ inline std::size_t chain(const Eigen::Vector2f* c, std::size_t m, Eigen::Vector2
 // usual number of pops (0, 1 or 2; 3 or more take a branch). A chain is a stack S[0..k) whose
 // four bottom entries are NaN sentinels: a turn test against a sentinel is false, no pop, as
 // the plain chain does not test with fewer than two points. Its top four entries are mirrored
-// in registers, so the three tests that decide 0, 1, 2 or more pops run side by side: pop while
-// cross(S[k-2], S[k-1], b) <= 0 pops S[k-1] exactly when the tests (o, a), (p, o), (q, p)
-// against b are true in that order. The same float operations as cross().
+// in registers, x and y apart (lane j holds S[k-1-j]), so the three tests that decide 0, 1, 2
+// or more pops run in lanes 0, 1, 2 of one vector: pop while cross(S[k-2], S[k-1], b) <= 0
+// pops S[k-1] exactly when the tests of (S[k-2], S[k-1]), (S[k-3], S[k-2]), (S[k-4], S[k-3])
+// against b are true in that order. Lane j computes cross(S[k-2-j], S[k-1-j], b) with the same
+// float operations as cross(); one test per lane costs a third of the instructions of three
+// tests in lanes 0 and 1.
 struct Chain {
   Eigen::Vector2f* s;
   std::size_t k;
-  __m128 a, o, p, q;  // S[k-1], S[k-2], S[k-3], S[k-4]: x in lane 0, y in lane 1
+  __m128 x, y;  // lane j: S[k-1-j] (j = 0..3)
 };
 
-inline __m128 loadPoint(const Eigen::Vector2f& v) {
-  return _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(v.data())));
+inline __m128 shiftDown(__m128 v) {  // lane j <- lane j + 1, lane 3 <- 0
+  return _mm_castsi128_ps(_mm_srli_si128(_mm_castps_si128(v), 4));
+}
+inline __m128 shiftUp(__m128 v) {  // lane j <- lane j - 1, lane 0 <- 0
+  return _mm_castsi128_ps(_mm_slli_si128(_mm_castps_si128(v), 4));
+}
+inline __m128 toLane3(float f) {
+  return _mm_castsi128_ps(_mm_slli_si128(_mm_castps_si128(_mm_set_ss(f)), 12));
 }
 
-// cross(o, a, b) in lane 0: (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x).
-inline __m128 crossPs(__m128 o, __m128 a, __m128 b) {
-  const __m128 d1 = _mm_sub_ps(a, o), d2 = _mm_sub_ps(b, o);
-  const __m128 m = _mm_mul_ps(d1, _mm_shuffle_ps(d2, d2, _MM_SHUFFLE(3, 2, 0, 1)));
-  return _mm_sub_ss(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(3, 2, 1, 1)));
-}
-
-inline __m128 selectPs(__m128 mask, __m128 x, __m128 y) {  // mask ? x : y, lane by lane
-  return _mm_or_ps(_mm_and_ps(mask, x), _mm_andnot_ps(mask, y));
+// Mirrors the top four entries of c->s[0..c->k) in c->x, c->y.
+inline void loadTop(Chain* c) {
+  const Eigen::Vector2f* t = c->s + c->k - 4;
+  c->x = _mm_setr_ps(t[3].x(), t[2].x(), t[1].x(), t[0].x());
+  c->y = _mm_setr_ps(t[3].y(), t[2].y(), t[1].y(), t[0].y());
 }
 
 void startChain(Eigen::Vector2f* s, const Eigen::Vector2f& bottom, Chain* c) {
@@ -187,16 +192,17 @@ void startChain(Eigen::Vector2f* s, const Eigen::Vector2f& bottom, Chain* c) {
   s[4] = bottom;
   c->s = s;
   c->k = 5;
-  c->a = loadPoint(bottom);
-  c->o = c->p = c->q = loadPoint(s[0]);
+  loadTop(c);
 }
 
 inline void pushChain(const Eigen::Vector2f& point, Chain* c) {
-  const __m128 b = loadPoint(point), zero = _mm_setzero_ps();
-  const __m128 t1 = _mm_cmple_ss(crossPs(c->o, c->a, b), zero);
-  const __m128 t2 = _mm_cmple_ss(crossPs(c->p, c->o, b), zero);
-  const __m128 t3 = _mm_cmple_ss(crossPs(c->q, c->p, b), zero);
-  const int tests = _mm_movemask_ps(_mm_movelh_ps(_mm_unpacklo_ps(t1, t2), t3)) & 7;
+  const __m128 bx = _mm_set1_ps(point.x()), by = _mm_set1_ps(point.y());
+  const __m128 ox = shiftDown(c->x), oy = shiftDown(c->y);  // lane j: S[k-2-j]
+  // (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x), a = S[k-1-j], o = S[k-2-j]
+  const __m128 cr = _mm_sub_ps(_mm_mul_ps(_mm_sub_ps(c->x, ox), _mm_sub_ps(by, oy)),
+                               _mm_mul_ps(_mm_sub_ps(c->y, oy), _mm_sub_ps(bx, ox)));
+  const __m128 t = _mm_cmple_ps(cr, _mm_setzero_ps());
+  const int tests = _mm_movemask_ps(t) & 7;
   std::size_t k = c->k;
   if (tests == 7) {  // three pops or more: the plain loop on the stack
     Eigen::Vector2f* s = c->s;
@@ -204,27 +210,27 @@ inline void pushChain(const Eigen::Vector2f& point, Chain* c) {
     while (cross(s[k - 2], s[k - 1], point) <= 0.0f) --k;
     s[k++] = point;
     c->k = k;
-    c->a = b;
-    c->o = loadPoint(s[k - 2]);
-    c->p = loadPoint(s[k - 3]);
-    c->q = loadPoint(s[k - 4]);
+    loadTop(c);
     return;
   }
-  // pops: 0 (t1 false), 1 (t1, not t2), 2 (t1, t2, not t3).
+  // pops: 0 (t1 false), 1 (t1, not t2), 2 (t1, t2, not t3). Lanes 1..3 of the new top: pops 0:
+  // S[k-1..k-3] (shifted up); 1: S[k-2..k-4] (as they are); 2: S[k-3..k-5] (shifted down,
+  // S[k-5] from the stack). Lane 0: the point.
   const std::size_t pops = static_cast<std::size_t>((tests & 1) + ((tests & 3) == 3));
-  const __m128 m1 = _mm_shuffle_ps(t1, t1, 0);
-  const __m128 m2 = _mm_and_ps(m1, _mm_shuffle_ps(t2, t2, 0));
-  const __m128 below = loadPoint(c->s[k - 5]);
-  const __m128 o = selectPs(m1, selectPs(m2, c->p, c->o), c->a);
-  const __m128 p = selectPs(m1, selectPs(m2, c->q, c->p), c->o);
-  const __m128 q = selectPs(m1, selectPs(m2, below, c->q), c->p);
+  const __m128 m1 = _mm_shuffle_ps(t, t, 0);                             // pops >= 1
+  const __m128 m2 = _mm_and_ps(m1, _mm_shuffle_ps(t, t, _MM_SHUFFLE(1, 1, 1, 1)));  // pops 2
+  const __m128 only1 = _mm_xor_ps(m1, m2);                               // pops == 1
+  const Eigen::Vector2f& below = c->s[k - 5];
+  const __m128 x2 = _mm_or_ps(ox, toLane3(below.x())), y2 = _mm_or_ps(oy, toLane3(below.y()));
+  const __m128 x = _mm_or_ps(_mm_or_ps(_mm_and_ps(m2, x2), _mm_and_ps(only1, c->x)),
+                             _mm_andnot_ps(m1, shiftUp(c->x)));
+  const __m128 y = _mm_or_ps(_mm_or_ps(_mm_and_ps(m2, y2), _mm_and_ps(only1, c->y)),
+                             _mm_andnot_ps(m1, shiftUp(c->y)));
   k -= pops;
   c->s[k] = point;
   c->k = k + 1;
-  c->a = b;
-  c->o = o;
-  c->p = p;
-  c->q = q;
+  c->x = _mm_move_ss(x, bx);
+  c->y = _mm_move_ss(y, by);
 }
 #endif
 
