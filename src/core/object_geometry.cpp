@@ -304,7 +304,16 @@ void calipers(const Eigen::Vector2f* h, std::size_t n, float* scratch, Eigen::Ve
   std::size_t best_i = n, best_a = 0, best_b = 0, best_c = 0;
   bool init = false;
   double best_area = std::numeric_limits<double>::infinity();
-  const std::size_t steps = 2;  // taken as selects; a caliper moves at most n per edge
+  const std::size_t steps = 3;  // taken as selects; a caliper moves at most n per edge
+  const bool third_step = n >= 3;
+  // Index k advanced by up to three steps along (dx, dy), see below.
+  auto advance = [&](std::size_t k, float dx, float dy, auto farther) {
+    const std::size_t k1 = next(k), k2 = next(k1), k3 = next(k2);
+    const float d0 = proj(k, dx, dy), d1 = proj(k1, dx, dy), d2 = proj(k2, dx, dy);
+    const float d3 = proj(k3, dx, dy);
+    const bool s3 = third_step && farther(d3, d2);
+    return pick(farther(d1, d0), pick(farther(d2, d1), pick(s3, k3, k2), k1), k);
+  };
   for (std::size_t i = 0; i < n; ++i) {
     if (edge_len[i] <= 0.0f) continue;
     const float ux = edge_ux[i], uy = edge_uy[i];
@@ -324,25 +333,19 @@ void calipers(const Eigen::Vector2f* h, std::size_t n, float* scratch, Eigen::Ve
       }
       init = true;
     } else {
-      // Advance while the next vertex is at least as far (<= for the minimum). The first two
+      // Advance while the next vertex is at least as far (<= for the minimum). The first three
       // steps of each caliper are decided together from the projections of the vertex it is at
-      // (d0) and of the next two (d1, d2), all loaded as soon as the caliper's index is known:
-      // step 1 is taken when d1 >= d0, step 2 when step 1 is and d2 >= d1 (a failed step 1
-      // would test d1 against d0 again). So the index, carried from edge to edge, waits for one
-      // load-project-compare per edge, not two in a row. (n >= 2 here: an edge of nonzero
-      // length has two vertices; so steps == 2.) The projection of the vertex reached is
-      // recomputed from its index, off that chain, with the same operations.
-      {
-        const std::size_t a1 = next(a), a2 = next(a1);
-        const std::size_t b1 = next(b), b2 = next(b1);
-        const std::size_t c1 = next(c), c2 = next(c1);
-        const float a0p = proj(a, ux, uy), a1p = proj(a1, ux, uy), a2p = proj(a2, ux, uy);
-        const float b0p = proj(b, vx, vy), b1p = proj(b1, vx, vy), b2p = proj(b2, vx, vy);
-        const float c0p = proj(c, ux, uy), c1p = proj(c1, ux, uy), c2p = proj(c2, ux, uy);
-        a = pick(a1p >= a0p, pick(a2p >= a1p, a2, a1), a);
-        b = pick(b1p >= b0p, pick(b2p >= b1p, b2, b1), b);
-        c = pick(c1p <= c0p, pick(c2p <= c1p, c2, c1), c);
-      }
+      // (d0) and of the next three (d1, d2, d3), all loaded as soon as the caliper's index is
+      // known: step s is taken when the steps before it are and d[s] >= d[s-1] (after a failed
+      // step, the next one would test the same two vertices again). So the index, carried from
+      // edge to edge, waits for one load-project-compare per edge, not one per step; and a
+      // caliper rarely moves more than three vertices per edge (the loops below, branches).
+      // (n >= 2 here: an edge of nonzero length has two vertices; a third step only when
+      // n >= 3, as a caliper moves at most n vertices.) The projection of the vertex reached
+      // is recomputed from its index, off that chain, with the same operations.
+      a = advance(a, ux, uy, [](float d, float prev) { return d >= prev; });
+      b = advance(b, vx, vy, [](float d, float prev) { return d >= prev; });
+      c = advance(c, ux, uy, [](float d, float prev) { return d <= prev; });
       umax = proj(a, ux, uy);
       vmax = proj(b, vx, vy);
       umin = proj(c, ux, uy);
