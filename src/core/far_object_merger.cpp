@@ -212,14 +212,19 @@ std::size_t FarObjectMerger::apply(const LabeledCloud& foreground,
 
   // Rebuild: each group at the place of its first member, points in the
   // members' order.
+  // A root is grouped when another far object has it as its root: marked in one pass over
+  // the far objects (a search of them per root cost a find() per pair).
+  grouped_.assign(n, 0);
+  for (const std::uint32_t m : far_) {
+    const std::uint32_t r = find(m);
+    if (r != m) grouped_[r] = 1;
+  }
   out_.clear();
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint32_t r = find(static_cast<std::uint32_t>(k));
     if (r != k) continue;
     DetectedObject& obj = (*objects)[k];
-    bool grouped = false;
-    for (const std::uint32_t m : far_) grouped = grouped || (m != k && find(m) == k);
-    if (grouped) {
+    if (grouped_[k]) {
       fits(foreground, *objects, static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(k));
       indices_.clear();
       for (const std::uint32_t m : members_) {

@@ -99,6 +99,7 @@ class FarObjectMerger {
   std::vector<std::uint32_t> far_positions_;  // their points' positions
   std::vector<Pair> pairs_;                   // candidate pairs, nearest first
   std::vector<std::uint32_t> parent_;         // union-find over objects
+  std::vector<std::uint8_t> grouped_;         // per object: a root with other members
   std::vector<std::uint32_t> members_;        // scratch: objects of a group
   std::vector<std::uint32_t> positions_;
   std::vector<std::uint32_t> indices_;
