@@ -217,9 +217,10 @@ inline void pushChain(const Eigen::Vector2f& point, Chain* c) {
   // S[k-1..k-3] (shifted up); 1: S[k-2..k-4] (as they are); 2: S[k-3..k-5] (shifted down,
   // S[k-5] from the stack). Lane 0: the point.
   const std::size_t pops = static_cast<std::size_t>((tests & 1) + ((tests & 3) == 3));
-  const __m128 m1 = _mm_shuffle_ps(t, t, 0);                             // pops >= 1
-  const __m128 m2 = _mm_and_ps(m1, _mm_shuffle_ps(t, t, _MM_SHUFFLE(1, 1, 1, 1)));  // pops 2
-  const __m128 only1 = _mm_xor_ps(m1, m2);                               // pops == 1
+  // Masks of pops >= 1 (m1), pops == 2 (m2), pops == 1 (only1).
+  const __m128 m1 = _mm_shuffle_ps(t, t, 0);
+  const __m128 m2 = _mm_and_ps(m1, _mm_shuffle_ps(t, t, _MM_SHUFFLE(1, 1, 1, 1)));
+  const __m128 only1 = _mm_xor_ps(m1, m2);
   const Eigen::Vector2f& below = c->s[k - 5];
   const __m128 x2 = _mm_or_ps(ox, toLane3(below.x())), y2 = _mm_or_ps(oy, toLane3(below.y()));
   const __m128 x = _mm_or_ps(_mm_or_ps(_mm_and_ps(m2, x2), _mm_and_ps(only1, c->x)),
