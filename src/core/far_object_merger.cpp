@@ -144,47 +144,69 @@ std::size_t FarObjectMerger::apply(const LabeledCloud& foreground,
   const float max_z_gap = static_cast<float>(params_.max_z_gap_m);
   const float max_across = static_cast<float>(params_.max_across_gap_m);
   const float min_overlap = static_cast<float>(params_.min_across_overlap);
-  // Per far object once: its box axes (the yaw's cosine and sine) and a bound on the half
-  // extent of its box along any direction (half its diagonal).
-  far_info_.resize(far_.size());
+  // Per far object once: its box axes (the yaw's cosine and sine), a bound on the half
+  // extent of its box along any direction (half its diagonal), and the fields the first pair
+  // tests read, in arrays of their own (see below).
+  const std::size_t nf = far_.size();
+  far_info_.resize(nf);
   far_positions_.clear();
-  for (std::size_t i = 0; i < far_.size(); ++i) {
+  FarArrays& fa = far_arrays_;
+  for (std::vector<float>* v : {&fa.min_z, &fa.max_z, &fa.centroid_x, &fa.centroid_y}) {
+    v->resize(nf);
+  }
+  for (std::vector<double>* v : {&fa.center_x, &fa.center_y, &fa.radius}) v->resize(nf);
+  fa.near.resize(nf);
+  for (std::size_t i = 0; i < nf; ++i) {
     const DetectedObject& o = (*objects)[far_[i]];
     FarObject& f = far_info_[i];
     f.axis = Eigen::Vector2f(std::cos(o.obb_yaw_rad), std::sin(o.obb_yaw_rad));
-    f.radius = 0.5 * std::sqrt(static_cast<double>(o.obb_size.x()) * o.obb_size.x() +
-                               static_cast<double>(o.obb_size.y()) * o.obb_size.y());
+    fa.radius[i] = 0.5 * std::sqrt(static_cast<double>(o.obb_size.x()) * o.obb_size.x() +
+                                   static_cast<double>(o.obb_size.y()) * o.obb_size.y());
+    fa.min_z[i] = o.min_pt.z();
+    fa.max_z[i] = o.max_pt.z();
+    fa.centroid_x[i] = o.centroid.x();
+    fa.centroid_y[i] = o.centroid.y();
+    fa.center_x[i] = o.obb_center.x();
+    fa.center_y[i] = o.obb_center.y();
     f.state = FarObject::kUnknown;
   }
-  for (std::size_t i = 0; i < far_.size(); ++i) {
+  const double max_gap_m = params_.max_gap_m, max_across_gap_m = params_.max_across_gap_m;
+  for (std::size_t i = 0; i < nf; ++i) {
+    // First the two cheap tests for every later object j, without a branch (most pairs fail
+    // them, unpredictably) and over arrays (the compiler may vectorise the loop; the same
+    // float and double operations either way): the gap between the z ranges, and the
+    // distance of the box centres. Along and across two orthogonal unit directions, the gaps
+    // are at least the distance of the box centres along them minus both half diagonals:
+    // boxes whose centres are farther apart than that allows (with 1 cm to spare for
+    // rounding) cannot pass the tests below, which are left for the few near pairs. (Not when
+    // the line of sight to the midpoint of the centroids is shorter than 1 mm: its direction
+    // is then not scaled to unit length.)
+    const float min_z = fa.min_z[i], max_z = fa.max_z[i];
+    const float centroid_x = fa.centroid_x[i], centroid_y = fa.centroid_y[i];
+    const double center_x = fa.center_x[i], center_y = fa.center_y[i], radius = fa.radius[i];
+    for (std::size_t j = i + 1; j < nf; ++j) {
+      const float z_gap = std::max(min_z, fa.min_z[j]) - std::min(max_z, fa.max_z[j]);
+      const float mx = 0.5f * (centroid_x + fa.centroid_x[j]);
+      const float my = 0.5f * (centroid_y + fa.centroid_y[j]);
+      const double dx = center_x - fa.center_x[j], dy = center_y - fa.center_y[j];
+      const double reach = radius + fa.radius[j] + 0.01;
+      const double reach_along = reach + max_gap_m, reach_across = reach + max_across_gap_m;
+      const bool apart =
+          dx * dx + dy * dy > reach_along * reach_along + reach_across * reach_across;
+      fa.near[j] = (z_gap <= max_z_gap) & !(apart & (mx * mx + my * my > 2e-6f));
+    }
     const DetectedObject& a = (*objects)[far_[i]];
-    const FarObject& fa = far_info_[i];
-    for (std::size_t j = i + 1; j < far_.size(); ++j) {
+    const FarObject& fi = far_info_[i];
+    for (std::size_t j = i + 1; j < nf; ++j) {
+      if (!fa.near[j]) continue;
       const DetectedObject& b = (*objects)[far_[j]];
-      const FarObject& fb = far_info_[j];
-      const float z_gap =
-          std::max(a.min_pt.z(), b.min_pt.z()) - std::min(a.max_pt.z(), b.max_pt.z());
-      if (!(z_gap <= max_z_gap)) continue;
+      const FarObject& fj = far_info_[j];
       // Gaps between the two oriented boxes along and across the line of sight
       // to the pair's midpoint (0 where their projections overlap).
       const Eigen::Vector2f mid = 0.5f * (a.centroid.head<2>() + b.centroid.head<2>());
-      // Along and across two orthogonal unit directions, the gaps are at least the distance
-      // of the box centres along them minus both half diagonals: boxes whose centres are
-      // farther apart than that allows (with 1 cm to spare for rounding) cannot pass the
-      // tests below, which are left for the few near pairs. (Not when the line of sight is
-      // shorter than 1 mm: its direction is then not scaled to unit length.)
-      const double dx = static_cast<double>(a.obb_center.x()) - b.obb_center.x();
-      const double dy = static_cast<double>(a.obb_center.y()) - b.obb_center.y();
-      const double reach = fa.radius + fb.radius + 0.01;
-      const double reach_along = reach + params_.max_gap_m;
-      const double reach_across = reach + params_.max_across_gap_m;
-      if (dx * dx + dy * dy > reach_along * reach_along + reach_across * reach_across &&
-          mid.squaredNorm() > 2e-6f) {
-        continue;
-      }
       const Eigen::Vector2f u = mid / std::max(mid.norm(), 1e-3f), v(-u.y(), u.x());
-      const float along = intervalGap(project(a, fa.axis, u), project(b, fb.axis, u));
-      const Eigen::Vector2f pa = project(a, fa.axis, v), pb = project(b, fb.axis, v);
+      const float along = intervalGap(project(a, fi.axis, u), project(b, fj.axis, u));
+      const Eigen::Vector2f pa = project(a, fi.axis, v), pb = project(b, fj.axis, v);
       const float across = intervalGap(pa, pb);
       // Overlap across the line of sight, as a fraction of the narrower piece: a cabin lies
       // behind its body, a neighbour beside it.

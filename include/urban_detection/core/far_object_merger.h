@@ -80,9 +80,16 @@ class FarObjectMerger {
   struct FarObject {
     enum State : std::uint8_t { kUnknown, kFound, kMissing };
     Eigen::Vector2f axis;  // (cos, sin) of obb_yaw_rad
-    double radius;         // [m] half the diagonal of the oriented box
     std::uint32_t begin, end;
     State state;
+  };
+  // Per far object, the fields the first pair tests read (see apply()).
+  struct FarArrays {
+    std::vector<float> min_z, max_z;            // [m] min_pt.z(), max_pt.z()
+    std::vector<float> centroid_x, centroid_y;  // [m]
+    std::vector<double> center_x, center_y;     // [m] obb_center
+    std::vector<double> radius;                 // [m] half the diagonal of the oriented box
+    std::vector<std::uint8_t> near;             // scratch: pair (i, j) passed them
   };
   bool fits(const LabeledCloud& foreground, const std::vector<DetectedObject>& objects,
             std::uint32_t ra, std::uint32_t rb);
@@ -96,6 +103,7 @@ class FarObjectMerger {
   ObjectGeometry geometry_;
   std::vector<std::uint32_t> far_;            // objects far enough to be joined
   std::vector<FarObject> far_info_;           // per far object, see FarObject
+  FarArrays far_arrays_;                      // per far object, see FarArrays
   std::vector<std::uint32_t> far_positions_;  // their points' positions
   std::vector<Pair> pairs_;                   // candidate pairs, nearest first
   std::vector<std::uint32_t> parent_;         // union-find over objects
