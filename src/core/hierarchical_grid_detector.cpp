@@ -311,11 +311,6 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   const std::size_t n = foreground.points.size();
   stats_.input_points = n;
   resetGrid();
-  dense_count_.clear();
-  dense_xy_.clear();
-  dense_zmax_.clear();
-  dense_zmin_.clear();
-  dense_coarse_.clear();
   coarse_zmax_.clear();
   coarse_xy_.clear();
   point_slot_.resize(n);
@@ -379,11 +374,17 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       point_cell[i] = -1;
     }
   }
-  // Second pass. Inside implies finite (comparisons with NaN and inf fail), so the finiteness
-  // tests only run for the rejected points. The column and row of a new sub-cell come back
-  // from its flat index: (cell + 0.5) / nd_ in double is at least 0.5 / nd_ from the next
-  // integer and exact to far better than that, so the truncation is the integer division.
-  const double inv_nd = 1.0 / nd_;
+  // Second pass, in point order: the slot of each point's sub-cell, a new one opened where
+  // the sub-cell has none, and the slot's count and z range. A new sub-cell is not a branch
+  // (about one point in seven opens one, unpredictably): every point writes the entry of the
+  // next free slot and advances the free slot only when it opened it, so an existing slot's
+  // point leaves a stale entry there that the next opening overwrites. Inside implies finite
+  // (comparisons with NaN and inf fail), so the finiteness tests only run for the rejected
+  // points.
+  if (dense_acc_.size() < n + 1) dense_acc_.resize(n + 1);
+  DenseAcc* const acc = dense_acc_.data();
+  std::int32_t* const slot_map_w = dense_slot_.data();
+  std::int32_t next_slot = 0;
   for (i = 0; i < n; ++i) {
     const std::int32_t cell = point_cell[i];
     const LabeledPoint& p = points[i];
@@ -396,40 +397,56 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       continue;
     }
     const float z = p.z;
-    std::int32_t slot = dense_slot_[cell];
-    if (slot < 0) {
-      const int iy = static_cast<int>((cell + 0.5) * inv_nd), ix = cell - iy * nd_;
-      slot = static_cast<std::int32_t>(dense_cell_.size());
-      dense_slot_[cell] = slot;
-      dense_cell_.push_back(cell);
-      dense_xy_.push_back(CellXY{ix, iy});
-      dense_count_.push_back(0);
-      const int cx = coarse_of_[ix], cy = coarse_of_[iy];
-      const std::int32_t ccell = cy * nc_ + cx;
-      std::int32_t cslot = coarse_slot_[ccell];
-      if (cslot < 0) {
-        cslot = static_cast<std::int32_t>(coarse_cell_.size());
-        coarse_slot_[ccell] = cslot;
-        coarse_cell_.push_back(ccell);
-        coarse_xy_.push_back(CellXY{cx, cy});
-        coarse_zmax_.push_back(-std::numeric_limits<float>::infinity());
-      }
-      dense_coarse_.push_back(cslot);
-      dense_zmax_.push_back(z);
-      dense_zmin_.push_back(z);
-    }
-    ++dense_count_[slot];
-    dense_zmax_[slot] = std::max(dense_zmax_[slot], z);
-    dense_zmin_[slot] = std::min(dense_zmin_[slot], z);
+    const std::int32_t old_slot = slot_map_w[cell];
+    const bool fresh = old_slot < 0;
+    const std::int32_t slot = fresh ? next_slot : old_slot;
+    next_slot += fresh;
+    slot_map_w[cell] = slot;
+    const DenseAcc e = acc[slot];  // stale when fresh: every field is replaced then
+    DenseAcc u;
+    u.zmax = fresh ? z : std::max(e.zmax, z);
+    u.zmin = fresh ? z : std::min(e.zmin, z);
+    u.count = (fresh ? 0u : e.count) + 1u;
+    u.cell = cell;
+    acc[slot] = u;
     point_cell[i] = slot;
   }
-  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
-  const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
-  // Heights per sub-cell, gathered to the super-cells once (fewer dependent loads per point).
-  for (std::int32_t t = 0; t < nds; ++t) {
-    const std::int32_t c = dense_coarse_[t];
-    coarse_zmax_[c] = std::max(coarse_zmax_[c], dense_zmax_[t]);
+  // Per sub-cell, in slot order (the order of their first points): column and row, super-cell
+  // (opened in the same order as before), heights gathered to it. The column and row come back
+  // from the flat index: (cell + 0.5) / nd_ in double is at least 0.5 / nd_ from the next
+  // integer and exact to far better than that, so the truncation is the integer division.
+  const std::int32_t nds = next_slot;
+  const double inv_nd = 1.0 / nd_;
+  dense_cell_.resize(nds);
+  dense_xy_.resize(nds);
+  dense_count_.resize(nds);
+  dense_zmax_.resize(nds);
+  dense_zmin_.resize(nds);
+  dense_coarse_.resize(nds);
+  for (std::int32_t s = 0; s < nds; ++s) {
+    const DenseAcc& e = acc[s];
+    const std::int32_t cell = e.cell;
+    const int iy = static_cast<int>((cell + 0.5) * inv_nd), ix = cell - iy * nd_;
+    dense_cell_[s] = cell;
+    dense_xy_[s] = CellXY{ix, iy};
+    dense_count_[s] = e.count;
+    dense_zmax_[s] = e.zmax;
+    dense_zmin_[s] = e.zmin;
+    const int cx = coarse_of_[ix], cy = coarse_of_[iy];
+    const std::int32_t ccell = cy * nc_ + cx;
+    std::int32_t cslot = coarse_slot_[ccell];
+    if (cslot < 0) {
+      cslot = static_cast<std::int32_t>(coarse_cell_.size());
+      coarse_slot_[ccell] = cslot;
+      coarse_cell_.push_back(ccell);
+      coarse_xy_.push_back(CellXY{cx, cy});
+      coarse_zmax_.push_back(e.zmax);
+    } else {
+      coarse_zmax_[cslot] = std::max(coarse_zmax_[cslot], e.zmax);
+    }
+    dense_coarse_[s] = cslot;
   }
+  const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
   stats_.dense_cells = nds;
   stats_.coarse_cells = ncs;
 

@@ -157,6 +157,7 @@ bool applyKdTree(const YAML::Node& node, const std::string& where, KdTreeDetecto
   t.bind("max_cluster_size", &p->max_cluster_size);
   t.bind("max_extent_m", &p->max_extent_m);
   t.bind("max_abs_coordinate_m", &p->max_abs_coordinate_m);
+  t.bind("sorted_search", &p->sorted_search);
   return t.apply(node, where, error);
 }
 

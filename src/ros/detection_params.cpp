@@ -78,6 +78,7 @@ void loadHierarchicalGridParams(const ros::NodeHandle& nh,
 
 void loadKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorParams* p) {
   kdTreeTable(p).load(nh);
+  loadParam(nh, "sorted_search", &p->sorted_search);
   throwIfInvalid(nh, core::validate(*p));
 }
 

@@ -442,6 +442,35 @@ TEST(HierarchicalGridVsKdTree, SamePartitionAndBoxesOnWellSeparatedObjects) {
   }
 }
 
+// The kd-tree's neighbour order is not used by the clustering: sorted and unsorted radius
+// searches give the same objects, point order within them included (both order objects and
+// their points by position in the input).
+TEST(KdTreeDetector, SortedAndUnsortedSearchGiveTheSameObjects) {
+  LabeledCloud cloud = wellSeparatedScene();
+  // Two cars touching (one cluster) and a sparse pole: clusters grown across many searches.
+  std::uint32_t id = 100;
+  test::addLidarCar(&cloud, 25.0f, 20.0f, 0.0f, id++, 4.5f, 1.8f, 1.5f);
+  test::addLidarCar(&cloud, 25.0f, 22.0f, 0.0f, id++, 4.5f, 1.8f, 1.5f);
+  for (int k = 0; k < 12; ++k) test::addPoint(&cloud, -3.0f, 9.0f, -1.6f + 0.25f * k, id);
+  core::KdTreeDetectorParams sorted_p, unsorted_p;
+  sorted_p.sorted_search = true;
+  unsorted_p.sorted_search = false;
+  core::KdTreeDetector sorted(sorted_p), unsorted(unsorted_p);
+  std::vector<DetectedObject> a, b;
+  sorted.detect(cloud, &a);
+  unsorted.detect(cloud, &b);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GE(a.size(), 8u);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].id, b[i].id);
+    EXPECT_EQ(a[i].indices, b[i].indices);
+    EXPECT_EQ(a[i].centroid, b[i].centroid);
+    EXPECT_EQ(a[i].obb_center, b[i].obb_center);
+    EXPECT_EQ(a[i].obb_size, b[i].obb_size);
+    EXPECT_EQ(a[i].obb_yaw_rad, b[i].obb_yaw_rad);
+  }
+}
+
 TEST(HierarchicalGridInput, EmptyAndOnePoint) {
   HierarchicalGridDetector det;
   std::vector<DetectedObject> objects(3);  // stale content must be cleared

@@ -70,7 +70,7 @@ TEST(ParamsYaml, DetectionFileAndAutoDetection) {
       "f.yaml",
       "hierarchical_grid:\n  coarse_cell_m: 0.5\n  weight:\n    max_weight: 7.0\n"
       "  far_merge:\n    max_gap_m: 0.8\n"
-      "kdtree:\n  cluster_tolerance_m: 0.3\nmarkers:\n  lifetime_s: 0.2\n");
+      "kdtree:\n  cluster_tolerance_m: 0.3\n  sorted_search: true\nmarkers:\n  lifetime_s: 0.2\n");
   GridSegmenterParams seg;
   HierarchicalGridDetectorParams hier;
   KdTreeDetectorParams kd;
@@ -81,6 +81,7 @@ TEST(ParamsYaml, DetectionFileAndAutoDetection) {
   EXPECT_DOUBLE_EQ(hier.far_merge.max_gap_m, 0.8);
   EXPECT_DOUBLE_EQ(hier.far_merge.min_range_m, FarObjectMergerParams().min_range_m);
   EXPECT_DOUBLE_EQ(kd.cluster_tolerance_m, 0.3);
+  EXPECT_TRUE(kd.sorted_search);
   EXPECT_DOUBLE_EQ(seg.cell_size_m, GridSegmenterParams().cell_size_m);  // untouched
   // A segmentation file goes to the segmenter only.
   const std::string s = writeTemp("g.yaml", "cell_size_m: 0.4\n");

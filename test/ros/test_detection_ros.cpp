@@ -187,6 +187,7 @@ TEST(DetectionConfig, YamlMirrorsTheParamsStructs) {
   EXPECT_EQ(kd["max_cluster_size"].as<int>(), k.max_cluster_size);
   EXPECT_DOUBLE_EQ(kd["max_extent_m"].as<double>(), k.max_extent_m);
   EXPECT_DOUBLE_EQ(kd["max_abs_coordinate_m"].as<double>(), k.max_abs_coordinate_m);
+  EXPECT_EQ(kd["sorted_search"].as<bool>(), k.sorted_search);
   const ros_conv::ObjectMarkerParams mp;
   const YAML::Node m = y["markers"];
   EXPECT_EQ(m["show_ids"].as<bool>(), mp.show_ids);

@@ -196,6 +196,14 @@ class HierarchicalGridDetector : public ObjectDetector {
   std::int32_t probe_row_begin_[3] = {0, 0, 0};
   int probe_row_len_[3] = {0, 0, 0};  // per table: the length of all its rows
   bool probe_rows_ok_ = false;        // rows fit one 64-bit mask (else the loops per kind)
+  // Binning's per-slot accumulator (see detect()): grown to the largest cloud seen plus one,
+  // never shrunk, so the entry a point may open always exists.
+  struct DenseAcc {
+    float zmax, zmin;     // [m] highest and lowest point
+    std::uint32_t count;  // points
+    std::int32_t cell;    // flat grid index
+  };
+  std::vector<DenseAcc> dense_acc_;
   // Per touched sub-cell (slot).
   std::vector<std::int32_t> dense_cell_;    // flat grid index
   std::vector<CellXY> dense_xy_;            // grid column and row

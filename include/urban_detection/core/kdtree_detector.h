@@ -22,6 +22,11 @@ struct KdTreeDetectorParams {
   int max_cluster_size = 1000000;     // [-] larger clusters are dropped (PCL semantics)
   double max_extent_m = 20.0;         // [m] objects with a longer xy box side are dropped
   double max_abs_coordinate_m = 1000.0;  // [m] points with a larger |x|, |y| or |z| are ignored
+  // [-] true: the kd-tree sorts every radius search's neighbours by distance (PCL's default
+  // for pcl::search::KdTree, as in PCL's clustering tutorial). Clustering does not use the
+  // order, so the clusters are the same either way; unsorted is ~2.2x faster on KITTI raw
+  // foregrounds (sorting took about half of the baseline's time).
+  bool sorted_search = false;
 };
 
 /// Returns "" when `p` is usable, else a message naming the first bad field and its range.
