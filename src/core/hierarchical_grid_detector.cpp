@@ -510,11 +510,25 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   dense_parent_.resize(nds);
   const float thr = static_cast<float>(params_.dense_min_weighted_points);
   const float dcell = static_cast<float>(dense_cell_m_);
+  const float bridge_range2 = static_cast<float>(params_.bridge_range_m * params_.bridge_range_m);
+  const float gap_range2 =
+      static_cast<float>(params_.gap_bridge_range_m * params_.gap_bridge_range_m);
+  // Step 3's probe row of each sub-cell (its bridge table by sensor distance, its direction
+  // bin) is chosen here, where the sub-cell's centre and distance are computed anyway: the
+  // links below then start from a load instead of a division and a chain of compares.
+  probe_of_.resize(nds);
   for (std::int32_t s = 0; s < nds; ++s) {
     const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
     const float x = (ix + 0.5f) * dcell + origin, y = (iy + 0.5f) * dcell + origin;
-    rho[s] = static_cast<float>(dense_count_[s]) * weight_(std::sqrt(x * x + y * y));
+    const float d2 = x * x + y * y;
+    rho[s] = static_cast<float>(dense_count_[s]) * weight_(std::sqrt(d2));
     dense_parent_[s] = s;
+    const int table = d2 > gap_range2 ? 2 : d2 > bridge_range2 ? 1 : 0;
+    const int bin = directionBin(x, y);
+    const int len = probe_row_len_[table];
+    probe_of_[s] = ProbeRow{probe_row_begin_[table] + bin * len, len,
+                            d2 < dcell * dcell ? std::uint64_t{0xf}
+                                               : probe_mask_[table * kDirectionBins + bin]};
     if (rho[s] >= thr) {
       dense_occupied_[s] = 1;
       const std::int32_t cell = dense_cell_[s];
@@ -554,9 +568,6 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   if (params_.dense_refinement) {
     // Connected components of the dense sub-cells (8-neighbourhood) whose super-cells are
     // psi-linked, plus the radial bridges of step 3 (header).
-    const float bridge_range2 = static_cast<float>(params_.bridge_range_m * params_.bridge_range_m);
-    const float gap_range2 =
-        static_cast<float>(params_.gap_bridge_range_m * params_.gap_bridge_range_m);
     std::int32_t* parent = dense_parent_.data();
     // Root of the sub-cell whose links are being made: found once per sub-cell, not once per
     // link tried; a link can only replace it by a smaller root (roots stay the smallest slot).
@@ -589,14 +600,10 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
         // sub-cells), which of them are dense without branches, then the psi tests and links
         // of those in the row's order: the same links in the same order as one loop for the
         // neighbours and one for the bridges.
-        const float cx = (ix + 0.5f) * dcell + origin, cy = (iy + 0.5f) * dcell + origin;
-        const float d2 = cx * cx + cy * cy;
-        const int table = d2 > gap_range2 ? 2 : d2 > bridge_range2 ? 1 : 0;
-        const int bin = directionBin(cx, cy);
-        const int len = probe_row_len_[table];
-        const std::int32_t* row = probe_flat_.data() + probe_row_begin_[table] + bin * len;
-        const std::uint64_t mask =
-            d2 < dcell * dcell ? std::uint64_t{0xf} : probe_mask_[table * kDirectionBins + bin];
+        const ProbeRow& probe = probe_of_[s];
+        const int len = probe.len;
+        const std::int32_t* row = probe_flat_.data() + probe.begin;
+        const std::uint64_t mask = probe.mask;
         std::uint64_t dense_row = 0;
         for (int j = 0; j < len; ++j) {
           dense_row |= static_cast<std::uint64_t>(denseBit(cell + row[j])) << j;

@@ -204,6 +204,13 @@ class HierarchicalGridDetector : public ObjectDetector {
     std::int32_t cell;    // flat grid index
   };
   std::vector<DenseAcc> dense_acc_;
+  // Step 3's probe row of a sub-cell: its flat offsets probe_flat_[begin, begin + len) and the
+  // mask of the row's real entries (only the forward four for the sensor's own sub-cells).
+  struct ProbeRow {
+    std::int32_t begin, len;
+    std::uint64_t mask;
+  };
+  std::vector<ProbeRow> probe_of_;
   // Per touched sub-cell (slot).
   std::vector<std::int32_t> dense_cell_;    // flat grid index
   std::vector<CellXY> dense_xy_;            // grid column and row
