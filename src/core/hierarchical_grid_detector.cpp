@@ -234,16 +234,16 @@ void HierarchicalGridDetector::roofBridges() {
   root_zmin_.resize(nds);
   root_zmax_.resize(nds);
   flattenRoots(dense_parent_.data(), nds);
+  // Without a branch per sub-cell (whether it is dense and a root is data-dependent): a root
+  // starts its range from its own, every sub-cell folds into its root's. A sub-cell that is
+  // not dense is never linked, so it is its own root and only writes its own entry, which no
+  // dense sub-cell reads.
+  const float inf = std::numeric_limits<float>::infinity();
   for (std::int32_t s = 0; s < nds; ++s) {
-    if (!dense_occupied_[s]) continue;
     const std::int32_t root = dense_parent_[s];
-    if (root == s) {
-      root_zmin_[s] = dense_zmin_[s];
-      root_zmax_[s] = dense_zmax_[s];
-    } else {
-      root_zmin_[root] = std::min(root_zmin_[root], dense_zmin_[s]);
-      root_zmax_[root] = std::max(root_zmax_[root], dense_zmax_[s]);
-    }
+    const bool own = root == s;
+    root_zmin_[root] = std::min(own ? inf : root_zmin_[root], dense_zmin_[s]);
+    root_zmax_[root] = std::max(own ? -inf : root_zmax_[root], dense_zmax_[s]);
   }
   const float step = static_cast<float>(params_.roof_max_step_m);
   const float range2 =
@@ -251,15 +251,18 @@ void HierarchicalGridDetector::roofBridges() {
   const float dtheta = static_cast<float>(params_.ring_spacing_deg * M_PI / 180.0);
   const float origin = static_cast<float>(origin_m_);
   const float dcell = static_cast<float>(dense_cell_m_);
+  // The flat dense sub-cells of flat components, listed without a branch per sub-cell.
+  dense_flat_.resize(nds);
+  std::int32_t nflat = 0;
+  for (std::int32_t s = 0; s < nds; ++s) {
+    const std::int32_t root = dense_parent_[s];
+    dense_flat_[nflat] = s;
+    nflat += (dense_occupied_[s] != 0) & (dense_zmax_[s] - dense_zmin_[s] <= step) &
+             (root_zmax_[root] - root_zmin_[root] <= step);
+  }
+  dense_flat_.resize(nflat);
   // The rings b are few: from each, look back towards the sensor along its line of sight for
   // the sub-cells a it may join (the offsets of b's direction bin, negated).
-  dense_flat_.clear();
-  for (std::int32_t s = 0; s < nds; ++s) {
-    if (dense_occupied_[s] && dense_zmax_[s] - dense_zmin_[s] <= step) {
-      const std::int32_t root = dense_parent_[s];
-      if (root_zmax_[root] - root_zmin_[root] <= step) dense_flat_.push_back(s);
-    }
-  }
   for (const std::int32_t b : dense_flat_) {
     const int ix = dense_xy_[b].x, iy = dense_xy_[b].y;
     const float cx = (ix + 0.5f) * dcell + origin, cy = (iy + 0.5f) * dcell + origin;
