@@ -683,8 +683,13 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   auto componentOf = [&](std::int32_t s) -> std::int32_t {
     const std::int32_t root =
         params_.dense_refinement ? dense_parent_[s] : coarse_parent_[dense_coarse_[s]];
-    if (root_object_[root] < 0) root_object_[root] = ncomp++;
-    return root_object_[root];
+    // A new component's number without a branch (about one sub-cell in ten starts one).
+    const std::int32_t known = root_object_[root];
+    const bool fresh = known < 0;
+    const std::int32_t c = fresh ? ncomp : known;
+    root_object_[root] = c;
+    ncomp += fresh;
+    return c;
   };
   // The 8-neighbourhood in the order of the original (dy, dx) loops: ties of rho keep the first.
   std::int32_t ring_flat[8];
