@@ -415,9 +415,9 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     point_cell[i] = slot;
   }
   // Per sub-cell, in slot order (the order of their first points): column and row, super-cell
-  // (opened in the same order as before), heights gathered to it. The column and row come back
-  // from the flat index: (cell + 0.5) / nd_ in double is at least 0.5 / nd_ from the next
-  // integer and exact to far better than that, so the truncation is the integer division.
+  // (opened in the order of their first sub-cells), heights gathered to it. The column and row
+  // come back from the flat index: (cell + 0.5) / nd_ in double is at least 0.5 / nd_ from the
+  // next integer and exact to far better than that, so the truncation is the integer division.
   const std::int32_t nds = next_slot;
   const double inv_nd = 1.0 / nd_;
   dense_cell_.resize(nds);

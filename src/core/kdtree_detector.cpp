@@ -50,7 +50,8 @@ void KdTreeDetector::detect(const LabeledCloud& foreground, std::vector<Detected
   if (valid->empty()) return;
 
   LabeledCloud::ConstPtr cloud(&foreground, [](const LabeledCloud*) {});  // non-owning
-  pcl::search::KdTree<LabeledPoint>::Ptr tree(new pcl::search::KdTree<LabeledPoint>(params_.sorted_search));
+  pcl::search::KdTree<LabeledPoint>::Ptr tree(
+      new pcl::search::KdTree<LabeledPoint>(params_.sorted_search));
   tree->setInputCloud(cloud, valid);
   std::vector<pcl::PointIndices> clusters;
   pcl::EuclideanClusterExtraction<LabeledPoint> ec;

@@ -18,10 +18,11 @@
 // comes as motion-compensated clouds, not packets); the JSON says which
 // (pipeline_includes_packet_decode). The pipeline's stages run back to back per revolution
 // (markers after them, timed but not in the pipeline figure); kdtree_detection and the
-// standalone hough_refinement are timed in a second pass over the same revolutions, so they
-// do not evict the pipeline's buffers from the caches between its revolutions. --no-kdtree skips the baseline (on the
-// simulated drive's dense near-range blobs it takes seconds per revolution); the speed-up is then
-// not measured (null in the JSON). A Debug build (no NDEBUG) refuses to run.
+// standalone hough_refinement are timed in a second pass over the same revolutions, so they do
+// not evict the pipeline's buffers from the caches between its revolutions. --no-kdtree skips
+// the baseline (on the simulated drive's dense near-range blobs it takes seconds per
+// revolution); the speed-up is then not measured (null in the JSON). A Debug build (no NDEBUG)
+// refuses to run.
 #include <sched.h>
 #include <sys/resource.h>
 #include <time.h>
