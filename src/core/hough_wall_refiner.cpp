@@ -91,26 +91,40 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
     // Split the segment into runs of occupied pixels (gaps up to max_line_gap). Hough joins
     // collinear but separate things (a car, then 3 m of road, then a wall); only a run that is
     // itself long and supported by wall evidence is a wall: a row of parked cars is a line of
-    // short cells below the sensor, without tall or field-of-view-truncated cells.
+    // short cells below the sensor, without tall or field-of-view-truncated cells, and a van
+    // among them (tall, or truncated by the field of view) does not make the row a wall.
+    // A run that fails the support test can still hold a wall: a facade that continues a row
+    // of parked cars. Its stretches of wall-supporting pixels at least min_mixed_wall_length_m
+    // long (longer than any vehicle) are walls.
     bool line_used = false;
     const std::size_t n = line_px_.size();
-    std::size_t i = 0;
-    while (i < n) {
-      while (i < n && !line_px_[i].occupied) ++i;
-      if (i >= n) break;
-      const std::size_t start = i;
-      std::size_t last = i;
-      int occupied = 0, support = 0;
-      for (std::size_t j = i; j < n && static_cast<int>(j - last) <= gap_cells + 1; ++j) {
-        if (!line_px_[j].occupied) continue;
-        last = j;
-        ++occupied;
-        support += line_px_[j].support ? 1 : 0;
+    const double min_mixed_len = params_.min_mixed_wall_length_m / cell_size_m;
+    auto length = [&](std::size_t a, std::size_t b) {
+      return std::hypot(line_px_[b].col - line_px_[a].col, line_px_[b].row - line_px_[a].row) +
+             1.0;
+    };
+    // Runs of pixels in [from, to] with `member` set, bridging gaps up to gap_cells; calls
+    // `take(start, last, occupied, support)` for each.
+    auto runs = [&](std::size_t from, std::size_t to, bool LinePixel::*member, auto&& take) {
+      std::size_t i = from;
+      while (i <= to) {
+        while (i <= to && !(line_px_[i].*member)) ++i;
+        if (i > to) break;
+        const std::size_t start = i;
+        std::size_t last = i;
+        int occupied = 0, support = 0;
+        for (std::size_t j = i; j <= to && static_cast<int>(j - last) <= gap_cells + 1; ++j) {
+          if (line_px_[j].*member) last = j;
+        }
+        for (std::size_t j = start; j <= last; ++j) {
+          occupied += line_px_[j].occupied ? 1 : 0;
+          support += line_px_[j].support ? 1 : 0;
+        }
+        i = last + 1;
+        take(start, last, occupied, support);
       }
-      i = last + 1;
-      const double len = std::hypot(line_px_[last].col - line_px_[start].col,
-                                    line_px_[last].row - line_px_[start].row) + 1.0;
-      if (len < min_len || support < params_.min_tall_fraction * occupied) continue;
+    };
+    auto relabel = [&](std::size_t start, std::size_t last) {
       line_used = true;
       for (std::size_t k = start; k <= last; ++k) {
         for (int dr = -w; dr <= w; ++dr) {
@@ -126,6 +140,24 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
           }
         }
       }
+    };
+    if (n > 0) {
+      runs(0, n - 1, &LinePixel::occupied,
+           [&](std::size_t start, std::size_t last, int occupied, int support) {
+             if (length(start, last) < min_len) return;
+             if (support >= params_.min_tall_fraction * occupied) {
+               relabel(start, last);
+               return;
+             }
+             if (min_mixed_len <= 0.0) return;
+             runs(start, last, &LinePixel::support,
+                  [&](std::size_t s0, std::size_t s1, int occ, int sup) {
+                    if (length(s0, s1) >= std::max(min_len, min_mixed_len) &&
+                        sup >= params_.min_tall_fraction * occ) {
+                      relabel(s0, s1);
+                    }
+                  });
+           });
     }
     if (line_used) {
       ++stats.lines_accepted;

@@ -76,6 +76,7 @@ bool applySegmentation(const YAML::Node& root, const std::string& where,
   hough.bind("max_line_gap_m", &h.max_line_gap_m);
   hough.bind("theta_resolution_deg", &h.theta_resolution_deg);
   hough.bind("min_tall_fraction", &h.min_tall_fraction);
+  hough.bind("min_mixed_wall_length_m", &h.min_mixed_wall_length_m);
   hough.bind("line_half_width_cells", &h.line_half_width_cells);
   hough.bind("extend_lines", &h.extend_lines);
   FieldTable t;

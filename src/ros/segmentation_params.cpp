@@ -53,6 +53,7 @@ bool validateGridSegmenterParams(const core::GridSegmenterParams& p, std::string
   c.check("hough/max_line_gap_m", p.hough.max_line_gap_m, 0.0, 100.0);
   c.check("hough/theta_resolution_deg", p.hough.theta_resolution_deg, 0.1, 45.0);
   c.check("hough/min_tall_fraction", p.hough.min_tall_fraction, 0.0, 1.0);
+  c.check("hough/min_mixed_wall_length_m", p.hough.min_mixed_wall_length_m, 0.0, 500.0);
   c.check("hough/line_half_width_cells", p.hough.line_half_width_cells, 0, 5);
   return c.ok();
 }
@@ -84,6 +85,8 @@ bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParam
   nh.param("hough/max_line_gap_m", h.max_line_gap_m, h.max_line_gap_m);
   nh.param("hough/theta_resolution_deg", h.theta_resolution_deg, h.theta_resolution_deg);
   nh.param("hough/min_tall_fraction", h.min_tall_fraction, h.min_tall_fraction);
+  nh.param("hough/min_mixed_wall_length_m", h.min_mixed_wall_length_m,
+           h.min_mixed_wall_length_m);
   nh.param("hough/extend_lines", h.extend_lines, h.extend_lines);
   nh.param("hough/line_half_width_cells", h.line_half_width_cells, h.line_half_width_cells);
   return validateGridSegmenterParams(*p, error);

@@ -402,6 +402,42 @@ TEST(HoughWallRefiner, AsciiWallRunIsRelabelledAndCarsAreNot) {
   EXPECT_TRUE(refiner.relabeledCells().empty());
 }
 
+TEST(HoughWallRefiner, FacadeContinuingARowOfCarsIsAWallAndAVanAmongCarsIsNot) {
+  // 1 m cells. Row 1: parked cars, one empty cell, then a facade seen short but reaching the
+  // top of the field of view ('!') ending in tall cells: one run of 26 occupied cells, 16 of
+  // them supporting (0.62 < 0.8), yet the 16 m supported stretch is a facade (the simulated
+  // drive's narrow street). Row 4: a van ('!!!!!', 5 m, truncated by the field of view)
+  // between cars: its supported stretch is shorter than a vehicle-proof wall.
+  AsciiGrid g({"................................",
+               "sssssssss.!!!!!!!!!!!!TTTT......",
+               "................................",
+               "................................",
+               "ssss.ssss.!!!!!.ssss.ssss.......",
+               "................................"});
+  core::HoughWallRefinerParams p;
+  p.max_range_m = 100.0;
+  p.votes = 6;
+  p.min_line_length_m = 6.0;
+  p.max_line_gap_m = 1.0;
+  p.line_half_width_cells = 0;
+  p.min_tall_fraction = 0.8;
+  p.min_mixed_wall_length_m = 8.0;
+  core::HoughWallRefiner refiner(p);
+  refiner.refine(g.rows, g.cols, 1.0, &g.classes, &g.support);
+  EXPECT_EQ(g.row(1), "sssssssss.TTTTTTTTTTTTTTTT......");
+  EXPECT_EQ(g.row(4), "ssss.ssss.sssss.ssss.ssss.......");
+  EXPECT_EQ(refiner.relabeledCells().size(), 12u);
+
+  // With the mixed-run rule off, the cars veto the facade (the behaviour before it).
+  AsciiGrid h({"................................",
+               "sssssssss.!!!!!!!!!!!!TTTT......",
+               "................................"});
+  p.min_mixed_wall_length_m = 0.0;
+  refiner.setParams(p);
+  refiner.refine(h.rows, h.cols, 1.0, &h.classes, &h.support);
+  EXPECT_EQ(h.row(1), "sssssssss.ssssssssssssTTTT......");
+}
+
 TEST(HoughWallRefiner, RejectsInconsistentInput) {
   core::HoughWallRefiner refiner;
   std::vector<SegmentClass> cls(10, SegmentClass::kShort);

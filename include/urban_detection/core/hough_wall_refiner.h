@@ -29,6 +29,10 @@ struct HoughWallRefinerParams {
                                        //     on at least this fraction of wall-supporting cells
                                        //     (tall, or reaching the top of the field of view):
                                        //     rows of parked cars are not walls
+  double min_mixed_wall_length_m = 8.0;  // [m] in a run that fails min_tall_fraction, a
+                                       //     stretch of wall-supporting cells at least this long
+                                       //     (longer than a vehicle) is still a wall: a facade
+                                       //     continuing a row of parked cars; 0 disables
   bool extend_lines = true;            // walk each Hough segment across the whole window, so a
                                        //     facade fragment found by Hough recovers the facade
   int line_half_width_cells = 1;       // [cells] relabel short cells up to this far from a line
@@ -53,7 +57,9 @@ class HoughWallRefiner {
   /// sensor at the grid centre). Tall and short cells within max_range_m are rasterised into a
   /// binary image, cv::HoughLinesP finds line segments; each segment is split into runs of
   /// occupied cells (gaps up to max_line_gap_m), and kShort cells of runs at least
-  /// min_line_length_m long with at least min_tall_fraction wall support become kTall.
+  /// min_line_length_m long with at least min_tall_fraction wall support become kTall. In a
+  /// run that fails the support test, stretches of wall-supporting cells (same gaps, same
+  /// fraction) at least min_mixed_wall_length_m long become kTall too.
   /// Only kShort -> kTall changes are made.
   HoughWallStats refine(int rows, int cols, double cell_size_m,
                         std::vector<SegmentClass>* cell_classes);
