@@ -95,7 +95,8 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
     // among them (tall, or truncated by the field of view) does not make the row a wall.
     // A run that fails the support test can still hold a wall: a facade that continues a row
     // of parked cars. Its stretches of wall-supporting pixels at least min_mixed_wall_length_m
-    // long (longer than any vehicle) are walls.
+    // long (longer than any vehicle) are walls; there only the facade's own short cells (those
+    // truncated by the field of view) become tall, not an object standing against the wall.
     bool line_used = false;
     const std::size_t n = line_px_.size();
     const double min_mixed_len = params_.min_mixed_wall_length_m / cell_size_m;
@@ -124,7 +125,9 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
         take(start, last, occupied, support);
       }
     };
-    auto relabel = [&](std::size_t start, std::size_t last) {
+    // `supported_only`: only short cells that are wall evidence themselves (truncated by the
+    // field of view) change, not the short objects standing beside the wall.
+    auto relabel = [&](std::size_t start, std::size_t last, bool supported_only) {
       line_used = true;
       for (std::size_t k = start; k <= last; ++k) {
         for (int dr = -w; dr <= w; ++dr) {
@@ -132,7 +135,7 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
             const int r = line_px_[k].row + dr, c = line_px_[k].col + dc;
             if (r < r0 || r >= r1 || c < c0 || c >= c1) continue;
             const std::size_t idx = static_cast<std::size_t>(r) * cols + c;
-            if (isShort(idx)) {
+            if (isShort(idx) && (!supported_only || !wall_support || (*wall_support)[idx])) {
               cls[idx] = SegmentClass::kTall;
               relabeled_.push_back(static_cast<std::int32_t>(idx));
               ++stats.cells_relabeled;
@@ -146,7 +149,7 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
            [&](std::size_t start, std::size_t last, int occupied, int support) {
              if (length(start, last) < min_len) return;
              if (support >= params_.min_tall_fraction * occupied) {
-               relabel(start, last);
+               relabel(start, last, false);
                return;
              }
              if (min_mixed_len <= 0.0) return;
@@ -154,7 +157,7 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
                   [&](std::size_t s0, std::size_t s1, int occ, int sup) {
                     if (length(s0, s1) >= std::max(min_len, min_mixed_len) &&
                         sup >= params_.min_tall_fraction * occ) {
-                      relabel(s0, s1);
+                      relabel(s0, s1, true);
                     }
                   });
            });

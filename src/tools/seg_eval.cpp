@@ -260,7 +260,8 @@ bool setParam(core::GridSegmenterParams* p, const std::string& kv) {
 
 // KITTI object frames: share of the points of labelled objects (inside their 3-D boxes, above
 // the ground band, rules of eval_datasets.h) that end up in the foreground, per class.
-void evalKittiObject(const std::string& dir, const core::GridSegmenterParams& params) {
+void evalKittiObject(const std::string& dir, const core::GridSegmenterParams& params,
+                     double ascii_half_m) {
   const std::vector<std::string> bins = core::listFiles(dir + "/velodyne", ".bin");
   if (bins.empty()) {
     std::printf("\nKITTI object: no frames in %s/velodyne (skipped)\n", dir.c_str());
@@ -303,6 +304,7 @@ void evalKittiObject(const std::string& dir, const core::GridSegmenterParams& pa
       c[2] += off[i] == SegmentClass::kShort;
     }
   }
+  if (ascii_half_m > 0.0 && frames > 0) printAscii(seg_on, ascii_half_m);
   std::printf("\nKITTI object %s, %d frames: object points (in boxes, above the ground band) in "
               "the foreground\n| class | points | fg hough on | fg hough off |\n", dir.c_str(),
               frames);
@@ -518,7 +520,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!kitti_object_dir.empty()) {
-    evalKittiObject(kitti_object_dir, params);
+    evalKittiObject(kitti_object_dir, params, ascii_half_m);
     return 0;
   }
 

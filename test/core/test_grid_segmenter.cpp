@@ -428,6 +428,19 @@ TEST(HoughWallRefiner, FacadeContinuingARowOfCarsIsAWallAndAVanAmongCarsIsNot) {
   EXPECT_EQ(g.row(4), "ssss.ssss.sssss.ssss.ssss.......");
   EXPECT_EQ(refiner.relabeledCells().size(), 12u);
 
+  // A bin ('ss', short, not truncated by the field of view) against that facade, with a line
+  // half width of one cell: the facade's own cells change, the bin and the cars do not.
+  AsciiGrid b({"................................",
+               "..............ss................",
+               "sssssssss.!!!!!!!!!!!!TTTT......",
+               "................................"});
+  p.line_half_width_cells = 1;
+  refiner.setParams(p);
+  refiner.refine(b.rows, b.cols, 1.0, &b.classes, &b.support);
+  EXPECT_EQ(b.row(1), "..............ss................");
+  EXPECT_EQ(b.row(2), "sssssssss.TTTTTTTTTTTTTTTT......");
+  p.line_half_width_cells = 0;
+
   // With the mixed-run rule off, the cars veto the facade (the behaviour before it).
   AsciiGrid h({"................................",
                "sssssssss.!!!!!!!!!!!!TTTT......",
