@@ -3,7 +3,9 @@
 # ../shared/data/kitti_object, ../shared/data/semantic_kitti (when the shared folder exists)
 # and a simulated drive (always, once the simulator is built). Called by `scripts/run eval`
 # after setup + build with the workspace sourced. Writes results/eval_<dataset>.{json,txt}
-# and prints a combined table. Extra arguments go to every urban_detection_eval call
+# and prints a combined table; then the segmentation accuracy (urban_detection_seg_eval) on
+# SemanticKITTI and the simulated drive into results/seg_eval_<dataset>.{json,txt}.
+# Extra arguments go to every urban_detection_eval call
 # (e.g. --details).
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -52,6 +54,24 @@ else
 fi
 
 [ "${#ran[@]}" -gt 0 ] || { echo "eval: no dataset found" >&2; exit 1; }
+
+# Segmentation accuracy (issue 4): ground / walls / foreground per point, Hough on and off.
+SEG_CONFIG=()
+[ -f "$REPO/config/segmentation.yaml" ] && SEG_CONFIG=(--config "$REPO/config/segmentation.yaml")
+if [ -x "$BIN/urban_detection_seg_eval" ]; then
+  if [ -d "$DATA/semantic_kitti/sequences/00/velodyne" ]; then
+    echo "== seg_eval: semantic_kitti"
+    "${PIN[@]}" "$BIN/urban_detection_seg_eval" "$DATA/semantic_kitti/sequences/00" \
+        "${SEG_CONFIG[@]}" --json "$OUT/seg_eval_semantic_kitti.json" \
+        | tee "$OUT/seg_eval_semantic_kitti.txt"
+  fi
+  if [ -s "$OUT/sim/drive.gt" ]; then
+    echo "== seg_eval: sim"
+    "${PIN[@]}" "$BIN/urban_detection_seg_eval" --sim "$OUT/sim/drive.gt" \
+        --pcap "$OUT/sim/drive.pcap" "${SEG_CONFIG[@]}" --json "$OUT/seg_eval_sim.json" \
+        | tee "$OUT/seg_eval_sim.txt"
+  fi
+fi
 /usr/bin/python3 - "${ran[@]}" <<'PY' | tee "$OUT/eval_summary.txt"
 import json, sys
 print("\n%-15s %-18s %6s %5s %5s %5s %5s %9s %7s %7s" % (

@@ -1,7 +1,7 @@
 // urban_detection_seg_eval: accuracy of the grid segmentation (paper Sec. 3.1) with and without
 // the Hough wall refinement, on SemanticKITTI scans, KITTI object frames or a simulated drive.
 //
-//   urban_detection_seg_eval [DIR] [-v] [--json FILE] [--set name=value ...]
+//   urban_detection_seg_eval [DIR] [-v] [--json FILE] [--config FILE] [--set name=value ...]
 //   urban_detection_seg_eval --sim GTFILE --pcap PCAP [--calibration FILE] [--max-frames N] ...
 //   urban_detection_seg_eval --kitti-object [DIR] ...
 //   DIR defaults to $UD_SHARED_DATA/semantic_kitti/sequences/00 (or ../shared/data/...); it holds
@@ -29,6 +29,7 @@
 #include "urban_detection/core/ground_truth.h"
 #include "urban_detection/core/kitti_io.h"
 #include "urban_detection/core/object_class.h"
+#include "urban_detection/core/params_yaml.h"
 
 namespace fs = std::filesystem;
 namespace core = urban_detection::core;
@@ -436,6 +437,7 @@ void usage(const char* argv0, FILE* out) {
       "       %s --sim GTFILE --pcap PCAP [options]  simulated drive (urban_detection_simulate)\n"
       "       %s --kitti-object [DIR] [options]      KITTI object frames\n"
       "options:\n"
+      "  --config FILE        segmentation.yaml style file (repeatable; in order with --set)\n"
       "  --set name=value     a GridSegmenterParams field (repeatable), e.g. hough.votes=30\n"
       "  --calibration FILE   (--sim) the calibration the drive was simulated with\n"
       "  --max-frames N       (--sim) score the first N revolutions only\n"
@@ -468,7 +470,14 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--set") {
+    if (a == "--config") {
+      const std::string path = value();
+      std::string err;
+      if (!core::loadPipelineParamsYaml(path, &params, nullptr, nullptr, &err)) {
+        std::fprintf(stderr, "error: %s\n", err.c_str());
+        return 2;
+      }
+    } else if (a == "--set") {
       const std::string kv = value();
       if (!setParam(&params, kv)) {
         std::fprintf(stderr, "unknown parameter in --set %s\n", kv.c_str());
