@@ -18,7 +18,7 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
-#include <functional>
+#include <utility>
 #include <map>
 #include <string>
 #include <vector>

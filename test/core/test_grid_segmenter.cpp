@@ -356,6 +356,18 @@ struct AsciiGrid {
   std::vector<std::uint8_t> support;
 };
 
+// Refiner parameters for the 1 m cells of the ASCII grids: 6 m walls, 1 m gaps, 80 % support.
+core::HoughWallRefinerParams asciiRefinerParams() {
+  core::HoughWallRefinerParams p;
+  p.max_range_m = 100.0;
+  p.votes = 6;
+  p.min_line_length_m = 6.0;
+  p.max_line_gap_m = 1.0;
+  p.line_half_width_cells = 0;
+  p.min_tall_fraction = 0.8;
+  return p;
+}
+
 TEST(HoughWallRefiner, AsciiWallRunIsRelabelledAndCarsAreNot) {
   // 1 m cells. Row 1: a wall, tall at both ends, its middle seen short but reaching the top
   // of the field of view ('!'). Row 4: a wall run broken by a 4 m gap from a car ('sss'):
@@ -369,13 +381,7 @@ TEST(HoughWallRefiner, AsciiWallRunIsRelabelledAndCarsAreNot) {
                "................................",
                "ssss.ssss.ssss.ssss.ssss........",
                "................................"});
-  core::HoughWallRefinerParams p;
-  p.max_range_m = 100.0;
-  p.votes = 6;
-  p.min_line_length_m = 6.0;
-  p.max_line_gap_m = 1.0;
-  p.line_half_width_cells = 0;
-  p.min_tall_fraction = 0.8;
+  core::HoughWallRefinerParams p = asciiRefinerParams();
   core::HoughWallRefiner refiner(p);
   const std::vector<SegmentClass> before = g.classes;
   const core::HoughWallStats st = refiner.refine(g.rows, g.cols, 1.0, &g.classes, &g.support);
@@ -404,8 +410,8 @@ TEST(HoughWallRefiner, AsciiWallRunIsRelabelledAndCarsAreNot) {
 
 TEST(HoughWallRefiner, FacadeContinuingARowOfCarsIsAWallAndAVanAmongCarsIsNot) {
   // 1 m cells. Row 1: parked cars, one empty cell, then a facade seen short but reaching the
-  // top of the field of view ('!') ending in tall cells: one run of 26 occupied cells, 16 of
-  // them supporting (0.62 < 0.8), yet the 16 m supported stretch is a facade (the simulated
+  // top of the field of view ('!') ending in tall cells: one run of 25 occupied cells, 16 of
+  // them supporting (0.64 < 0.8), yet the 16 m supported stretch is a facade (the simulated
   // drive's narrow street). Row 4: a van ('!!!!!', 5 m, truncated by the field of view)
   // between cars: its supported stretch is shorter than a vehicle-proof wall.
   AsciiGrid g({"................................",
@@ -414,13 +420,7 @@ TEST(HoughWallRefiner, FacadeContinuingARowOfCarsIsAWallAndAVanAmongCarsIsNot) {
                "................................",
                "ssss.ssss.!!!!!.ssss.ssss.......",
                "................................"});
-  core::HoughWallRefinerParams p;
-  p.max_range_m = 100.0;
-  p.votes = 6;
-  p.min_line_length_m = 6.0;
-  p.max_line_gap_m = 1.0;
-  p.line_half_width_cells = 0;
-  p.min_tall_fraction = 0.8;
+  core::HoughWallRefinerParams p = asciiRefinerParams();
   p.min_mixed_wall_length_m = 8.0;
   core::HoughWallRefiner refiner(p);
   refiner.refine(g.rows, g.cols, 1.0, &g.classes, &g.support);
