@@ -18,9 +18,9 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
-#include <utility>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "urban_detection/core/calibration.h"
