@@ -31,6 +31,8 @@
 #include "urban_detection/core/object_class.h"
 #include "urban_detection/core/params_yaml.h"
 
+#include "tool_common.h"
+
 namespace fs = std::filesystem;
 namespace core = urban_detection::core;
 namespace sk = urban_detection::core::semantic_kitti;
@@ -160,12 +162,8 @@ bool writeJson(const std::string& path, const std::string& dataset, const std::s
                const Counts& on, const Counts& off) {
   FILE* f = std::fopen(path.c_str(), "w");
   if (!f) return false;
-  std::fprintf(f, "{\n  \"dataset\": \"%s\",\n  \"path\": \"", dataset.c_str());
-  for (char ch : source) {
-    if (ch == '"' || ch == '\\') std::fputc('\\', f);
-    std::fputc(ch, f);
-  }
-  std::fprintf(f, "\",\n  \"frames\": %d", on.frames);
+  std::fprintf(f, "{\n  \"dataset\": \"%s\",\n  \"path\": \"%s\",\n  \"frames\": %d",
+               dataset.c_str(), urban_detection::tools::jsonEscape(source).c_str(), on.frames);
   const std::pair<const char*, Group> shares[] = {
       {"car", Group::kCar}, {"person", Group::kPerson}, {"cyclist", Group::kCyclist},
       {"other_vehicle", Group::kOtherVehicle}, {"street_object", Group::kStreetObject},
