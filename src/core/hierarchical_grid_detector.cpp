@@ -308,6 +308,58 @@ void HierarchicalGridDetector::roofBridges() {
   }
 }
 
+void HierarchicalGridDetector::linkCoarse() {
+  // As at the dense level: the root of the super-cell whose links are made is kept, the psi
+  // tests of its forward neighbours are a bit mask (an empty cell, slot -1, has a NaN Z_max),
+  // then the links in the same order.
+  const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
+  coarse_parent_.resize(ncs);
+  for (std::int32_t s = 0; s < ncs; ++s) coarse_parent_[s] = s;
+  coarse_key_.resize(ncs + 1);
+  coarse_key_[0] = std::numeric_limits<float>::quiet_NaN();
+  std::copy(coarse_zmax_.begin(), coarse_zmax_.end(), coarse_key_.begin() + 1);
+  const float* ckey = coarse_key_.data() + 1;
+  std::int32_t* cparent = coarse_parent_.data();
+  const float psi_max = psi_max_f_;
+  std::int32_t croot = 0;
+  auto uniteCoarse = [cparent, &croot](std::int32_t r) {
+    r = findRoot(cparent, r);
+    if (r == croot) return;
+    if (r < croot) {
+      cparent[croot] = r;
+      croot = r;
+    } else {
+      cparent[r] = croot;
+    }
+  };
+  std::int32_t forward_flat[4];
+  for (int f = 0; f < 4; ++f) forward_flat[f] = kForward[f][1] * nc_ + kForward[f][0];
+  for (std::int32_t s = 0; s < ncs; ++s) {
+    const int cx = coarse_xy_[s].x, cy = coarse_xy_[s].y;
+    const float zs = ckey[s];
+    croot = findRoot(cparent, s);
+    if (cx >= 1 && cx < nc_ - 1 && cy < nc_ - 1) {
+      const std::int32_t* here = coarse_slot_.data() + coarse_cell_[s];
+      unsigned linked_forward = 0;
+      for (int f = 0; f < 4; ++f) {
+        linked_forward |=
+            static_cast<unsigned>(std::fabs(zs - ckey[here[forward_flat[f]]]) <= psi_max) << f;
+      }
+      for (; linked_forward; linked_forward &= linked_forward - 1) {
+        uniteCoarse(here[forward_flat[__builtin_ctz(linked_forward)]]);
+      }
+      continue;
+    }
+    for (const auto& o : kForward) {
+      const int x = cx + o[0], y = cy + o[1];
+      if (x < 0 || x >= nc_ || y >= nc_) continue;
+      const std::int32_t r = coarse_slot_[y * nc_ + x];
+      if (r >= 0 && linked(s, r)) uniteCoarse(r);
+    }
+  }
+  for (std::int32_t s = 0; s < ncs; ++s) stats_.coarse_blobs += coarse_parent_[s] == s;
+}
+
 void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
                                       std::vector<DetectedObject>* objects) {
   stats_ = HierarchicalGridStats();
@@ -454,56 +506,10 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   stats_.coarse_cells = ncs;
 
   // --- Coarse level: psi links between 8-neighbouring super-cells -> blobs. -----------------
-  // As at the dense level below: the root of the super-cell whose links are made is kept, the
-  // psi tests of its forward neighbours are a bit mask (an empty cell, slot -1, has a NaN
-  // Z_max), then the links in the same order.
-  coarse_parent_.resize(ncs);
-  for (std::int32_t s = 0; s < ncs; ++s) coarse_parent_[s] = s;
-  coarse_key_.resize(ncs + 1);
-  coarse_key_[0] = std::numeric_limits<float>::quiet_NaN();
-  std::copy(coarse_zmax_.begin(), coarse_zmax_.end(), coarse_key_.begin() + 1);
-  {
-    const float* ckey = coarse_key_.data() + 1;
-    std::int32_t* cparent = coarse_parent_.data();
-    const float psi_max = psi_max_f_;
-    std::int32_t croot = 0;
-    auto uniteCoarse = [cparent, &croot](std::int32_t r) {
-      r = findRoot(cparent, r);
-      if (r == croot) return;
-      if (r < croot) {
-        cparent[croot] = r;
-        croot = r;
-      } else {
-        cparent[r] = croot;
-      }
-    };
-    std::int32_t forward_flat[4];
-    for (int f = 0; f < 4; ++f) forward_flat[f] = kForward[f][1] * nc_ + kForward[f][0];
-    for (std::int32_t s = 0; s < ncs; ++s) {
-      const int cx = coarse_xy_[s].x, cy = coarse_xy_[s].y;
-      const float zs = ckey[s];
-      croot = findRoot(cparent, s);
-      if (cx >= 1 && cx < nc_ - 1 && cy < nc_ - 1) {
-        const std::int32_t* here = coarse_slot_.data() + coarse_cell_[s];
-        unsigned linked_forward = 0;
-        for (int f = 0; f < 4; ++f) {
-          linked_forward |=
-              static_cast<unsigned>(std::fabs(zs - ckey[here[forward_flat[f]]]) <= psi_max) << f;
-        }
-        for (; linked_forward; linked_forward &= linked_forward - 1) {
-          uniteCoarse(here[forward_flat[__builtin_ctz(linked_forward)]]);
-        }
-        continue;
-      }
-      for (const auto& o : kForward) {
-        const int x = cx + o[0], y = cy + o[1];
-        if (x < 0 || x >= nc_ || y >= nc_) continue;
-        const std::int32_t r = coarse_slot_[y * nc_ + x];
-        if (r >= 0 && linked(s, r)) uniteCoarse(r);
-      }
-    }
-  }
-  for (std::int32_t s = 0; s < ncs; ++s) stats_.coarse_blobs += coarse_parent_[s] == s;
+  // The blobs are the objects without the dense refinement; with it, the coarse level only
+  // contributes Z_max and the psi test (linked()) to the links of the dense level, whose
+  // components are the objects, so the blobs are not built.
+  if (!params_.dense_refinement) linkCoarse();
 
   // --- Dense level: weighted densities; dense sub-cells are the nodes of the components. ----
   dense_occupied_.assign(nds, 0);

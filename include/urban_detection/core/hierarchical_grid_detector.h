@@ -18,8 +18,9 @@
 ///  1. Coarse level. Z_max(s) is the largest z of the points in super-cell s. Two super-cells
 ///     s, r are *linked* when s = r or psi(s, r) = |Z_max(s) - Z_max(r)| <= `psi_max_m`. The
 ///     connected components of the links between 8-neighbouring non-empty super-cells
-///     (union-find) are the coarse blobs (reported in the stats; with `dense_refinement` =
-///     false they are the objects: the paper's "simple grid" comparison of Fig. 7).
+///     (union-find) are the coarse blobs: with `dense_refinement` = false they are the objects
+///     (the paper's "simple grid" comparison of Fig. 7); with it, the links of step 3 carry
+///     the coarse level's psi test and the blobs themselves are not built.
 ///  2. Dense level. The weighted density of sub-cell c with n points whose centre lies at
 ///     horizontal distance d from the sensor is rho(c) = n * w(d), w the distance weight of
 ///     distance_weight.h (far sub-cells are enriched, paper Sec. 4). c is *dense* when rho(c) >=
@@ -130,7 +131,7 @@ struct HierarchicalGridStats {
   std::size_t invalid_points = 0;  // non-finite coordinates
   std::size_t outside_points = 0;  // outside the grid extent or |z| > max_abs_z_m
   std::size_t coarse_cells = 0;    // non-empty super-cells
-  std::size_t coarse_blobs = 0;    // connected components at the coarse level
+  std::size_t coarse_blobs = 0;    // coarse blobs (step 1); 0 with dense_refinement (not built)
   std::size_t dense_cells = 0;     // non-empty sub-cells
   std::size_t dense_occupied = 0;  // sub-cells with weighted density >= threshold
   std::size_t bridges = 0;         // bridges (step 3) that joined two components
@@ -161,6 +162,9 @@ class HierarchicalGridDetector : public ObjectDetector {
   bool linked(std::int32_t coarse_a, std::int32_t coarse_b) const;
   void resetGrid();
   void buildBridgeTables();
+  // Step 1's coarse blobs into coarse_parent_ (only without the dense refinement: with it the
+  // dense level's links carry the coarse level's psi test and the blobs are not needed).
+  void linkCoarse();
   void roofBridges();
   // Bridge table of step 3b (after the near, far and farthest tables of step 3).
   static constexpr int kRoofTable = 3;
