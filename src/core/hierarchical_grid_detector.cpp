@@ -335,7 +335,7 @@ void HierarchicalGridDetector::linkCoarse() {
   std::int32_t forward_flat[4];
   for (int f = 0; f < 4; ++f) forward_flat[f] = kForward[f][1] * nc_ + kForward[f][0];
   for (std::int32_t s = 0; s < ncs; ++s) {
-    const int cx = coarse_xy_[s].x, cy = coarse_xy_[s].y;
+    const int cy = coarse_cell_[s] / nc_, cx = coarse_cell_[s] - cy * nc_;
     const float zs = ckey[s];
     croot = findRoot(cparent, s);
     if (cx >= 1 && cx < nc_ - 1 && cy < nc_ - 1) {
@@ -366,8 +366,6 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   const std::size_t n = foreground.points.size();
   stats_.input_points = n;
   resetGrid();
-  coarse_zmax_.clear();
-  coarse_xy_.clear();
   point_slot_.resize(n);
 
   // --- Binning: every point goes to its sub-cell and, through it, to its super-cell. -------
@@ -478,6 +476,11 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   dense_zmax_.resize(nds);
   dense_zmin_.resize(nds);
   dense_coarse_.resize(nds);
+  // A new super-cell is not a branch either (about one sub-cell in three opens one): every
+  // sub-cell writes the next free super-cell's entries, which only advances when it opened it.
+  coarse_cell_.resize(nds);
+  coarse_zmax_.resize(nds);
+  std::int32_t next_coarse = 0;
   for (std::int32_t s = 0; s < nds; ++s) {
     const DenseAcc& e = acc[s];
     const std::int32_t cell = e.cell;
@@ -489,18 +492,18 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     dense_zmin_[s] = e.zmin;
     const int cx = coarse_of_[ix], cy = coarse_of_[iy];
     const std::int32_t ccell = cy * nc_ + cx;
-    std::int32_t cslot = coarse_slot_[ccell];
-    if (cslot < 0) {
-      cslot = static_cast<std::int32_t>(coarse_cell_.size());
-      coarse_slot_[ccell] = cslot;
-      coarse_cell_.push_back(ccell);
-      coarse_xy_.push_back(CellXY{cx, cy});
-      coarse_zmax_.push_back(e.zmax);
-    } else {
-      coarse_zmax_[cslot] = std::max(coarse_zmax_[cslot], e.zmax);
-    }
+    const std::int32_t old_cslot = coarse_slot_[ccell];
+    const bool fresh = old_cslot < 0;
+    const std::int32_t cslot = fresh ? next_coarse : old_cslot;
+    next_coarse += fresh;
+    coarse_slot_[ccell] = cslot;
+    coarse_cell_[cslot] = ccell;
+    const float zmax = coarse_zmax_[cslot];  // stale when fresh
+    coarse_zmax_[cslot] = fresh ? e.zmax : std::max(zmax, e.zmax);
     dense_coarse_[s] = cslot;
   }
+  coarse_cell_.resize(next_coarse);
+  coarse_zmax_.resize(next_coarse);
   const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
   stats_.dense_cells = nds;
   stats_.coarse_cells = ncs;

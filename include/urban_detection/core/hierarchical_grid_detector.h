@@ -233,7 +233,6 @@ class HierarchicalGridDetector : public ObjectDetector {
   std::vector<std::int32_t> dense_flat_;
   // Per touched super-cell (slot).
   std::vector<std::int32_t> coarse_cell_;
-  std::vector<CellXY> coarse_xy_;  // grid column and row
   std::vector<float> coarse_key_;  // [m] Z_max at slot + 1, NaN at 0 (slot -1: empty)
   std::vector<float> coarse_zmax_;
   std::vector<std::int32_t> coarse_parent_;  // union-find of the coarse level
