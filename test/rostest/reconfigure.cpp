@@ -207,6 +207,8 @@ TEST(Reconfigure, OutOfRangeValuesAreRejectedByEveryNodelet) {
        "'sensor_height_m' = 50 is outside [-10, 10]"},
       {"/rr_seg/segmentation", "hough_min_tall_fraction", -0.5,
        "'hough/min_tall_fraction' = -0.5 is outside [0, 1]"},
+      {"/rr_seg/segmentation", "hough_min_mixed_wall_length_m", 600.0,
+       "'hough/min_mixed_wall_length_m' = 600 is outside [0, 500]"},
       {"/rr_hg/detector/hierarchical_grid", "psi_max_m", 500.0,
        "'/rr_hg/detector/hierarchical_grid/psi_max_m' = 500 is out of range: accepted [0, 100] m"},
       {"/rr_hg/detector/hierarchical_grid", "bridge_range_m", 5000.0,

@@ -23,6 +23,7 @@ inline GridSegmentationConfig toConfig(const core::GridSegmenterParams& p) {
   c.hough_min_line_length_m = p.hough.min_line_length_m;
   c.hough_max_line_gap_m = p.hough.max_line_gap_m;
   c.hough_min_tall_fraction = p.hough.min_tall_fraction;
+  c.hough_min_mixed_wall_length_m = p.hough.min_mixed_wall_length_m;
   return c;
 }
 
@@ -41,6 +42,7 @@ inline core::GridSegmenterParams fromConfig(const GridSegmentationConfig& c,
   base.hough.min_line_length_m = c.hough_min_line_length_m;
   base.hough.max_line_gap_m = c.hough_max_line_gap_m;
   base.hough.min_tall_fraction = c.hough_min_tall_fraction;
+  base.hough.min_mixed_wall_length_m = c.hough_min_mixed_wall_length_m;
   return base;
 }
 
