@@ -79,7 +79,7 @@ for r in runs:
     for s in r["stages"]:
         if s not in stages:
             stages.append(s)
-w = 34
+w = 36
 print("\n%-*s" % (w, "wall median / p95 (cpu median) ms") +
       "".join("%30s" % r["label"] for r in runs))
 for s in stages:
@@ -91,7 +91,8 @@ for s in stages:
     print(row)
 for key, fmt in (("pipeline_median_ms", "%.2f"), ("pipeline_cpu_median_ms", "%.2f"),
                  ("pipeline_fps", "%.1f"), ("pipeline_cpu_fps", "%.1f"),
-                 ("hier_vs_kdtree_speedup", "%.1f"), ("peak_rss_mb", "%.0f"),
+                 ("hier_vs_kdtree_speedup", "%.1f"),
+                 ("hier_vs_kdtree_pcl_default_speedup", "%.1f"), ("peak_rss_mb", "%.0f"),
                  ("revolutions", "%d"), ("mean_points", "%.0f"),
                  ("mean_foreground_points", "%.0f")):
     print("%-*s" % (w, key) + "".join(

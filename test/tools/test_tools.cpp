@@ -89,6 +89,7 @@ TEST_F(ToolsTest, BenchWritesStagesPipelineAndNoSpeedupWithoutKdTree) {
   EXPECT_GT(b.get<double>("pipeline_fps"), 0.0);
   EXPECT_GT(b.get<double>("mean_objects_hierarchical"), 0.0);
   EXPECT_EQ("null", b.get<std::string>("hier_vs_kdtree_speedup"));
+  EXPECT_EQ("null", b.get<std::string>("hier_vs_kdtree_pcl_default_speedup"));
   EXPECT_GT(b.get<double>("peak_rss_mb"), 0.0);
 }
 
@@ -101,6 +102,13 @@ TEST_F(ToolsTest, BenchMeasuresTheKdTreeOnTheSameRevolutions) {
                        b.get<double>("stages.hierarchical_detection.median_ms");
   EXPECT_NEAR(ratio, b.get<double>("hier_vs_kdtree_speedup"), 1e-3 * ratio);
   EXPECT_GT(b.get<double>("mean_objects_kdtree"), 0.0);
+  // The shipped unsorted search, and beside it PCL's default sorted one on the same foregrounds.
+  expectStage(b, "kdtree_detection_pcl_default");
+  const double ratio_default =
+      b.get<double>("stages.kdtree_detection_pcl_default.median_ms") /
+      b.get<double>("stages.hierarchical_detection.median_ms");
+  EXPECT_NEAR(ratio_default, b.get<double>("hier_vs_kdtree_pcl_default_speedup"),
+              1e-3 * ratio_default);
 }
 
 TEST_F(ToolsTest, BenchRejectsUnknownArgumentsAndMissingInput) {
