@@ -22,6 +22,9 @@ constexpr int kForward[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
 // to 64 Mi sub-cells (256 MB) so a typo in the extent cannot exhaust memory.
 constexpr double kMaxDenseCells = 64.0 * 1024 * 1024;
 
+// The psi test of two sub-cells through their keys (header of weighDensities()).
+inline bool withinPsi(float za, float zb, float psi_max) { return std::fabs(za - zb) <= psi_max; }
+
 // Union-find root with path halving; inline, it runs for every link tried.
 inline std::int32_t findRoot(std::int32_t* parent, std::int32_t i) {
   while (parent[i] != i) {
@@ -210,6 +213,11 @@ void HierarchicalGridDetector::buildBridgeTables() {
   }
 }
 
+inline bool HierarchicalGridDetector::interior(int ix, int iy) const {
+  return ix >= probe_margin_ && iy >= probe_margin_ && ix < nd_ - probe_margin_ &&
+         iy < nd_ - probe_margin_;
+}
+
 inline bool HierarchicalGridDetector::linked(std::int32_t a, std::int32_t b) const {
   return a == b || std::fabs(coarse_zmax_[a] - coarse_zmax_[b]) <= psi_max_f_;
 }
@@ -360,15 +368,10 @@ void HierarchicalGridDetector::linkCoarse() {
   for (std::int32_t s = 0; s < ncs; ++s) stats_.coarse_blobs += coarse_parent_[s] == s;
 }
 
-void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
-                                      std::vector<DetectedObject>* objects) {
-  stats_ = HierarchicalGridStats();
+// Binning: every point goes to its sub-cell and, through it (buildCells()), to its super-cell.
+std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground) {
   const std::size_t n = foreground.points.size();
-  stats_.input_points = n;
-  resetGrid();
   point_slot_.resize(n);
-
-  // --- Binning: every point goes to its sub-cell and, through it, to its super-cell. -------
   const float origin = static_cast<float>(origin_m_);
   const float inv_dense = static_cast<float>(1.0 / dense_cell_m_);
   const float nd_f = static_cast<float>(nd_);
@@ -464,11 +467,15 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     acc[slot] = u;
     point_cell[i] = slot;
   }
+  return next_slot;
+}
+
+void HierarchicalGridDetector::buildCells(std::int32_t nds) {
+  const DenseAcc* const acc = dense_acc_.data();
   // Per sub-cell, in slot order (the order of their first points): column and row, super-cell
   // (opened in the order of their first sub-cells), heights gathered to it. The column and row
   // come back from the flat index: (cell + 0.5) / nd_ in double is at least 0.5 / nd_ from the
   // next integer and exact to far better than that, so the truncation is the integer division.
-  const std::int32_t nds = next_slot;
   const double inv_nd = 1.0 / nd_;
   dense_cell_.resize(nds);
   dense_xy_.resize(nds);
@@ -504,17 +511,14 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   }
   coarse_cell_.resize(next_coarse);
   coarse_zmax_.resize(next_coarse);
-  const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
   stats_.dense_cells = nds;
-  stats_.coarse_cells = ncs;
+  stats_.coarse_cells = next_coarse;
+}
 
-  // --- Coarse level: psi links between 8-neighbouring super-cells -> blobs. -----------------
-  // The blobs are the objects without the dense refinement; with it, the coarse level only
-  // contributes Z_max and the psi test (linked()) to the links of the dense level, whose
-  // components are the objects, so the blobs are not built.
-  if (!params_.dense_refinement) linkCoarse();
-
-  // --- Dense level: weighted densities; dense sub-cells are the nodes of the components. ----
+// Dense level: weighted densities; dense sub-cells are the nodes of the components.
+void HierarchicalGridDetector::weighDensities() {
+  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
+  const float origin = static_cast<float>(origin_m_);
   dense_occupied_.assign(nds, 0);
   dense_rho_.resize(nds + 1);  // [0]: slot -1 (no sub-cell), see the ring of step 4
   dense_rho_[0] = 0.0f;
@@ -553,13 +557,24 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   // super-cell when the sub-cell is dense, NaN otherwise (every comparison with NaN fails).
   // |za - zb| <= psi_max is linked(): equal super-cells give 0 <= psi_max. Slot -1 (an empty
   // sub-cell) has a key too, NaN: a probe needs no test for it.
-  const float psi_max = psi_max_f_;
   dense_key_.resize(nds + 1);
   dense_key_[0] = std::numeric_limits<float>::quiet_NaN();
   for (std::int32_t s = 0; s < nds; ++s) {
     dense_key_[s + 1] = dense_occupied_[s] ? coarse_zmax_[dense_coarse_[s]]
                                            : std::numeric_limits<float>::quiet_NaN();
   }
+}
+
+// Step 3: connected components of the dense sub-cells (8-neighbourhood) whose super-cells are
+// psi-linked, plus the radial bridges (header).
+void HierarchicalGridDetector::linkDense() {
+  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
+  const float origin = static_cast<float>(origin_m_);
+  const float dcell = static_cast<float>(dense_cell_m_);
+  const float bridge_range2 = static_cast<float>(params_.bridge_range_m * params_.bridge_range_m);
+  const float gap_range2 =
+      static_cast<float>(params_.gap_bridge_range_m * params_.gap_bridge_range_m);
+  const float psi_max = psi_max_f_;
   const float* key = dense_key_.data() + 1;
   const std::int32_t* slot_map = dense_slot_.data();
   // Dense sub-cells as one bit per grid cell (80 kB for the default grid, mostly cached, where
@@ -569,116 +584,111 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   auto denseBit = [dense_bits](std::int32_t cell) {
     return static_cast<unsigned>(dense_bits[cell >> 6] >> (cell & 63)) & 1u;
   };
-  auto psiOk = [psi_max](float za, float zb) { return std::fabs(za - zb) <= psi_max; };
-  // Sub-cells at least probe_margin_ from the grid border probe through flat offsets without
-  // bounds checks; the others (never on real data with the default extent) check each probe.
-  auto interior = [this](int ix, int iy) {
-    return ix >= probe_margin_ && iy >= probe_margin_ && ix < nd_ - probe_margin_ &&
-           iy < nd_ - probe_margin_;
+  std::int32_t* parent = dense_parent_.data();
+  // Root of the sub-cell whose links are being made: found once per sub-cell, not once per
+  // link tried; a link can only replace it by a smaller root (roots stay the smallest slot).
+  std::int32_t root = 0;
+  auto unite = [parent, &root](std::int32_t r) {
+    r = findRoot(parent, r);
+    if (r == root) return false;
+    if (r < root) {
+      parent[root] = r;
+      root = r;
+    } else {
+      parent[r] = root;
+    }
+    return true;
   };
-
-  if (params_.dense_refinement) {
-    // Connected components of the dense sub-cells (8-neighbourhood) whose super-cells are
-    // psi-linked, plus the radial bridges of step 3 (header).
-    std::int32_t* parent = dense_parent_.data();
-    // Root of the sub-cell whose links are being made: found once per sub-cell, not once per
-    // link tried; a link can only replace it by a smaller root (roots stay the smallest slot).
-    std::int32_t root = 0;
-    auto unite = [parent, &root](std::int32_t r) {
-      r = findRoot(parent, r);
-      if (r == root) return false;
-      if (r < root) {
-        parent[root] = r;
-        root = r;
-      } else {
-        parent[r] = root;
+  const std::int32_t forward_flat[4] = {
+      kForward[0][1] * nd_ + kForward[0][0], kForward[1][1] * nd_ + kForward[1][0],
+      kForward[2][1] * nd_ + kForward[2][0], kForward[3][1] * nd_ + kForward[3][0]};
+  for (std::int32_t s = 0; s < nds; ++s) {
+    if (!dense_occupied_[s]) continue;
+    const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
+    const float ks = key[s];
+    const bool inside = interior(ix, iy);
+    const std::int32_t cell = dense_cell_[s];
+    const std::int32_t* here = slot_map + cell;
+    root = findRoot(parent, s);
+    if (inside && probe_rows_ok_) {
+      // Interior sub-cell: one row of probes (the four forward neighbours, then the
+      // bridges of its table and direction bin; only the forward ones for the sensor's own
+      // sub-cells), which of them are dense without branches, then the psi tests and links
+      // of those in the row's order: the same links in the same order as one loop for the
+      // neighbours and one for the bridges.
+      const ProbeRow& probe = probe_of_[s];
+      const int len = probe.len;
+      const std::int32_t* row = probe_flat_.data() + probe.begin;
+      const std::uint64_t mask = probe.mask;
+      std::uint64_t dense_row = 0;
+      for (int j = 0; j < len; ++j) {
+        dense_row |= static_cast<std::uint64_t>(denseBit(cell + row[j])) << j;
       }
-      return true;
-    };
-    const std::int32_t forward_flat[4] = {
-        kForward[0][1] * nd_ + kForward[0][0], kForward[1][1] * nd_ + kForward[1][0],
-        kForward[2][1] * nd_ + kForward[2][0], kForward[3][1] * nd_ + kForward[3][0]};
-    for (std::int32_t s = 0; s < nds; ++s) {
-      if (!dense_occupied_[s]) continue;
-      const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
-      const float ks = key[s];
-      const bool inside = interior(ix, iy);
-      const std::int32_t cell = dense_cell_[s];
-      const std::int32_t* here = slot_map + cell;
-      root = findRoot(parent, s);
-      if (inside && probe_rows_ok_) {
-        // Interior sub-cell: one row of probes (the four forward neighbours, then the
-        // bridges of its table and direction bin; only the forward ones for the sensor's own
-        // sub-cells), which of them are dense without branches, then the psi tests and links
-        // of those in the row's order: the same links in the same order as one loop for the
-        // neighbours and one for the bridges.
-        const ProbeRow& probe = probe_of_[s];
-        const int len = probe.len;
-        const std::int32_t* row = probe_flat_.data() + probe.begin;
-        const std::uint64_t mask = probe.mask;
-        std::uint64_t dense_row = 0;
-        for (int j = 0; j < len; ++j) {
-          dense_row |= static_cast<std::uint64_t>(denseBit(cell + row[j])) << j;
-        }
-        for (dense_row &= mask; dense_row; dense_row &= dense_row - 1) {
-          const int j = __builtin_ctzll(dense_row);
-          const std::int32_t r = here[row[j]];
-          if (psiOk(ks, key[r]) && unite(r) && j >= 4) ++stats_.bridges;
-        }
-        continue;
+      for (dense_row &= mask; dense_row; dense_row &= dense_row - 1) {
+        const int j = __builtin_ctzll(dense_row);
+        const std::int32_t r = here[row[j]];
+        if (withinPsi(ks, key[r], psi_max) && unite(r) && j >= 4) ++stats_.bridges;
       }
-      if (inside) {
-        // Which of the four are dense first, without branches (their outcomes are
-        // data-dependent), then the psi tests and links of those in the same order.
-        unsigned dense_forward = 0;
-        for (int f = 0; f < 4; ++f) dense_forward |= denseBit(cell + forward_flat[f]) << f;
-        for (; dense_forward; dense_forward &= dense_forward - 1) {
-          const std::int32_t r = here[forward_flat[__builtin_ctz(dense_forward)]];
-          if (psiOk(ks, key[r])) unite(r);
-        }
-      } else {
-        for (int f = 0; f < 4; ++f) {
-          const int x = ix + kForward[f][0], y = iy + kForward[f][1];
-          if (x < 0 || x >= nd_ || y >= nd_) continue;
-          const std::int32_t r = slot_map[y * nd_ + x];
-          if (psiOk(ks, key[r])) unite(r);
-        }
+      continue;
+    }
+    if (inside) {
+      // Which of the four are dense first, without branches (their outcomes are
+      // data-dependent), then the psi tests and links of those in the same order.
+      unsigned dense_forward = 0;
+      for (int f = 0; f < 4; ++f) dense_forward |= denseBit(cell + forward_flat[f]) << f;
+      for (; dense_forward; dense_forward &= dense_forward - 1) {
+        const std::int32_t r = here[forward_flat[__builtin_ctz(dense_forward)]];
+        if (withinPsi(ks, key[r], psi_max)) unite(r);
       }
-      // Outwards along the line of sight (step 3): the precomputed offsets of the ray's
-      // direction bin, every dense sub-cell there.
-      const float cx = (ix + 0.5f) * dcell + origin, cy = (iy + 0.5f) * dcell + origin;
-      const float d2 = cx * cx + cy * cy;
-      if (d2 < dcell * dcell) continue;  // the sensor's own sub-cells have no direction
-      const int table = d2 > gap_range2 ? 2 : d2 > bridge_range2 ? 1 : 0;
-      const int bin = directionBin(cx, cy);
-      const std::int32_t* begin = &bridge_begin_[table * (kDirectionBins + 1) + bin];
-      if (inside) {
-        // As above, up to 64 probes at a time.
-        for (std::int32_t k0 = begin[0]; k0 < begin[1]; k0 += 64) {
-          const std::int32_t* flat = bridge_flat_.data() + k0;
-          const int m = std::min<std::int32_t>(64, begin[1] - k0);
-          std::uint64_t dense_bridge = 0;
-          for (int j = 0; j < m; ++j) {
-            dense_bridge |= static_cast<std::uint64_t>(denseBit(cell + flat[j])) << j;
-          }
-          for (; dense_bridge; dense_bridge &= dense_bridge - 1) {
-            const std::int32_t r = here[flat[__builtin_ctzll(dense_bridge)]];
-            if (psiOk(ks, key[r]) && unite(r)) ++stats_.bridges;
-          }
-        }
-        continue;
-      }
-      for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
-        const int x = ix + bridge_offsets_[k].x, y = iy + bridge_offsets_[k].y;
-        if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
+    } else {
+      for (int f = 0; f < 4; ++f) {
+        const int x = ix + kForward[f][0], y = iy + kForward[f][1];
+        if (x < 0 || x >= nd_ || y >= nd_) continue;
         const std::int32_t r = slot_map[y * nd_ + x];
-        if (psiOk(ks, key[r]) && unite(r)) ++stats_.bridges;
+        if (withinPsi(ks, key[r], psi_max)) unite(r);
       }
     }
-    if (params_.roof_bridge_subcells > 0) roofBridges();
+    // Outwards along the line of sight (step 3): the precomputed offsets of the ray's
+    // direction bin, every dense sub-cell there.
+    const float cx = (ix + 0.5f) * dcell + origin, cy = (iy + 0.5f) * dcell + origin;
+    const float d2 = cx * cx + cy * cy;
+    if (d2 < dcell * dcell) continue;  // the sensor's own sub-cells have no direction
+    const int table = d2 > gap_range2 ? 2 : d2 > bridge_range2 ? 1 : 0;
+    const int bin = directionBin(cx, cy);
+    const std::int32_t* begin = &bridge_begin_[table * (kDirectionBins + 1) + bin];
+    if (inside) {
+      // As above, up to 64 probes at a time.
+      for (std::int32_t k0 = begin[0]; k0 < begin[1]; k0 += 64) {
+        const std::int32_t* flat = bridge_flat_.data() + k0;
+        const int m = std::min<std::int32_t>(64, begin[1] - k0);
+        std::uint64_t dense_bridge = 0;
+        for (int j = 0; j < m; ++j) {
+          dense_bridge |= static_cast<std::uint64_t>(denseBit(cell + flat[j])) << j;
+        }
+        for (; dense_bridge; dense_bridge &= dense_bridge - 1) {
+          const std::int32_t r = here[flat[__builtin_ctzll(dense_bridge)]];
+          if (withinPsi(ks, key[r], psi_max) && unite(r)) ++stats_.bridges;
+        }
+      }
+      continue;
+    }
+    for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
+      const int x = ix + bridge_offsets_[k].x, y = iy + bridge_offsets_[k].y;
+      if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
+      const std::int32_t r = slot_map[y * nd_ + x];
+      if (withinPsi(ks, key[r], psi_max) && unite(r)) ++stats_.bridges;
+    }
   }
+}
 
-  // --- Component index per sub-cell (near-empty ones borrow a dense neighbour's). -----------
+// Component index per sub-cell (near-empty ones borrow a dense neighbour's).
+std::int32_t HierarchicalGridDetector::numberComponents() {
+  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
+  const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
+  const float psi_max = psi_max_f_;
+  const float* rho = dense_rho_.data() + 1;
+  const float* key = dense_key_.data() + 1;
+  const std::int32_t* slot_map = dense_slot_.data();
   // Components are numbered in the order of first appearance of their sub-cells, which is the
   // order of the first point in the input, so ids do not depend on the grid layout.
   dense_object_.assign(nds, -1);
@@ -733,15 +743,20 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
         r = slot_map[y * nd_ + x];
       }
       const float rho_r = rho[r];
-      const bool take = psiOk(zs, key[r]) & (rho_r > best_rho);
+      const bool take = withinPsi(zs, key[r], psi_max) & (rho_r > best_rho);
       best = take ? r : best;
       best_rho = take ? rho_r : best_rho;
     }
     if (best >= 0) dense_object_[s] = componentOf(best);
   }
   stats_.components = ncomp;
+  return ncomp;
+}
 
-  // --- Per component: size and extent (on the sub-cells it covers) for the filters. --------
+// Per component: size and extent (on the sub-cells it covers) for the filters.
+std::size_t HierarchicalGridDetector::filterComponents(std::int32_t ncomp) {
+  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
+  const float* rho = dense_rho_.data() + 1;
   comp_count_.assign(ncomp, 0);
   comp_rho_.assign(ncomp, 0.0f);
   comp_box_.resize(4 * static_cast<std::size_t>(ncomp));
@@ -779,12 +794,18 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
       comp_final_[c] = static_cast<std::int32_t>(nobj++);
     }
   }
-  stats_.objects = nobj;
+  return nobj;
+}
 
-  // --- Output. One pass scatters every point to its object (a counting sort), writing its
-  // index and xy contiguously per object and accumulating the object's moments (pass 1 of the
-  // geometry) on the way, so the cloud is read once, sequentially. The objects vector is
-  // resized, not cleared, so the index vectors keep their capacity between frames. ----------
+// Output. One pass scatters every point to its object (a counting sort), writing its index and
+// xy contiguously per object and accumulating the object's moments (pass 1 of the geometry) on
+// the way, so the cloud is read once, sequentially. The objects vector is resized, not cleared,
+// so the index vectors keep their capacity between frames.
+void HierarchicalGridDetector::emitObjects(const LabeledCloud& foreground, std::int32_t ncomp,
+                                           std::size_t nobj,
+                                           std::vector<DetectedObject>* objects) {
+  const std::size_t n = foreground.points.size();
+  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
   objects->resize(nobj);
   object_begin_.assign(nobj + 1, 0);
   for (std::int32_t c = 0; c < ncomp; ++c) {
@@ -835,7 +856,27 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
     obj.id = static_cast<std::uint32_t>(k + 1);
     geometry_.finish(moments_[k], object_xy_.data() + object_begin_[k], &obj);
   }
-  // --- Step 6 (far_object_merger.h).
+}
+
+void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
+                                      std::vector<DetectedObject>* objects) {
+  stats_ = HierarchicalGridStats();
+  stats_.input_points = foreground.points.size();
+  resetGrid();
+  buildCells(binPoints(foreground));
+  // The coarse blobs are the objects without the dense refinement; with it, the coarse level
+  // only contributes Z_max and the psi test (linked()) to the links of the dense level, whose
+  // components are the objects, so the blobs are not built.
+  if (!params_.dense_refinement) linkCoarse();
+  weighDensities();
+  if (params_.dense_refinement) {
+    linkDense();
+    if (params_.roof_bridge_subcells > 0) roofBridges();
+  }
+  const std::int32_t ncomp = numberComponents();
+  const std::size_t nobj = filterComponents(ncomp);
+  emitObjects(foreground, ncomp, nobj, objects);
+  // Step 6 (far_object_merger.h).
   stats_.far_joins = far_merger_.apply(foreground, objects);
   stats_.objects = objects->size();
 }

@@ -159,7 +159,28 @@ class HierarchicalGridDetector : public ObjectDetector {
   double denseCellSize() const { return dense_cell_m_; }
 
  private:
+  // detect()'s stages, in order (the header's steps; each reads the members the previous ones
+  // filled).
+  // Every point to its sub-cell slot (point_slot_, dense_acc_); returns the number of sub-cells.
+  std::int32_t binPoints(const LabeledCloud& foreground);
+  // Per sub-cell arrays (dense_*) and the super-cells with their Z_max (coarse_*).
+  void buildCells(std::int32_t nds);
+  // Step 2: weighted densities, dense sub-cells (dense_bits_), psi keys, probe rows.
+  void weighDensities();
+  // Step 3: union-find of the dense sub-cells over the 8-neighbourhood and the radial bridges.
+  void linkDense();
+  // Step 4: component number per sub-cell (dense_object_); returns the number of components.
+  std::int32_t numberComponents();
+  // The size and extent filters: comp_final_; returns the number of objects.
+  std::size_t filterComponents(std::int32_t ncomp);
+  // The objects: point indices, boxes (object_geometry.h).
+  void emitObjects(const LabeledCloud& foreground, std::int32_t ncomp, std::size_t nobj,
+                   std::vector<DetectedObject>* objects);
+
   bool linked(std::int32_t coarse_a, std::int32_t coarse_b) const;
+  // Sub-cells at least probe_margin_ from the grid border probe through flat offsets without
+  // bounds checks; the others (never on real data with the default extent) check each probe.
+  bool interior(int ix, int iy) const;
   void resetGrid();
   void buildBridgeTables();
   // Step 1's coarse blobs into coarse_parent_ (only without the dense refinement: with it the
