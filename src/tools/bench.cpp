@@ -462,11 +462,11 @@ int main(int argc, char** argv) {
               points_sum / frames, fg_sum / frames, hier_obj_sum / frames);
   if (run_kdtree) std::printf(" / %.1f kd-tree objects", kd_obj_sum / frames);
   std::printf(" per revolution; %d CPU(s) allowed\n", cpus);
-  std::printf("  %-24s %10s %10s %14s\n", "stage", "median_ms", "p95_ms", "cpu_median_ms");
+  std::printf("  %-28s %10s %10s %14s\n", "stage", "median_ms", "p95_ms", "cpu_median_ms");
   for (const char* name : order) {
     auto it = stage.find(name);
     if (it == stage.end()) continue;
-    std::printf("  %-24s %10.3f %10.3f %14.3f%s\n", name, median(it->second),
+    std::printf("  %-28s %10.3f %10.3f %14.3f%s\n", name, median(it->second),
                 percentile(it->second, 0.95), median(cpu_stage[name]),
                 std::string(name) == "hough_refinement" ? "  (inside segmentation)"
                 : std::string(name) == "markers"        ? "  (rviz output, lazy, not in pipeline)"
@@ -475,7 +475,7 @@ int main(int argc, char** argv) {
                     ? "  (baseline with PCL's default sorted search)"
                     : "");
   }
-  std::printf("  %-24s %10.3f %10.3f %14.3f  (%s-> hierarchical objects)\n", "pipeline",
+  std::printf("  %-28s %10.3f %10.3f %14.3f  (%s-> hierarchical objects)\n", "pipeline",
               pipeline_median, percentile(pipeline, 0.95), median(pipeline_cpu),
               any_packets ? "packets " : "cloud ");
   std::printf("  object_filter %s: %.1f hierarchical objects rejected per revolution\n",
