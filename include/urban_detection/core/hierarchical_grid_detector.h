@@ -165,10 +165,14 @@ class HierarchicalGridDetector : public ObjectDetector {
   std::int32_t binPoints(const LabeledCloud& foreground);
   // Per sub-cell arrays (dense_*) and the super-cells with their Z_max (coarse_*).
   void buildCells(std::int32_t nds);
+  // Step 1's coarse blobs into coarse_parent_ (only without the dense refinement, see detect()).
+  void linkCoarse();
   // Step 2: weighted densities, dense sub-cells (dense_bits_), psi keys, probe rows.
   void weighDensities();
   // Step 3: union-find of the dense sub-cells over the 8-neighbourhood and the radial bridges.
   void linkDense();
+  // Step 3b: the roof bridges, into the same union-find.
+  void roofBridges();
   // Step 4: component number per sub-cell (dense_object_); returns the number of components.
   std::int32_t numberComponents();
   // The size and extent filters: comp_final_; returns the number of objects.
@@ -183,10 +187,6 @@ class HierarchicalGridDetector : public ObjectDetector {
   bool interior(int ix, int iy) const;
   void resetGrid();
   void buildBridgeTables();
-  // Step 1's coarse blobs into coarse_parent_ (only without the dense refinement: with it the
-  // dense level's links carry the coarse level's psi test and the blobs are not needed).
-  void linkCoarse();
-  void roofBridges();
   // Bridge table of step 3b (after the near, far and farthest tables of step 3).
   static constexpr int kRoofTable = 3;
   static constexpr int kDirectionBins = 256;  // line-of-sight directions of the bridge tables
