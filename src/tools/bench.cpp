@@ -24,8 +24,7 @@
 // baseline is also timed with PCL's default sorted search (kdtree_detection_pcl_default: the
 // same clusters), so both speed-ups come from one run. --no-kdtree skips the baseline (on the
 // simulated drive's dense near-range blobs it takes seconds per revolution); the speed-ups are
-// then not measured (null in the JSON). A Debug build (no NDEBUG)
-// refuses to run.
+// then not measured (null in the JSON). A Debug build (no NDEBUG) refuses to run.
 #include <sched.h>
 #include <sys/resource.h>
 #include <time.h>
