@@ -6,19 +6,8 @@
 # Writes results/bench_<dataset>.{json,txt} and prints a combined table. Extra arguments go to
 # every urban_detection_bench call (e.g. --repeat 5).
 set -euo pipefail
-REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-BIN="${UD_WS:-$REPO/.ws}/devel/lib/urban_detection"
-DATA="${UD_SHARED_DATA:-$REPO/../shared/data}"
-OUT="$REPO/results"
-mkdir -p "$OUT"
-
-PIN=()
-if command -v taskset >/dev/null; then PIN=(taskset -c 0); else
-  echo "bench: taskset not found, running unpinned" >&2; fi
-CONFIGS=()
-for c in segmentation detection; do
-  [ -f "$REPO/config/$c.yaml" ] && CONFIGS+=(--config "$REPO/config/$c.yaml")
-done
+# shellcheck source=tool_env.sh
+source "$(dirname "${BASH_SOURCE[0]}")/tool_env.sh"  # REPO BIN DATA OUT PIN CONFIGS
 EXTRA=("$@")
 
 # Packet decoding alone (Google Benchmark, urban_detection_bench_decode): one 600 rpm

@@ -8,18 +8,8 @@
 # Extra arguments go to every urban_detection_eval call
 # (e.g. --details).
 set -euo pipefail
-REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-BIN="${UD_WS:-$REPO/.ws}/devel/lib/urban_detection"
-DATA="${UD_SHARED_DATA:-$REPO/../shared/data}"
-OUT="$REPO/results"
-mkdir -p "$OUT"
-
-PIN=()
-command -v taskset >/dev/null && PIN=(taskset -c 0)
-CONFIGS=()
-for c in segmentation detection; do
-  [ -f "$REPO/config/$c.yaml" ] && CONFIGS+=(--config "$REPO/config/$c.yaml")
-done
+# shellcheck source=tool_env.sh
+source "$(dirname "${BASH_SOURCE[0]}")/tool_env.sh"  # REPO BIN DATA OUT PIN CONFIGS
 
 if [ ! -x "$BIN/urban_detection_eval" ]; then
   echo "eval: $BIN/urban_detection_eval is not built" >&2

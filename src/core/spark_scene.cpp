@@ -10,14 +10,7 @@ namespace {
 
 void add(CloudXYZIRT* cloud, std::vector<cv::Vec3b>* rgb, const Eigen::Vector3f& p,
          const cv::Vec3b& colour) {
-  PointXYZIRT q;
-  q.x = p.x();
-  q.y = p.y();
-  q.z = p.z();
-  q.intensity = 100.0f;
-  q.ring = 0;
-  q.time = 0.0f;
-  cloud->push_back(q);
+  cloud->push_back(makePoint(p.x(), p.y(), p.z(), 100.0f));
   rgb->push_back(colour);
 }
 

@@ -185,14 +185,7 @@ bool readCloud(const std::string& path, ud::CloudXYZIRT* cloud, std::vector<cv::
   cloud->clear();
   cloud->reserve(xyz.size());
   for (const auto& p : xyz) {
-    ud::PointXYZIRT q;
-    q.x = p.x;
-    q.y = p.y;
-    q.z = p.z;
-    q.intensity = 0.0f;
-    q.ring = 0;
-    q.time = 0.0f;
-    cloud->push_back(q);
+    cloud->push_back(ud::makePoint(p.x, p.y, p.z));
   }
   if (has_intensity) {
     pcl::PointCloud<pcl::PointXYZI> xyzi;
@@ -572,14 +565,8 @@ int runKitti(int argc, char** argv) {
         if (std::fabs(b.x()) > 0.5 * l.length_m || b.y() < 0.2 || b.y() > l.height_m ||
             std::fabs(b.z()) > 0.5 * l.width_m)
           continue;
-        ud::LabeledPoint q;
-        q.x = p.x;
-        q.y = p.y;
-        q.z = p.z;
-        q.intensity = p.intensity;
-        q.label = static_cast<std::uint32_t>(k + 1);
-        q.index = static_cast<std::uint32_t>(i);
-        pts.push_back(q);
+        pts.push_back(ud::makeLabeledPoint(p.x, p.y, p.z, static_cast<std::uint32_t>(k + 1),
+                                           static_cast<std::uint32_t>(i), p.intensity));
       }
     }
     core::SegmentationScores scores;

@@ -27,14 +27,7 @@ inline Partition partitionOf(const std::vector<core::DetectedObject>& objects) {
 /// Appends a point; its `index` is its position and `label` is the ground-truth object (0 =
 /// none), so tests can rebuild the expected partition independently of the detector.
 inline void addPoint(LabeledCloud* cloud, float x, float y, float z, std::uint32_t truth) {
-  LabeledPoint p;
-  p.x = x;
-  p.y = y;
-  p.z = z;
-  p.intensity = 0.0f;
-  p.label = truth;
-  p.index = static_cast<std::uint32_t>(cloud->size());
-  cloud->push_back(p);
+  cloud->push_back(makeLabeledPoint(x, y, z, truth, static_cast<std::uint32_t>(cloud->size())));
 }
 
 /// Expected partition from the ground-truth labels (label 0 excluded).

@@ -60,14 +60,8 @@ inline CloudXYZIRT rayCast(float sensor_h, const std::vector<Box>& boxes, std::v
         if (hit && t0 > 0.0f && t0 < best) best = t0, tag = bx.tag;
       }
       if (tag < 0) continue;
-      PointXYZIRT p;
-      p.x = dx * best;
-      p.y = dy * best;
-      p.z = dz * best;  // sensor frame
-      p.intensity = 10.0f;
-      p.ring = static_cast<std::uint16_t>(b);
-      p.time = 0.0f;
-      cloud.push_back(p);
+      cloud.push_back(makePoint(dx * best, dy * best, dz * best, 10.0f,  // sensor frame
+                                static_cast<std::uint16_t>(b)));
       tags->push_back(tag);
     }
   }
@@ -80,14 +74,7 @@ inline void sampleSurface(CloudXYZIRT* cloud, float sensor_h, float x0, float x1
                           float y1, float step, const std::function<float(float, float)>& height) {
   for (float x = x0; x <= x1; x += step) {
     for (float y = y0; y <= y1; y += step) {
-      PointXYZIRT p;
-      p.x = x;
-      p.y = y;
-      p.z = height(x, y) - sensor_h;
-      p.intensity = 0.0f;
-      p.ring = 0;
-      p.time = 0.0f;
-      cloud->push_back(p);
+      cloud->push_back(makePoint(x, y, height(x, y) - sensor_h));
     }
   }
 }

@@ -83,15 +83,9 @@ inline core::DetectedObject scan(const Shape& shape, double az0_deg, double az1_
       const double t = shape(d);
       if (t <= 0) continue;
       const Eigen::Vector3d p = t * d;
-      LabeledPoint q;
-      q.x = static_cast<float>(p.x());
-      q.y = static_cast<float>(p.y());
-      q.z = static_cast<float>(p.z());
-      q.intensity = intensity;
-      q.label = 4;
-      q.index = static_cast<std::uint32_t>(3 * fg->size() + 7);
-      o.indices.push_back(q.index);
-      fg->push_back(q);
+      o.indices.push_back(static_cast<std::uint32_t>(3 * fg->size() + 7));
+      fg->push_back(makeLabeledPoint(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                     static_cast<float>(p.z()), 4, o.indices.back(), intensity));
       sum += p;
       if (o.indices.size() == 1) o.min_pt = o.max_pt = p.cast<float>();
       o.min_pt = o.min_pt.cwiseMin(p.cast<float>());

@@ -50,16 +50,6 @@ KittiLabel carLabel() {
   return l;
 }
 
-PointXYZIRT pt(float x, float y, float z) {
-  PointXYZIRT p;
-  p.x = x;
-  p.y = y;
-  p.z = z;
-  p.intensity = 0.f;
-  p.ring = 0;
-  p.time = 0.f;
-  return p;
-}
 
 TEST(KittiObject, ParsesLabelLine) {
   const KittiLabel l = carLabel();
@@ -132,17 +122,17 @@ TEST(KittiObject, GroundTruthRoles) {
       "Pedestrian 0 0 0 0 0 10 10 1.8 0.6 0.8 -1.0 1.7 8.0 0.0", &ped));
   CloudXYZIRT cloud;
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  cloud.push_back(pt(15.27f, -2.0f, -1.0f));   // 0 car, 0.78 m above its bottom
-  cloud.push_back(pt(15.27f, -2.0f, -1.7f));   // 1 car, 0.08 m above bottom: excluded
-  cloud.push_back(pt(15.27f, -2.85f, -1.0f));  // 2 0.05 m outside the side: within margin
-  cloud.push_back(pt(15.27f, -2.95f, -1.0f));  // 3 0.15 m outside: background, u 737.7 v 222.9
-  cloud.push_back(pt(-5.0f, 0.0f, 0.0f));      // 4 behind the camera: don't care
-  cloud.push_back(pt(1.0f, 10.0f, 0.0f));      // 5 left of the image: don't care
-  cloud.push_back(pt(20.27f, -3.0f, 0.0f));    // 6 projects to (705, 177.2): DontCare box
-  cloud.push_back(pt(17.2f, -2.0f, -0.35f));   // 7 car, near the top rear corner
-  cloud.push_back(pt(17.45f, -2.0f, -1.0f));   // 8 0.18 m behind the car: background
-  cloud.push_back(pt(nan, 0.0f, 0.0f));        // 9 non-finite: excluded
-  cloud.push_back(pt(8.27f, 1.0f, -1.08f));    // 10 pedestrian: camera (-1.0, 1.0, 8.0)
+  cloud.push_back(makePoint(15.27f, -2.0f, -1.0f));   // 0 car, 0.78 m above its bottom
+  cloud.push_back(makePoint(15.27f, -2.0f, -1.7f));   // 1 car, 0.08 m above bottom: excluded
+  cloud.push_back(makePoint(15.27f, -2.85f, -1.0f));  // 2 0.05 m outside the side: within margin
+  cloud.push_back(makePoint(15.27f, -2.95f, -1.0f));  // 3 0.15 m outside: background, u 737.7 v 222.9
+  cloud.push_back(makePoint(-5.0f, 0.0f, 0.0f));      // 4 behind the camera: don't care
+  cloud.push_back(makePoint(1.0f, 10.0f, 0.0f));      // 5 left of the image: don't care
+  cloud.push_back(makePoint(20.27f, -3.0f, 0.0f));    // 6 projects to (705, 177.2): DontCare box
+  cloud.push_back(makePoint(17.2f, -2.0f, -0.35f));   // 7 car, near the top rear corner
+  cloud.push_back(makePoint(17.45f, -2.0f, -1.0f));   // 8 0.18 m behind the car: background
+  cloud.push_back(makePoint(nan, 0.0f, 0.0f));        // 9 non-finite: excluded
+  cloud.push_back(makePoint(8.27f, 1.0f, -1.08f));    // 10 pedestrian: camera (-1.0, 1.0, 8.0)
   KittiGroundTruthParams params;
   params.min_points = 1;
   EvalFrame gt;

@@ -23,16 +23,7 @@ using core::SegmentClass;
 
 constexpr float kKittiHeight = 1.73f;
 
-PointXYZIRT pt(float x, float y, float z) {
-  PointXYZIRT p;
-  p.x = x;
-  p.y = y;
-  p.z = z;
-  p.intensity = 1.0f;
-  p.ring = 0;
-  p.time = 0.0f;
-  return p;
-}
+PointXYZIRT pt(float x, float y, float z) { return makePoint(x, y, z, 1.0f); }
 
 int countLabel(const std::vector<SegmentClass>& labels, SegmentClass c) {
   int n = 0;

@@ -31,14 +31,7 @@ struct Scene {
 };
 
 void add(Scene* s, float x, float y, float z, Tag tag) {
-  PointXYZIRT p;
-  p.x = x;
-  p.y = y;
-  p.z = z;
-  p.intensity = 10.0f;
-  p.ring = 0;
-  p.time = 0.0f;
-  s->cloud.push_back(p);
+  s->cloud.push_back(makePoint(x, y, z, 10.0f));
   s->tags.push_back(tag);
 }
 

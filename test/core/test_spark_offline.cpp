@@ -25,16 +25,6 @@ namespace {
 using core::CapturePathParams;
 using core::OrthoCamera;
 
-PointXYZIRT pt(float x, float y, float z) {
-  PointXYZIRT p;
-  p.x = x;
-  p.y = y;
-  p.z = z;
-  p.intensity = 0;
-  p.ring = 0;
-  p.time = 0;
-  return p;
-}
 
 TEST(SparkCapture, PosesEveryIntervalAlongThePolyline) {
   CapturePathParams p;
@@ -73,11 +63,11 @@ TEST(SparkCapture, OrthographicProjectionByHand) {
 
 TEST(SparkCapture, ZBufferKeepsTheFirstPointHit) {
   CloudXYZIRT cloud;
-  cloud.push_back(pt(5, -2, 1));  // pixel (7, 4), depth 5
-  cloud.push_back(pt(3, -2, 1));  // same pixel, nearer
-  cloud.push_back(pt(-3, 0, 0));  // behind the camera
-  cloud.push_back(pt(std::numeric_limits<float>::quiet_NaN(), 0, 0));
-  cloud.push_back(pt(50, 100, 0));  // outside the image
+  cloud.push_back(makePoint(5, -2, 1));  // pixel (7, 4), depth 5
+  cloud.push_back(makePoint(3, -2, 1));  // same pixel, nearer
+  cloud.push_back(makePoint(-3, 0, 0));  // behind the camera
+  cloud.push_back(makePoint(std::numeric_limits<float>::quiet_NaN(), 0, 0));
+  cloud.push_back(makePoint(50, 100, 0));  // outside the image
   const std::vector<cv::Vec3b> colours = {{1, 1, 1}, {2, 2, 2}, {3, 3, 3}, {4, 4, 4}, {5, 5, 5}};
   const OrthoCamera c = OrthoCamera::make({0, 0, 0}, 0.0, 0.0, 10, 10, 1.0, 100.0);
   core::OrthoRenderer r;
@@ -143,9 +133,9 @@ TEST(SparkDbscan, MatchesBruteForceDefinition) {
   for (const Eigen::Vector3f& c :
        {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(3, 0, 0), Eigen::Vector3f(-4, 5, 1)})
     for (int i = 0; i < 120; ++i)
-      cloud.push_back(pt(c.x() + g(rng), c.y() + g(rng), c.z() + g(rng)));
-  for (int i = 0; i < 60; ++i) cloud.push_back(pt(u(rng), u(rng), u(rng)));
-  cloud.push_back(pt(std::numeric_limits<float>::quiet_NaN(), 0, 0));
+      cloud.push_back(makePoint(c.x() + g(rng), c.y() + g(rng), c.z() + g(rng)));
+  for (int i = 0; i < 60; ++i) cloud.push_back(makePoint(u(rng), u(rng), u(rng)));
+  cloud.push_back(makePoint(std::numeric_limits<float>::quiet_NaN(), 0, 0));
   std::vector<std::uint32_t> members;
   for (std::uint32_t i = 0; i < cloud.size(); i += 1) members.push_back(i);
   const double eps = 0.35;
@@ -206,9 +196,9 @@ TEST(SparkDbscan, MatchesBruteForceDefinition) {
 
 TEST(SparkInstances, VotesClassifyAndBoxesCut) {
   CloudXYZIRT cloud;
-  for (int i = 0; i < 20; ++i) cloud.push_back(pt(0.1f * i, 0, 0));       // 0..19: class 1
-  for (int i = 0; i < 20; ++i) cloud.push_back(pt(10 + 0.1f * i, 0, 0));  // 20..39: class 2
-  cloud.push_back(pt(0.5f, 0.05f, 0.0f));  // 40: inside the first box, never hit
+  for (int i = 0; i < 20; ++i) cloud.push_back(makePoint(0.1f * i, 0, 0));       // 0..19: class 1
+  for (int i = 0; i < 20; ++i) cloud.push_back(makePoint(10 + 0.1f * i, 0, 0));  // 20..39: class 2
+  cloud.push_back(makePoint(0.5f, 0.05f, 0.0f));  // 40: inside the first box, never hit
   std::vector<int> point_class(cloud.size(), -1);
   for (int i = 0; i < 20; ++i) point_class[i] = 1;
   for (int i = 20; i < 40; ++i) point_class[i] = 2;

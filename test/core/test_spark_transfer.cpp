@@ -155,14 +155,7 @@ Eigen::Isometry3d opticalFromLidar() {
   return t;
 }
 void addPoint(LabeledCloud* c, std::uint32_t id, float x, float y, float z) {
-  LabeledPoint p;
-  p.x = x;
-  p.y = y;
-  p.z = z;
-  p.intensity = 0;
-  p.label = id;
-  p.index = static_cast<std::uint32_t>(c->size());
-  c->push_back(p);
+  c->push_back(makeLabeledPoint(x, y, z, id, static_cast<std::uint32_t>(c->size())));
 }
 
 // Label map at half the camera resolution (50 x 40): car left of u = 50, vegetation right of

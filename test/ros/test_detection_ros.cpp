@@ -65,13 +65,8 @@ TEST(DetectionConversions, ObjectPointsCarryTheirObjectId) {
   fg.header.frame_id = "velodyne";
   fg.header.stamp = 1317000000123456ULL;
   for (std::uint32_t i = 0; i < 6; ++i) {
-    LabeledPoint p;
-    p.x = static_cast<float>(i);
-    p.y = p.z = 0.0f;
-    p.intensity = 0.0f;
-    p.label = 4;         // kShort on the foreground
-    p.index = 100 + i;  // index in velodyne_points
-    fg.push_back(p);
+    // label 4: kShort on the foreground; index: in velodyne_points
+    fg.push_back(makeLabeledPoint(static_cast<float>(i), 0.0f, 0.0f, 4, 100 + i));
   }
   core::DetectedObject a, b;
   a.id = 1;

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "urban_detection/ros/velodyne_scan.h"
+#include "../core/spin_packets.h"
 
 namespace urban_detection {
 namespace {
@@ -13,19 +14,7 @@ constexpr std::size_t kReturnsPerPacket = 384;
 
 // Packets 6 deg apart (1 deg per firing), first block at `first_az_deg`, all returns at 10 m.
 std::vector<core::RawPacket> makePackets(int count, double first_az_deg) {
-  const core::PacketEncoder encoder(core::Calibration::nominalHdl64eS2());
-  std::vector<core::RawPacket> packets;
-  for (int i = 0; i < count; ++i) {
-    core::Firing firings[6];
-    for (int k = 0; k < 6; ++k) {
-      const double az = std::fmod(first_az_deg + 6.0 * i + k, 360.0);
-      firings[k].azimuth = static_cast<std::uint16_t>(std::lround(az * 100.0)) % 36000;
-      firings[k].distance.fill(5000);
-      firings[k].intensity.fill(50);
-    }
-    packets.push_back(encoder.encode(firings, 0));
-  }
-  return packets;
+  return test::spinPackets(count, first_az_deg, 1.0, 0);
 }
 
 TEST(ScanAssembler, PublishesOnlyWholeRevolutionsCutAtTheCutAngle) {

@@ -31,6 +31,7 @@
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/pcap_io.h"
 #include "urban_detection/core/segment_class.h"
+#include "../core/spin_packets.h"
 #include "rostest_util.h"
 
 namespace urban_detection {
@@ -43,16 +44,7 @@ using rostest_util::waitFor;
 // Flat road (0.25 m grid, 30 x 30 m) and a 1.5 m high box: ground and short points.
 boost::shared_ptr<CloudXYZIRT> street() {
   auto cloud = boost::make_shared<CloudXYZIRT>();
-  auto add = [&](float x, float y, float z) {
-    PointXYZIRT p;
-    p.x = x;
-    p.y = y;
-    p.z = z;
-    p.intensity = 1.0f;
-    p.ring = 0;
-    p.time = 0.0f;
-    cloud->push_back(p);
-  };
+  auto add = [&](float x, float y, float z) { cloud->push_back(makePoint(x, y, z, 1.0f)); };
   for (float x = -15.f; x <= 15.f; x += 0.25f)
     for (float y = -15.f; y <= 15.f; y += 0.25f) add(x, y, -1.73f);
   for (float x = 5.f; x <= 7.f; x += 0.1f)
@@ -162,20 +154,11 @@ TEST(ErrorContract, TruncatedPcapStopsTheReplayWithOneClearError) {
   // whole ones, and two packets of a fourth: the first opens it, so the third is published;
   // then the file is cut in the middle of the last record.
   const std::string path = "/tmp/urban_detection_truncated_" + std::to_string(getpid()) + ".pcap";
-  const core::PacketEncoder encoder(core::Calibration::nominalHdl64eS2());
-  const int packets = 30 + 60 * 3 + 2;  // the 2nd packet of the 4th revolution is cut
+  // the 2nd packet of the 4th revolution is cut
+  const auto packets = test::spinPackets(30 + 60 * 3 + 2, 180.5, 1.0, 288, 9);
   {
     core::PcapWriter writer(path);
-    for (int i = 0; i < packets; ++i) {
-      core::Firing firings[6];
-      for (int k = 0; k < 6; ++k) {
-        const double az = std::fmod(180.5 + 6.0 * i + k, 360.0);
-        firings[k].azimuth = static_cast<std::uint16_t>(std::lround(az * 100.0)) % 36000;
-        firings[k].distance.fill(5000);
-        firings[k].intensity.fill(9);
-      }
-      writer.write(encoder.encode(firings, static_cast<std::uint32_t>(i * 288)), 1000.0 + i * 288e-6);
-    }
+    for (std::size_t i = 0; i < packets.size(); ++i) writer.write(packets[i], 1000.0 + i * 288e-6);
   }
   FILE* f = std::fopen(path.c_str(), "r+");
   ASSERT_NE(f, nullptr);
@@ -198,7 +181,7 @@ TEST(ErrorContract, TruncatedPcapStopsTheReplayWithOneClearError) {
   ASSERT_TRUE(manager.load("/ec_pcap/source", "urban_detection/PacketSource", {}, {}));
   EXPECT_TRUE(waitFor([&] {
     return rosout.count(rosgraph_msgs::Log::ERROR, "is truncated after " +
-                                                       std::to_string(packets - 1) +
+                                                       std::to_string(packets.size() - 1) +
                                                        " packets; replay stops") == 1;
   }, 10.0));
   EXPECT_TRUE(waitFor([&] {

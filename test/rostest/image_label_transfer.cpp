@@ -108,15 +108,9 @@ struct Scene {
       o.id = id;
       o.class_label = "unknown";
       for (int k = 0; k < 8; ++k) {
-        LabeledPoint p;
-        p.x = xs[id - 1];
-        p.y = ys[id - 1] + 0.05f * k;
-        p.z = 0.1f * (k % 3);
-        p.intensity = 10;
-        p.label = id;
-        p.index = static_cast<std::uint32_t>(cloud->size());
-        o.indices.push_back(p.index);
-        cloud->push_back(p);
+        o.indices.push_back(static_cast<std::uint32_t>(cloud->size()));
+        cloud->push_back(makeLabeledPoint(xs[id - 1], ys[id - 1] + 0.05f * k, 0.1f * (k % 3),
+                                          id, o.indices.back(), 10.0f));
       }
       o.point_count = 8;
       objs->objects.push_back(o);

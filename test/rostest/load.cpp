@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "urban_detection/core/hdl64e_packet.h"
+#include "../core/spin_packets.h"
 #include "rostest_util.h"
 
 namespace urban_detection {
@@ -46,20 +47,8 @@ using Clock = std::chrono::steady_clock;
 // advancing 0.1728 deg per firing, half a firing off the cut angle 0.
 constexpr int kPacketsPerRevolution = 347;
 std::vector<core::RawPacket> makeRevolution() {
-  const core::PacketEncoder encoder(core::Calibration::nominalHdl64eS2());
   const double deg_per_firing = 360.0 / (6.0 * kPacketsPerRevolution);
-  std::vector<core::RawPacket> packets;
-  for (int i = 0; i < kPacketsPerRevolution; ++i) {
-    core::Firing firings[6];
-    for (int k = 0; k < 6; ++k) {
-      const double az = (6 * i + k + 0.5) * deg_per_firing;
-      firings[k].azimuth = static_cast<std::uint16_t>(std::lround(az * 100.0) % 36000);
-      firings[k].distance.fill(5000);  // 10 m
-      firings[k].intensity.fill(50);
-    }
-    packets.push_back(encoder.encode(firings, static_cast<std::uint32_t>(i * 288)));
-  }
-  return packets;
+  return test::spinPackets(kPacketsPerRevolution, 0.5 * deg_per_firing, deg_per_firing, 288);
 }
 
 // ------------------------------------------------------------------------------------------

@@ -30,6 +30,7 @@
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/pcap_io.h"
 #include "urban_detection/ros/velodyne_scan.h"
+#include "../core/spin_packets.h"
 #include "rostest_util.h"
 
 namespace urban_detection {
@@ -47,20 +48,9 @@ constexpr std::size_t kReturnsPerPacket = 384;
 
 // Packets of a spin starting at `first_az_deg` with 6 deg per packet (1 deg per firing). The
 // azimuths are offset by half a degree from the cut angle 0 so the cut is unambiguous.
+// Intensities 40..45 by firing, packets 1667 us apart.
 std::vector<core::RawPacket> makePackets(int count, double first_az_deg) {
-  const core::PacketEncoder encoder(core::Calibration::nominalHdl64eS2());
-  std::vector<core::RawPacket> packets;
-  for (int i = 0; i < count; ++i) {
-    core::Firing firings[6];
-    for (int k = 0; k < 6; ++k) {
-      const double az = std::fmod(first_az_deg + 6.0 * i + k, 360.0);
-      firings[k].azimuth = static_cast<std::uint16_t>(std::lround(az * 100.0)) % 36000;
-      firings[k].distance.fill(kDistanceRaw);
-      firings[k].intensity.fill(static_cast<std::uint8_t>(40 + k));
-    }
-    packets.push_back(encoder.encode(firings, static_cast<std::uint32_t>(i * 1667)));
-  }
-  return packets;
+  return test::spinPackets(count, first_az_deg, 1.0, 1667, 40, 1, kDistanceRaw);
 }
 
 VelodyneScan::Ptr makeScan(const std::vector<core::RawPacket>& packets, ros::Time stamp,

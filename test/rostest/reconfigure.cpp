@@ -82,14 +82,11 @@ boost::shared_ptr<LabeledCloud> twoClusters(std::uint32_t seq) {
   auto cloud = boost::make_shared<LabeledCloud>();
   auto add = [&](float cx, int n) {
     for (int i = 0; i < n; ++i) {
-      LabeledPoint p;
-      p.x = cx + 0.05f * static_cast<float>(i % 3);
-      p.y = 5.0f + 0.05f * static_cast<float>(i / 3);
-      p.z = -1.0f + 0.1f * static_cast<float>(i % 4);
-      p.intensity = 1.0f;
-      p.label = static_cast<std::uint32_t>(core::SegmentClass::kShort);
-      p.index = static_cast<std::uint32_t>(cloud->size());
-      cloud->push_back(p);
+      cloud->push_back(makeLabeledPoint(cx + 0.05f * static_cast<float>(i % 3),
+                                        5.0f + 0.05f * static_cast<float>(i / 3),
+                                        -1.0f + 0.1f * static_cast<float>(i % 4),
+                                        static_cast<std::uint32_t>(core::SegmentClass::kShort),
+                                        static_cast<std::uint32_t>(cloud->size()), 1.0f));
     }
   };
   add(5.0f, 12);

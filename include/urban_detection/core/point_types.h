@@ -32,6 +32,39 @@ struct EIGEN_ALIGN16 LabeledPoint {
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 };
 
+namespace detail {
+/// A point of type PointT with x, y, z, intensity and the fourth coordinate 1 (as PCL's own
+/// points have it); the type's other fields are left to the caller.
+template <typename PointT>
+inline PointT pointXyzi(float x, float y, float z, float intensity) {
+  PointT p;
+  p.x = x;
+  p.y = y;
+  p.z = z;
+  p.data[3] = 1.0f;
+  p.intensity = intensity;
+  return p;
+}
+}  // namespace detail
+
+/// A return with every field set.
+inline PointXYZIRT makePoint(float x, float y, float z, float intensity = 0.0f,
+                             std::uint16_t ring = 0, float time = 0.0f) {
+  PointXYZIRT p = detail::pointXyzi<PointXYZIRT>(x, y, z, intensity);
+  p.ring = ring;
+  p.time = time;
+  return p;
+}
+
+/// A labelled point with every field set.
+inline LabeledPoint makeLabeledPoint(float x, float y, float z, std::uint32_t label,
+                                     std::uint32_t index, float intensity = 0.0f) {
+  LabeledPoint p = detail::pointXyzi<LabeledPoint>(x, y, z, intensity);
+  p.label = label;
+  p.index = index;
+  return p;
+}
+
 using CloudXYZIRT = pcl::PointCloud<PointXYZIRT>;
 using LabeledCloud = pcl::PointCloud<LabeledPoint>;
 

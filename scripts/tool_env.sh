@@ -1,0 +1,20 @@
+# Sourced by the measuring scripts (bench.sh, eval.sh): where things are and how they run.
+#   REPO     the checkout
+#   BIN      the built tools (<UD_WS or REPO/.ws>/devel/lib/urban_detection)
+#   DATA     the shared datasets (UD_SHARED_DATA, default ../shared/data)
+#   OUT      results/, created
+#   PIN      the command prefix pinning a tool to core 0 (empty without taskset)
+#   CONFIGS  --config FILE for each of config/{segmentation,detection}.yaml that exists
+REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BIN="${UD_WS:-$REPO/.ws}/devel/lib/urban_detection"
+DATA="${UD_SHARED_DATA:-$REPO/../shared/data}"
+OUT="$REPO/results"
+mkdir -p "$OUT"
+
+PIN=()
+if command -v taskset >/dev/null; then PIN=(taskset -c 0); else
+  echo "$(basename "$0"): taskset not found, running unpinned" >&2; fi
+CONFIGS=()
+for c in segmentation detection; do
+  [ -f "$REPO/config/$c.yaml" ] && CONFIGS+=(--config "$REPO/config/$c.yaml")
+done
