@@ -15,12 +15,13 @@
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 
+#include "urban_detection/GridSegmentationConfig.h"
 #include "urban_detection/core/grid_segmenter.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/pointcloud2_input.h"
-#include "urban_detection/ros/segmentation_config.h"
 #include "urban_detection/ros/segmentation_params.h"
 #include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/tunable_fields.h"
 #include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
@@ -43,9 +44,11 @@ class GridSegmentation : public nodelet::Nodelet {
     }
     segmenter_.reset(new core::GridSegmenter(params));
     reconfigure_ = std::make_unique<Reconfigure>(
-        pnh, ros_conv::toConfig(params), [this](const GridSegmentationConfig& c) {
+        pnh, ros_conv::toConfig<GridSegmentationConfig>(params, ros_conv::GridSegmenterTunables()),
+        [this](const GridSegmentationConfig& c) {
           std::lock_guard<std::mutex> lock(segment_mutex_);  // between two revolutions
-          const core::GridSegmenterParams p = ros_conv::fromConfig(c, segmenter_->params());
+          const core::GridSegmenterParams p = ros_conv::fromConfig(
+              c, segmenter_->params(), ros_conv::GridSegmenterTunables());
           std::string why;
           if (!ros_conv::validateGridSegmenterParams(p, &why)) return why;
           segmenter_->setParams(p);

@@ -14,6 +14,7 @@
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/tunable_fields.h"
 #include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
@@ -29,22 +30,17 @@ class ObjectMarkers : public nodelet::Nodelet {
       NODELET_FATAL("ObjectMarkers: %s; the nodelet stays idle", e.what());
       return;
     }
-    ObjectMarkersConfig c;
-    c.show_ids = params_.show_ids;
-    c.box_alpha = params_.box_alpha;
-    c.text_size_m = params_.text_size_m;
-    c.min_box_size_m = params_.min_box_size_m;
-    reconfigure_ = std::make_unique<Reconfigure>(pnh, c, [this, pnh](const ObjectMarkersConfig& n) {
+    const ObjectMarkersConfig initial =
+        ros_conv::toConfig<ObjectMarkersConfig>(params_, ros_conv::ObjectMarkerTunables());
+    auto apply = [this, pnh](const ObjectMarkersConfig& n) {
       std::lock_guard<std::mutex> lock(params_mutex_);  // applied from the next message on
-      ros_conv::ObjectMarkerParams p = params_;
-      p.show_ids = n.show_ids;
-      p.box_alpha = n.box_alpha;
-      p.text_size_m = n.text_size_m;
-      p.min_box_size_m = n.min_box_size_m;
+      const ros_conv::ObjectMarkerParams p =
+          ros_conv::fromConfig(n, params_, ros_conv::ObjectMarkerTunables());
       const std::string error = ros_conv::checkObjectMarkerParams(pnh, p);
       if (error.empty()) params_ = p;
       return error;
-    });
+    };
+    reconfigure_ = std::make_unique<Reconfigure>(pnh, initial, apply);
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
         getNodeHandle(), getPrivateNodeHandle(), getName(), "markers");
     diagnostics_->setActive(false);

@@ -258,14 +258,8 @@ int main(int argc, char** argv) {
     }
   }
 
-  core::GridSegmenterParams seg_params;
-  core::HierarchicalGridDetectorParams hier_params;
-  core::KdTreeDetectorParams kd_params;
-  core::ObjectFilterParams filter_params;
-  if (!urban_detection::tools::loadConfigs(configs, &seg_params, &hier_params, &kd_params,
-                                           &filter_params)) {
-    return 2;
-  }
+  urban_detection::tools::PipelineParams params;
+  if (!urban_detection::tools::loadConfigs(configs, &params)) return 2;
 
   std::vector<std::unique_ptr<Source>> sources;
   for (const auto& d : pcd_dirs) {
@@ -293,7 +287,7 @@ int main(int argc, char** argv) {
   }
 
   std::string seg_error;
-  if (!urban_detection::ros_conv::validateGridSegmenterParams(seg_params, &seg_error)) {
+  if (!urban_detection::ros_conv::validateGridSegmenterParams(params.segmentation, &seg_error)) {
     std::fprintf(stderr, "error: invalid segmentation parameters: %s\n", seg_error.c_str());
     return 2;
   }
@@ -302,15 +296,15 @@ int main(int argc, char** argv) {
   std::unique_ptr<core::KdTreeDetector> kdtree, kdtree_pcl_default;
   std::unique_ptr<core::ObjectFilter> object_filter;
   try {
-    object_filter.reset(new core::ObjectFilter(filter_params));
-    segmenter.reset(new core::GridSegmenter(seg_params));
-    core::GridSegmenterParams no_hough = seg_params;
+    object_filter.reset(new core::ObjectFilter(params.object_filter));
+    segmenter.reset(new core::GridSegmenter(params.segmentation));
+    core::GridSegmenterParams no_hough = params.segmentation;
     no_hough.hough.enabled = false;
     segmenter_no_hough.reset(new core::GridSegmenter(no_hough));
-    hier.reset(new core::HierarchicalGridDetector(hier_params));
-    kdtree.reset(new core::KdTreeDetector(kd_params));
-    if (!kd_params.sorted_search) {
-      core::KdTreeDetectorParams sorted = kd_params;
+    hier.reset(new core::HierarchicalGridDetector(params.hierarchical));
+    kdtree.reset(new core::KdTreeDetector(params.kdtree));
+    if (!params.kdtree.sorted_search) {
+      core::KdTreeDetectorParams sorted = params.kdtree;
       sorted.sorted_search = true;
       kdtree_pcl_default.reset(new core::KdTreeDetector(sorted));
     }
@@ -318,7 +312,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: invalid parameters: %s\n", e.what());
     return 2;
   }
-  core::HoughWallRefiner hough(seg_params.hough);
+  core::HoughWallRefiner hough(params.segmentation.hough);
 
   std::map<std::string, std::vector<double>> stage, cpu_stage;  // wall and thread-CPU ms
   std::vector<double> pipeline, pipeline_cpu;
@@ -372,7 +366,7 @@ int main(int argc, char** argv) {
       StageTimer hier_t;
       hier->detect(foreground, &objects);
       hier_t.stop("hierarchical_detection", &stage, &cpu_stage, &total, &total_cpu);
-      if (filter_params.enabled) {
+      if (params.object_filter.enabled) {
         StageTimer filter_t;
         const core::ObjectFilterStats fs = object_filter->apply(foreground, &objects);
         filter_t.stop("object_filter", &stage, &cpu_stage, &total, &total_cpu);
@@ -418,7 +412,7 @@ int main(int argc, char** argv) {
       cells = segmenter_no_hough->cellClasses();
       const auto& g = segmenter_no_hough->grid();
       StageTimer hough_t;
-      hough.refine(g.rows(), g.cols(), seg_params.cell_size_m, &cells,
+      hough.refine(g.rows(), g.cols(), params.segmentation.cell_size_m, &cells,
                    &segmenter_no_hough->wallSupport());
       hough_t.stop("hough_refinement", &stage, &cpu_stage);
     });
@@ -478,7 +472,7 @@ int main(int argc, char** argv) {
               pipeline_median, percentile(pipeline, 0.95), median(pipeline_cpu),
               any_packets ? "packets " : "cloud ");
   std::printf("  object_filter %s: %.1f hierarchical objects rejected per revolution\n",
-              filter_params.enabled ? "on" : "off", rejected_sum / frames);
+              params.object_filter.enabled ? "on" : "off", rejected_sum / frames);
   char speedup_text[64] = "not measured (--no-kdtree)";
   if (run_kdtree) std::snprintf(speedup_text, sizeof(speedup_text), "%.1fx", speedup);
   if (std::isfinite(speedup_pcl_default)) {
@@ -501,7 +495,7 @@ int main(int argc, char** argv) {
         << ",\n  \"mean_foreground_points\": " << jsonNumber(fg_sum / frames)
         << ",\n  \"mean_objects_hierarchical\": " << jsonNumber(hier_obj_sum / frames)
         << ",\n  \"mean_objects_kdtree\": " << jsonNumber(run_kdtree ? kd_obj_sum / frames : std::nan(""))
-        << ",\n  \"object_filter\": " << (filter_params.enabled ? "true" : "false")
+        << ",\n  \"object_filter\": " << (params.object_filter.enabled ? "true" : "false")
         << ",\n  \"mean_rejected_objects_hierarchical\": " << jsonNumber(rejected_sum / frames)
         << ",\n  \"pipeline_includes_packet_decode\": " << (any_packets ? "true" : "false")
         << ",\n  \"stages\": {";

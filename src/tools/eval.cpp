@@ -616,23 +616,17 @@ int main(int argc, char** argv) {
   }
 
   // Parameters: in-class defaults, then each --config file in order.
-  core::GridSegmenterParams seg_params;
-  core::HierarchicalGridDetectorParams hier_params;
-  core::KdTreeDetectorParams kd_params;
-  core::ObjectFilterParams filter_params;
-  if (!urban_detection::tools::loadConfigs(configs, &seg_params, &hier_params, &kd_params,
-                                           &filter_params)) {
-    return 2;
-  }
+  urban_detection::tools::PipelineParams params;
+  if (!urban_detection::tools::loadConfigs(configs, &params)) return 2;
   if (filter_arg == "on" || filter_arg == "off") {
-    filter_params.enabled = filter_arg == "on";
+    params.object_filter.enabled = filter_arg == "on";
   } else if (!filter_arg.empty()) {
     std::fprintf(stderr, "error: --object-filter must be on or off\n");
     return 2;
   }
   std::unique_ptr<core::ObjectFilter> object_filter;
   try {
-    object_filter.reset(new core::ObjectFilter(filter_params));
+    object_filter.reset(new core::ObjectFilter(params.object_filter));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: invalid object filter parameters: %s\n", e.what());
     return 2;
@@ -652,10 +646,10 @@ int main(int argc, char** argv) {
   std::vector<std::unique_ptr<core::ObjectDetector>> detectors;
   try {
     if (detector_arg == "hierarchical" || detector_arg == "both") {
-      detectors.emplace_back(new core::HierarchicalGridDetector(hier_params));
+      detectors.emplace_back(new core::HierarchicalGridDetector(params.hierarchical));
     }
     if (detector_arg == "kdtree" || detector_arg == "both") {
-      detectors.emplace_back(new core::KdTreeDetector(kd_params));
+      detectors.emplace_back(new core::KdTreeDetector(params.kdtree));
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: invalid detector parameters: %s\n", e.what());
@@ -666,11 +660,11 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::string seg_error;
-  if (!urban_detection::ros_conv::validateGridSegmenterParams(seg_params, &seg_error)) {
+  if (!urban_detection::ros_conv::validateGridSegmenterParams(params.segmentation, &seg_error)) {
     std::fprintf(stderr, "error: invalid segmentation parameters: %s\n", seg_error.c_str());
     return 2;
   }
-  core::GridSegmenter segmenter(seg_params);
+  core::GridSegmenter segmenter(params.segmentation);
 
   std::unique_ptr<Dataset> dataset;
   std::string dataset_path;
@@ -790,7 +784,7 @@ int main(int argc, char** argv) {
                   countsJson(diags[k].false_fragments).c_str());
     }
     std::printf("%s: object filter %s, rejected by content %s\n", detectors[k]->name().c_str(),
-                filter_params.enabled ? "on" : "off",
+                params.object_filter.enabled ? "on" : "off",
                 countsJson(rejected_by_content[k]).c_str());
   }
 
@@ -820,7 +814,7 @@ int main(int argc, char** argv) {
           << scoreJson(evaluators[k].total())
           << ", \"missed_by_cause\": " << countsJson(diags[k].missed_by_cause)
           << ", \"false_by_content\": " << countsJson(diags[k].false_by_class)
-          << ", \"object_filter\": " << (filter_params.enabled ? "true" : "false")
+          << ", \"object_filter\": " << (params.object_filter.enabled ? "true" : "false")
           << ", \"rejected_by_content\": " << countsJson(rejected_by_content[k]) << "}";
     }
     out << "\n  },\n  \"foreground_points_by_class\": " << countsJson(fg_composition) << "\n}\n";

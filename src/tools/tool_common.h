@@ -55,16 +55,22 @@ inline double optionNumber(int argc, char** argv, int* i, const char* option) {
   return x;
 }
 
-/// Applies the pipeline config files in order over the in-class defaults: segmentation,
-/// detectors and object filter (null pointers skip that part). Prints the first error and
-/// returns false.
-inline bool loadConfigs(const std::vector<std::string>& paths, core::GridSegmenterParams* seg,
-                        core::HierarchicalGridDetectorParams* hier,
-                        core::KdTreeDetectorParams* kd, core::ObjectFilterParams* filter) {
+/// Every parameter set of the pipeline, as the config files give them.
+struct PipelineParams {
+  core::GridSegmenterParams segmentation;
+  core::HierarchicalGridDetectorParams hierarchical;
+  core::KdTreeDetectorParams kdtree;
+  core::ObjectFilterParams object_filter;
+};
+
+/// Applies the pipeline config files in order over the in-class defaults of `params`. Prints
+/// the first error and returns false.
+inline bool loadConfigs(const std::vector<std::string>& paths, PipelineParams* params) {
   for (const std::string& path : paths) {
     std::string err;
-    if (!core::loadPipelineParamsYaml(path, seg, hier, kd, &err) ||
-        (filter != nullptr && !core::loadObjectFilterParamsYaml(path, filter, &err))) {
+    if (!core::loadPipelineParamsYaml(path, &params->segmentation, &params->hierarchical,
+                                      &params->kdtree, &err) ||
+        !core::loadObjectFilterParamsYaml(path, &params->object_filter, &err)) {
       std::fprintf(stderr, "error: %s\n", err.c_str());
       return false;
     }
