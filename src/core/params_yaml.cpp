@@ -1,5 +1,6 @@
 #include "urban_detection/core/params_yaml.h"
 
+#include <filesystem>
 #include <functional>
 #include <map>
 
@@ -199,10 +200,21 @@ bool applyObjectFilter(const YAML::Node& node, const std::string& where, ObjectF
   return t.apply(node, where, error);
 }
 
-}  // namespace
+bool applyClassifier(const YAML::Node& node, const std::string& where,
+                     ObjectClassifierParams* p, std::string* error) {
+  FieldTable t;
+  t.bind("enabled", &p->enabled);
+  t.bind("model", &p->model_path);
+  t.bind("min_object_probability", &p->min_object_probability);
+  t.bind("reject_non_objects", &p->reject_non_objects);
+  return t.apply(node, where, error);
+}
 
-bool loadObjectFilterParamsYaml(const std::string& path, ObjectFilterParams* params,
-                                std::string* error) {
+// The `section:` map of a detection.yaml style file (top level, or under `detection:` in a
+// combined file) applied by `apply`; a file without it changes nothing.
+template <typename Params, typename Apply>
+bool loadDetectionSection(const std::string& path, const std::string& section, Params* params,
+                          Apply apply, std::string* error) {
   YAML::Node root;
   if (!loadRoot(path, "", &root, error)) return false;
   std::string where = path + ": ";
@@ -210,8 +222,26 @@ bool loadObjectFilterParamsYaml(const std::string& path, ObjectFilterParams* par
     root = root["detection"];
     where += "detection/";
   }
-  if (!root.IsMap() || !root["object_filter"]) return true;
-  return applyObjectFilter(root["object_filter"], where + "object_filter/", params, error);
+  if (!root.IsMap() || !root[section]) return true;
+  return apply(root[section], where + section + "/", params, error);
+}
+
+}  // namespace
+
+bool loadObjectFilterParamsYaml(const std::string& path, ObjectFilterParams* params,
+                                std::string* error) {
+  return loadDetectionSection(path, "object_filter", params, applyObjectFilter, error);
+}
+
+bool loadObjectClassifierParamsYaml(const std::string& path, ObjectClassifierParams* params,
+                                    std::string* error) {
+  if (!loadDetectionSection(path, "classifier", params, applyClassifier, error)) return false;
+  // A relative model path is relative to the folder of the file that names it.
+  const std::filesystem::path model(params->model_path);
+  if (!params->model_path.empty() && model.is_relative()) {
+    params->model_path = (std::filesystem::path(path).parent_path() / model).string();
+  }
+  return true;
 }
 
 bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& section,
@@ -253,7 +283,8 @@ bool loadPipelineParamsYaml(const std::string& path, GridSegmenterParams* segmen
     return !root["detection"] ||
            applyDetection(root["detection"], where + "detection/", hierarchical, kdtree, error);
   }
-  if (root["hierarchical_grid"] || root["kdtree"] || root["object_filter"]) {
+  if (root["hierarchical_grid"] || root["kdtree"] || root["object_filter"] ||
+      root["classifier"]) {
     return applyDetection(root, where, hierarchical, kdtree, error);
   }
   return !segmentation || applySegmentation(root, where, segmentation, error);

@@ -1,5 +1,7 @@
 #include "urban_detection/ros/detection_params.h"
 
+#include <ros/package.h>
+
 #include <cmath>
 #include <string>
 #include <vector>
@@ -106,6 +108,17 @@ void loadObjectFilterParams(const ros::NodeHandle& nh, core::ObjectFilterParams*
   loadParam(nh, "hedge_min_length_m", &p->hedge_min_length_m, 0.0, 100.0, "m");
   loadParam(nh, "uniform_max_intensity_std", &p->uniform_max_intensity_std, 0.0, 1e6);
   loadParam(nh, "uniform_min_points", &p->uniform_min_points, 2, 1000000);
+  throwIfInvalid(nh, core::validate(*p));
+}
+
+void loadObjectClassifierParams(const ros::NodeHandle& nh, core::ObjectClassifierParams* p) {
+  loadParam(nh, "enabled", &p->enabled);
+  loadParam(nh, "model", &p->model_path);
+  loadParam(nh, "min_object_probability", &p->min_object_probability, -1.0, 1.0);
+  loadParam(nh, "reject_non_objects", &p->reject_non_objects);
+  if (!p->model_path.empty() && p->model_path.front() != '/') {
+    p->model_path = ros::package::getPath("urban_detection") + "/config/" + p->model_path;
+  }
   throwIfInvalid(nh, core::validate(*p));
 }
 

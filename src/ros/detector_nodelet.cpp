@@ -20,6 +20,10 @@ void DetectorNodelet::onInit() {
     ros_conv::loadObjectFilterParams(ros::NodeHandle(getPrivateNodeHandle(), "object_filter"),
                                      &filter_params);
     filter_ = std::make_unique<core::ObjectFilter>(filter_params);
+    core::ObjectClassifierParams classifier_params;
+    ros_conv::loadObjectClassifierParams(ros::NodeHandle(getPrivateNodeHandle(), "classifier"),
+                                         &classifier_params);
+    classifier_ = std::make_unique<core::ObjectClassifier>(classifier_params);
   } catch (const std::exception& e) {
     NODELET_FATAL("%s: %s; the nodelet stays idle", getName().c_str(), e.what());
     return;
@@ -34,7 +38,15 @@ void DetectorNodelet::onInit() {
   std::lock_guard<std::mutex> lock(connect_mutex_);
   objects_pub_ = nh.advertise<DetectedObjectArray>("objects", 2, connect, connect);
   points_pub_ = nh.advertise<LabeledCloud>("objects/points", 2, connect, connect);
-  NODELET_INFO("%s: %s detector ready", getName().c_str(), detector_->name().c_str());
+  rejected_pub_ = nh.advertise<DetectedObjectArray>("objects/rejected", 2, connect, connect);
+  if (classifier_->params().enabled) {
+    NODELET_INFO("%s: %s detector ready, classifier %s (P(object) >= %.2f)", getName().c_str(),
+                 detector_->name().c_str(), classifier_->params().model_path.c_str(),
+                 classifier_->threshold());
+  } else {
+    NODELET_INFO("%s: %s detector ready, classifier off", getName().c_str(),
+                 detector_->name().c_str());
+  }
 }
 
 void DetectorNodelet::replaceDetector(std::unique_ptr<core::ObjectDetector> detector) {
@@ -44,7 +56,9 @@ void DetectorNodelet::replaceDetector(std::unique_ptr<core::ObjectDetector> dete
 
 void DetectorNodelet::connectCb() {
   std::lock_guard<std::mutex> lock(connect_mutex_);
-  const bool wanted = objects_pub_.getNumSubscribers() > 0 || points_pub_.getNumSubscribers() > 0;
+  const bool wanted = objects_pub_.getNumSubscribers() > 0 ||
+                      points_pub_.getNumSubscribers() > 0 ||
+                      rejected_pub_.getNumSubscribers() > 0;
   diagnostics_->setActive(wanted);
   if (wanted && !sub_) {
     sub_ = getNodeHandle().subscribe("segmentation/foreground", queue_size_,
@@ -63,12 +77,27 @@ void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& 
   diagnostics_->count("rejected objects (porous)", filtered.porous, false);
   diagnostics_->count("rejected objects (bright hedge)", filtered.bright_hedge, false);
   diagnostics_->count("rejected objects (uniform material)", filtered.uniform, false);
+  const core::ObjectClassifierStats classified =
+      classifier_->apply(*foreground, &objects_, &rejected_);
+  if (classifier_->params().enabled) {
+    diagnostics_->count("rejected objects (classifier: non_object)", classified.rejected, false);
+    for (int c = 1; c < core::kNumObjectCategories; ++c) {
+      diagnostics_->count(std::string("objects classified ") +
+                              core::toString(static_cast<core::ObjectCategory>(c)),
+                          classified.by_class[c], false);
+    }
+  }
   std_msgs::Header header;
   pcl_conversions::fromPCL(foreground->header, header);
   if (objects_pub_.getNumSubscribers() > 0) {
     auto msg = boost::make_shared<DetectedObjectArray>();
     ros_conv::toMsg(objects_, detector_->name(), header, msg.get());
     objects_pub_.publish(boost::shared_ptr<const DetectedObjectArray>(msg));
+  }
+  if (rejected_pub_.getNumSubscribers() > 0) {
+    auto msg = boost::make_shared<DetectedObjectArray>();
+    ros_conv::toMsg(rejected_, detector_->name(), header, msg.get());
+    rejected_pub_.publish(boost::shared_ptr<const DetectedObjectArray>(msg));
   }
   if (points_pub_.getNumSubscribers() > 0) {
     auto points = boost::make_shared<LabeledCloud>();

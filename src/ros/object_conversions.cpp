@@ -31,8 +31,13 @@ void toMsg(const core::DetectedObject& o, DetectedObject* m) {
   m->obb_dimensions.y = o.obb_size.y();
   m->obb_dimensions.z = o.obb_size.z();
   m->indices.assign(o.indices.begin(), o.indices.end());
-  m->class_label = kUnknownClass;
-  m->class_confidence = 0.0f;
+  if (o.category == core::ObjectCategory::kUnknown) {
+    m->class_label = kUnknownClass;
+    m->class_confidence = 0.0f;
+  } else {
+    m->class_label = core::toString(o.category);
+    m->class_confidence = o.class_confidence;
+  }
 }
 
 void toMsg(const std::vector<core::DetectedObject>& objects, const std::string& detector,

@@ -49,7 +49,10 @@ std_msgs::ColorRGBA colourForClass(const std::string& class_label, double alpha)
       {"traffic sign", {220, 220, 0}}, {"traffic light", {250, 170, 30}},
       {"vegetation", {107, 142, 35}}, {"terrain", {152, 251, 152}}, {"building", {70, 70, 70}},
       {"wall", {102, 102, 156}},     {"fence", {190, 153, 153}},  {"road", {128, 64, 128}},
-      {"sidewalk", {244, 35, 232}}};
+      {"sidewalk", {244, 35, 232}},
+      // The LiDAR classifier's classes (object_classifier.h).
+      {"vehicle", {0, 0, 142}},      {"other_object", {250, 170, 30}},
+      {"non_object", {107, 142, 35}}};
   const auto it = palette.find(name);
   if (it == palette.end()) {
     // FNV-1a of the name picks a golden-ratio hue: stable across runs, unlike std::hash.

@@ -13,7 +13,8 @@
 //
 // "pipeline" = packet_decode (pcap input only) + segmentation (Hough refinement included) +
 // foreground_extraction + hierarchical_detection + object_filter (when enabled in the
-// config's object_filter section), i.e. packets -> objects on a pcap (the
+// config's object_filter section) + classification (features and forest, when the config's
+// classifier section enables it, as config/detection.yaml does), i.e. packets -> objects on a pcap (the
 // simulated drive of scripts/run bench) and cloud -> objects on PCD / .bin sweeps (KITTI raw
 // comes as motion-compensated clouds, not packets); the JSON says which
 // (pipeline_includes_packet_decode). The pipeline's stages run back to back per revolution
@@ -51,6 +52,7 @@
 #include "urban_detection/core/hough_wall_refiner.h"
 #include "urban_detection/core/kdtree_detector.h"
 #include "urban_detection/core/kitti_io.h"
+#include "urban_detection/core/object_classifier.h"
 #include "urban_detection/core/object_filter.h"
 #include "urban_detection/core/params_yaml.h"
 #include "urban_detection/ros/object_conversions.h"
@@ -295,8 +297,10 @@ int main(int argc, char** argv) {
   std::unique_ptr<core::HierarchicalGridDetector> hier;
   std::unique_ptr<core::KdTreeDetector> kdtree, kdtree_pcl_default;
   std::unique_ptr<core::ObjectFilter> object_filter;
+  std::unique_ptr<core::ObjectClassifier> classifier;
   try {
     object_filter.reset(new core::ObjectFilter(params.object_filter));
+    if (params.classifier.enabled) classifier.reset(new core::ObjectClassifier(params.classifier));
     segmenter.reset(new core::GridSegmenter(params.segmentation));
     core::GridSegmenterParams no_hough = params.segmentation;
     no_hough.hough.enabled = false;
@@ -372,6 +376,12 @@ int main(int argc, char** argv) {
         filter_t.stop("object_filter", &stage, &cpu_stage, &total, &total_cpu);
         rejected_sum += fs.vegetation;
       }
+      if (classifier) {
+        StageTimer class_t;
+        const core::ObjectClassifierStats cs = classifier->apply(foreground, &objects);
+        class_t.stop("classification", &stage, &cpu_stage, &total, &total_cpu);
+        rejected_sum += cs.rejected;
+      }
       hier_obj_sum += objects.size();
       pipeline.push_back(total);
       pipeline_cpu.push_back(total_cpu);
@@ -446,6 +456,7 @@ int main(int argc, char** argv) {
 
   const char* order[] = {"packet_decode", "segmentation", "hough_refinement",
                          "foreground_extraction", "hierarchical_detection", "object_filter",
+                         "classification",
                          "markers",
                          "kdtree_detection", "kdtree_detection_pcl_default"};
   std::printf("%s: %zu revolutions (%ld pass%s over", label.c_str(), frames, repeat,
@@ -471,8 +482,10 @@ int main(int argc, char** argv) {
   std::printf("  %-28s %10.3f %10.3f %14.3f  (%s-> hierarchical objects)\n", "pipeline",
               pipeline_median, percentile(pipeline, 0.95), median(pipeline_cpu),
               any_packets ? "packets " : "cloud ");
-  std::printf("  object_filter %s: %.1f hierarchical objects rejected per revolution\n",
-              params.object_filter.enabled ? "on" : "off", rejected_sum / frames);
+  std::printf("  object_filter %s, classifier %s: %.1f hierarchical objects rejected per "
+              "revolution\n",
+              params.object_filter.enabled ? "on" : "off", classifier ? "on" : "off",
+              rejected_sum / frames);
   char speedup_text[64] = "not measured (--no-kdtree)";
   if (run_kdtree) std::snprintf(speedup_text, sizeof(speedup_text), "%.1fx", speedup);
   if (std::isfinite(speedup_pcl_default)) {

@@ -27,6 +27,7 @@
 #include "urban_detection/core/kdtree_detector.h"
 #include "urban_detection/core/kitti_io.h"
 #include "urban_detection/core/object_class.h"
+#include "urban_detection/core/object_classifier.h"
 #include "urban_detection/core/object_filter.h"
 #include "urban_detection/core/params_yaml.h"
 #include "urban_detection/ros/segmentation_params.h"
@@ -35,6 +36,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "datasets.h"
 #include "tool_common.h"
 
 namespace core = urban_detection::core;
@@ -42,180 +44,15 @@ namespace fs = std::filesystem;
 
 using urban_detection::tools::jsonEscape;
 using urban_detection::tools::jsonNumber;
+using urban_detection::tools::Dataset;
+using urban_detection::tools::Frame;
+using urban_detection::tools::detectionContent;
+using urban_detection::tools::mostCommon;
+using urban_detection::tools::KittiObjectDataset;
+using urban_detection::tools::SemanticKittiDataset;
+using urban_detection::tools::SimulatedDriveDataset;
 
 namespace {
-
-// ------------------------------------------------------------------------------------------
-// Datasets
-
-struct Frame {
-  std::string id;
-  urban_detection::CloudXYZIRT cloud;
-  core::EvalFrame gt;
-  std::vector<std::uint16_t> point_class;  // dataset class per point, for diagnostics
-};
-
-// Frames are read in order (a simulated drive is a stream).
-class Dataset {
- public:
-  enum class Status { kFrame, kSkipped, kEnd };
-  virtual ~Dataset() = default;
-  virtual std::string name() const = 0;
-  virtual Status next(Frame* f, std::string* error) = 0;
-  virtual std::string className(std::uint16_t c) const = 0;
-};
-
-// Datasets of files, frame i by index.
-class IndexedDataset : public Dataset {
- public:
-  Status next(Frame* f, std::string* error) override {
-    if (next_ >= size()) return Status::kEnd;
-    return load(next_++, f, error) ? Status::kFrame : Status::kSkipped;
-  }
-  virtual std::size_t size() const = 0;
-  virtual bool load(std::size_t i, Frame* f, std::string* error) = 0;
-
- private:
-  std::size_t next_ = 0;
-};
-
-class KittiObjectDataset : public IndexedDataset {
- public:
-  // Point classes for diagnostics.
-  enum : std::uint16_t { kBackground = 0, kOutOfView = 1, kDontCareBox = 2, kExcluded = 3,
-                         kInBox = 4 };
-  KittiObjectDataset(const std::string& dir, const core::KittiGroundTruthParams& p)
-      : dir_(dir), params_(p), bins_(core::listFiles(dir + "/velodyne", ".bin")) {}
-  std::string name() const override { return "kitti_object"; }
-  std::size_t size() const override { return bins_.size(); }
-  bool load(std::size_t i, Frame* f, std::string* error) override {
-    const std::string stem = fs::path(bins_[i]).stem().string();
-    f->id = stem;
-    if (!core::readKittiBin(bins_[i], &f->cloud, error)) return false;
-    core::KittiCalibration calib;
-    if (!core::readKittiCalibration(dir_ + "/calib/" + stem + ".txt", &calib, error)) {
-      return false;
-    }
-    std::vector<core::KittiLabel> labels;
-    if (!core::readKittiLabels(dir_ + "/label_2/" + stem + ".txt", &labels, error)) return false;
-    int w = params_.image_width_px, h = params_.image_height_px;
-    core::readPngSize(dir_ + "/image_2/" + stem + ".png", &w, &h);  // keeps defaults if absent
-    core::buildKittiGroundTruth(f->cloud, labels, calib, params_, w, h, &f->gt);
-    f->point_class.resize(f->cloud.size());
-    for (std::size_t k = 0; k < f->cloud.size(); ++k) {
-      std::uint16_t c = kBackground;
-      if (f->gt.object_of_point[k] >= 0) {
-        c = kInBox;
-      } else if (f->gt.role[k] == core::PointRole::kExcluded) {
-        c = kExcluded;
-      } else if (f->gt.role[k] == core::PointRole::kDontCare) {
-        double u, v;
-        const auto& p = f->cloud[k];
-        c = calib.project({p.x, p.y, p.z}, &u, &v) && u >= 0 && u < w && v >= 0 && v < h
-                ? kDontCareBox
-                : kOutOfView;
-      }
-      f->point_class[k] = c;
-    }
-    return true;
-  }
-  std::string className(std::uint16_t c) const override {
-    static const char* names[] = {"unlabelled_in_view", "out_of_camera_view", "dontcare_box",
-                                  "ground_under_box", "labelled_box"};
-    return c < 5 ? names[c] : "?";
-  }
-
- private:
-  std::string dir_;
-  core::KittiGroundTruthParams params_;
-  std::vector<std::string> bins_;
-};
-
-class SemanticKittiDataset : public IndexedDataset {
- public:
-  SemanticKittiDataset(const std::string& dir, const core::SemanticKittiGroundTruthParams& p)
-      : params_(p) {
-    // DIR is a sequence folder (velodyne/, labels/) or the dataset root (sequences/NN/).
-    std::vector<std::string> seqs;
-    if (fs::is_directory(dir + "/velodyne")) {
-      seqs.push_back(dir);
-    } else {
-      for (const auto& s : core::listFiles(dir + "/sequences", "")) {
-        if (fs::is_directory(s + "/velodyne")) seqs.push_back(s);
-      }
-    }
-    for (const auto& s : seqs) {
-      for (const auto& b : core::listFiles(s + "/velodyne", ".bin")) {
-        const std::string stem = fs::path(b).stem().string();
-        const std::string l = s + "/labels/" + stem + ".label";
-        if (fs::exists(l)) {
-          frames_.push_back({b, l, fs::path(s).filename().string() + "/" + stem});
-        }
-      }
-    }
-  }
-  std::string name() const override { return "semantic_kitti"; }
-  std::size_t size() const override { return frames_.size(); }
-  bool load(std::size_t i, Frame* f, std::string* error) override {
-    f->id = frames_[i].id;
-    if (!core::readKittiBin(frames_[i].bin, &f->cloud, error)) return false;
-    if (!core::readSemanticKittiLabels(frames_[i].label, &labels_, error)) return false;
-    if (labels_.size() != f->cloud.size()) {
-      *error = frames_[i].label + ": " + std::to_string(labels_.size()) + " labels for " +
-               std::to_string(f->cloud.size()) + " points";
-      return false;
-    }
-    core::buildSemanticKittiGroundTruth(labels_, params_, &f->gt);
-    f->point_class.resize(labels_.size());
-    for (std::size_t k = 0; k < labels_.size(); ++k) {
-      f->point_class[k] = core::semanticKittiClass(labels_[k]);
-    }
-    return true;
-  }
-  std::string className(std::uint16_t c) const override {
-    return core::semanticKittiClassName(c);
-  }
-
- private:
-  struct Item {
-    std::string bin, label, id;
-  };
-  core::SemanticKittiGroundTruthParams params_;
-  std::vector<Item> frames_;
-  std::vector<std::uint32_t> labels_;
-};
-
-class SimulatedDriveDataset : public Dataset {
- public:
-  SimulatedDriveDataset(const std::string& gt, const std::string& pcap,
-                        const core::Calibration& cal, double cut_angle_deg,
-                        const core::SimulatedGroundTruthParams& p)
-      : reader_(pcap, gt, cal, cut_angle_deg), params_(p) {}
-  std::string name() const override { return "sim"; }
-  Status next(Frame* f, std::string* error) override {
-    switch (reader_.next(&f->cloud, &frame_, error)) {
-      case core::SimulatedDriveReader::Result::kEnd:
-        if (!error->empty()) std::fprintf(stderr, "warning: %s\n", error->c_str());
-        return Status::kEnd;
-      case core::SimulatedDriveReader::Result::kSkipped:
-        return Status::kSkipped;
-      case core::SimulatedDriveReader::Result::kFrame:
-        break;
-    }
-    f->id = "rev" + std::to_string(frame_.revolution);
-    core::buildSimulatedGroundTruth(frame_, params_, &f->gt);
-    f->point_class.assign(frame_.classes.begin(), frame_.classes.end());
-    return Status::kFrame;
-  }
-  std::string className(std::uint16_t c) const override {
-    return core::toString(static_cast<core::ObjectClass>(c));
-  }
-
- private:
-  core::SimulatedDriveReader reader_;
-  core::SimulatedGroundTruthParams params_;
-  core::GroundTruthFrame frame_;
-};
 
 // ------------------------------------------------------------------------------------------
 // Diagnostics: why was a GT object missed, what are the false detections made of.
@@ -227,31 +64,6 @@ struct Diagnostics {
 };
 
 const char* segName(core::SegmentClass c) { return core::toString(c); }
-
-// The key with the largest count ("?" when empty; the first such key on ties).
-std::string mostCommon(const std::map<std::string, std::size_t>& counts) {
-  std::string what = "?";
-  std::size_t most = 0;
-  for (const auto& kv : counts) {
-    if (kv.second > most) {
-      most = kv.second;
-      what = kv.first;
-    }
-  }
-  return what;
-}
-
-// The dataset class most of a detection's points carry ("part_of_<label>" for GT points).
-std::string detectionContent(const Frame& f, const Dataset& ds, const core::DetectedObject& d) {
-  const std::size_t n = f.cloud.size();
-  std::map<std::string, std::size_t> content;
-  for (std::uint32_t i : d.indices) {
-    if (i >= n) continue;
-    const std::int32_t og = f.gt.object_of_point[i];
-    content[og >= 0 ? "part_of_" + f.gt.objects[og].label : ds.className(f.point_class[i])]++;
-  }
-  return mostCommon(content);
-}
 
 // Explains each missed GT object and each false detection of one frame; appends to `diag`
 // and, when `out` is not null, prints one line per object.
@@ -517,6 +329,78 @@ std::string countsJson(const std::map<std::string, std::size_t>& m) {
   return o.str();
 }
 
+// ------------------------------------------------------------------------------------------
+// Another system's output (--detections DIR): per frame, one uint32 per input point, the
+// point's instance (0 = none); each instance is one detection.
+
+class ExternalDetections : public core::ObjectDetector {
+ public:
+  explicit ExternalDetections(const std::string& dir) : dir_(dir) {}
+  std::string name() const override { return "external"; }
+
+  // Reads the labels of frame `f`; false with `error` set when the file is missing or its
+  // size is not one uint32 per point of the frame's cloud.
+  bool load(const Frame& f, std::string* error) {
+    std::vector<std::string> candidates = {dir_ + "/" + f.id + ".label"};
+    const auto slash = f.id.find('/');
+    if (slash != std::string::npos) {
+      candidates.push_back(dir_ + "/sequences/" + f.id.substr(0, slash) + "/predictions/" +
+                           f.id.substr(slash + 1) + ".label");
+    }
+    for (const std::string& path : candidates) {
+      if (!fs::is_regular_file(path)) continue;
+      std::ifstream in(path, std::ios::binary);
+      labels_.assign(f.cloud.size(), 0u);
+      in.read(reinterpret_cast<char*>(labels_.data()),
+              static_cast<std::streamsize>(labels_.size() * sizeof(std::uint32_t)));
+      const bool exact = in.gcount() == static_cast<std::streamsize>(labels_.size() * 4) &&
+                         in.peek() == std::char_traits<char>::eof();
+      if (!exact) {
+        *error = path + ": not one uint32 per point of the frame (" +
+                 std::to_string(f.cloud.size()) + " points)";
+        return false;
+      }
+      cloud_ = &f.cloud;
+      return true;
+    }
+    *error = "no label file for frame " + f.id + " (tried " + candidates[0] + ")";
+    return false;
+  }
+
+  void detect(const urban_detection::LabeledCloud& /*foreground*/,
+              std::vector<core::DetectedObject>* objects) override {
+    objects->clear();
+    std::map<std::uint32_t, std::size_t> object_of_label;
+    for (std::size_t i = 0; i < labels_.size(); ++i) {
+      if (labels_[i] == 0) continue;
+      const auto it = object_of_label.emplace(labels_[i], objects->size()).first;
+      if (it->second == objects->size()) objects->emplace_back();
+      (*objects)[it->second].indices.push_back(static_cast<std::uint32_t>(i));
+    }
+    for (std::size_t k = 0; k < objects->size(); ++k) {
+      core::DetectedObject& o = (*objects)[k];
+      o.id = static_cast<std::uint32_t>(k + 1);
+      Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+      o.min_pt = Eigen::Vector3f::Constant(1e30f);
+      o.max_pt = Eigen::Vector3f::Constant(-1e30f);
+      for (const std::uint32_t i : o.indices) {
+        const Eigen::Vector3f p((*cloud_)[i].x, (*cloud_)[i].y, (*cloud_)[i].z);
+        sum += p;
+        o.min_pt = o.min_pt.cwiseMin(p);
+        o.max_pt = o.max_pt.cwiseMax(p);
+      }
+      o.centroid = sum / static_cast<float>(o.indices.size());
+      o.obb_center = 0.5f * (o.min_pt + o.max_pt);
+      o.obb_size = o.max_pt - o.min_pt;
+    }
+  }
+
+ private:
+  std::string dir_;
+  std::vector<std::uint32_t> labels_;
+  const urban_detection::CloudXYZIRT* cloud_ = nullptr;
+};
+
 void usage() {
   std::fprintf(stderr,
       "usage: urban_detection_eval (--kitti-object DIR | --semantic-kitti DIR |\n"
@@ -524,7 +408,8 @@ void usage() {
       "                             [--cut-angle DEG])\n"
       "         [--detector hierarchical|kdtree|both] [--config FILE]... [--json FILE]\n"
       "         [--max-frames N] [--min-gt-points N] [--details]\n"
-      "         [--object-filter on|off] [--features CSV]\n"
+      "         [--object-filter on|off] [--features CSV] [--classifier MODEL|off]\n"
+      "         [--detections DIR]\n"
       "  --sim GTFILE    ground-truth file of urban_detection_simulate (--gt), with the pcap it\n"
       "                  wrote (--pcap); --calibration is the one the drive was simulated with\n"
       "                  (default: nominal HDL-64E S2), --cut-angle the revolution cut [deg]\n"
@@ -536,6 +421,13 @@ void usage() {
       "                  object_filter/enabled of the config, else off)\n"
       "  --features CSV  write the object filter's features of every detection (before the\n"
       "                  filter) with its verdict and content, to measure their separation\n"
+      "  --classifier MODEL|off  the object classifier after the detector (default: classifier/\n"
+      "                  of the config, e.g. config/detection.yaml's shipped model; else off)\n"
+      "  --detections DIR  score another system's output instead of this package's detectors:\n"
+      "                  per frame a file of one uint32 per input point, the point's instance\n"
+      "                  (0 = none), at DIR/<frame>.label (SemanticKITTI: DIR/SEQ/NNNNNN.label\n"
+      "                  or DIR/sequences/SEQ/predictions/NNNNNN.label; KITTI object:\n"
+      "                  DIR/NNNNNN.label; simulated drive: DIR/revN.label)\n"
       "  --details       print every missed object and false detection with its cause\n"
       "  --png DIR       write a top view per frame (first detector): ground truth left,\n"
       "                  detections right; yellow boxes missed objects, red false detections\n"
@@ -552,7 +444,7 @@ int main(int argc, char** argv) {
   long max_frames = -1;
   long min_gt_points = 10;
   bool details = false;
-  std::string png_dir, features_path, filter_arg;
+  std::string png_dir, features_path, filter_arg, classifier_arg, detections_dir;
   PngView png_view;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -581,6 +473,8 @@ int main(int argc, char** argv) {
     else if (a == "--details") details = true;
     else if (a == "--object-filter") filter_arg = value("--object-filter");
     else if (a == "--features") features_path = value("--features");
+    else if (a == "--classifier") classifier_arg = value("--classifier");
+    else if (a == "--detections") detections_dir = value("--detections");
     else if (a == "--png") png_dir = value("--png");
     else if (a == "--png-view") {
       const std::string v = value("--png-view");
@@ -643,9 +537,42 @@ int main(int argc, char** argv) {
                  "height_m,triplets,jumps,jump_fraction,mean_intensity,std_intensity\n");
   }
 
+  // The classifier: the config's, replaced or switched off by --classifier.
+  if (classifier_arg == "off") {
+    params.classifier.enabled = false;
+  } else if (!classifier_arg.empty()) {
+    params.classifier.enabled = true;
+    params.classifier.model_path = classifier_arg;
+  }
+  if (!detections_dir.empty() && params.classifier.enabled) {
+    if (!classifier_arg.empty()) {
+      std::fprintf(stderr, "error: --classifier does not apply to --detections\n");
+      return 2;
+    }
+    params.classifier.enabled = false;
+  }
+  std::unique_ptr<core::ObjectClassifier> classifier;
+  if (params.classifier.enabled) {
+    try {
+      classifier.reset(new core::ObjectClassifier(params.classifier));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 2;
+    }
+  }
+
   std::vector<std::unique_ptr<core::ObjectDetector>> detectors;
+  ExternalDetections* external = nullptr;
   try {
-    if (detector_arg == "hierarchical" || detector_arg == "both") {
+    if (!detections_dir.empty()) {
+      if (!fs::is_directory(detections_dir)) {
+        std::fprintf(stderr, "error: --detections %s is not a directory\n",
+                     detections_dir.c_str());
+        return 1;
+      }
+      external = new ExternalDetections(detections_dir);
+      detectors.emplace_back(external);
+    } else if (detector_arg == "hierarchical" || detector_arg == "both") {
       detectors.emplace_back(new core::HierarchicalGridDetector(params.hierarchical));
     }
     if (detector_arg == "kdtree" || detector_arg == "both") {
@@ -698,6 +625,11 @@ int main(int argc, char** argv) {
   std::vector<core::DetectionEvaluator> unfiltered(detectors.size());  // --features verdicts
   std::vector<std::map<std::string, std::size_t>> rejected_by_content(detectors.size());
   std::vector<core::DetectedObject> rejected;
+  std::vector<std::map<std::string, std::size_t>> classified_out(detectors.size());
+  // Per detector: scores per sequence (SemanticKITTI) and, of the matched detections, the
+  // class given against the ground truth's ("vehicle->vehicle", ...).
+  std::vector<std::map<std::string, core::DetectionScore>> by_group(detectors.size());
+  std::vector<std::map<std::string, std::size_t>> class_pairs(detectors.size());
   std::map<std::string, std::size_t> fg_composition;  // foreground points by dataset class
   std::ostringstream rows;
   bool first_row = true;
@@ -715,6 +647,11 @@ int main(int argc, char** argv) {
     ++frames;
     if (status == Dataset::Status::kSkipped) {
       std::fprintf(stderr, "warning: skipping frame %zu: %s\n", frames - 1, err.c_str());
+      ++failed;
+      continue;
+    }
+    if (external && !external->load(f, &err)) {
+      std::fprintf(stderr, "warning: skipping frame %s: %s\n", f.id.c_str(), err.c_str());
       ++failed;
       continue;
     }
@@ -745,7 +682,21 @@ int main(int argc, char** argv) {
       }
       object_filter->apply(foreground, &objects, &rejected);
       for (const auto& o : rejected) ++rejected_by_content[k][detectionContent(f, *dataset, o)];
+      if (classifier) {
+        classifier->apply(foreground, &objects, &rejected);
+        for (const auto& o : rejected) {
+          ++classified_out[k][detectionContent(f, *dataset, o)];
+        }
+      }
       evaluators[k].evaluate(f.gt, objects, &match);
+      by_group[k][urban_detection::tools::frameGroup(f.id, dataset->name())] += match.score;
+      for (std::size_t d = 0; d < objects.size() && classifier; ++d) {
+        if (match.verdict[d] != core::DetectionVerdict::kTrue) continue;
+        const core::ObjectCategory truth =
+            core::categoryOfClassName(f.gt.objects[match.matched_gt[d]].label);
+        ++class_pairs[k][std::string(core::toString(truth)) + "->" +
+                         core::toString(objects[d].category)];
+      }
       diagnose(f, *dataset, seg, objects, match, detectors[k]->name(), &diags[k],
                details ? stdout : nullptr);
       if (!png_dir.empty() && k == 0) {
@@ -774,8 +725,24 @@ int main(int argc, char** argv) {
                 dataset->name().c_str(), detectors[k]->name().c_str(), frames - failed, t.no,
                 t.mo, t.fo, t.ignored, t.precision(), t.recall(), t.fRate());
   }
+  for (std::size_t k = 0; k < detectors.size() && by_group[k].size() > 1; ++k) {
+    for (const auto& g : by_group[k]) {
+      const core::DetectionScore& t = g.second;
+      std::printf("%-15s %-18s %6s %5zu %5zu %5zu %5zu %9.3f %7.3f %7.3f\n",
+                  (dataset->name() + ":" + g.first).c_str(), detectors[k]->name().c_str(), "",
+                  t.no, t.mo, t.fo, t.ignored, t.precision(), t.recall(), t.fRate());
+    }
+  }
+  std::printf("classifier: %s\n",
+              classifier ? params.classifier.model_path.c_str() : "off (objects unclassified)");
   std::printf("foreground points by class: %s\n", countsJson(fg_composition).c_str());
   for (std::size_t k = 0; k < detectors.size(); ++k) {
+    if (classifier) {
+      std::printf("%s: classifier rejected by content %s; matched objects' class "
+                  "(truth->given) %s\n",
+                  detectors[k]->name().c_str(), countsJson(classified_out[k]).c_str(),
+                  countsJson(class_pairs[k]).c_str());
+    }
     std::printf("%s: missed by cause %s; false by content %s\n", detectors[k]->name().c_str(),
                 countsJson(diags[k].missed_by_cause).c_str(),
                 countsJson(diags[k].false_by_class).c_str());
@@ -798,6 +765,8 @@ int main(int argc, char** argv) {
         << jsonEscape(dataset_path) << "\",\n  \"frames_evaluated\": " << frames - failed
         << ",\n  \"frames_failed\": " << failed << ",\n  \"min_iou\": "
         << jsonNumber(evaluators[0].params().min_iou) << ",\n  \"min_gt_points\": " << min_gt_points
+        << ",\n  \"classifier\": "
+        << (classifier ? "\"" + jsonEscape(params.classifier.model_path) + "\"" : "null")
         << ",\n  \"configs\": [";
     for (std::size_t c = 0; c < configs.size(); ++c) {
       out << (c ? ", " : "") << "\"" << jsonEscape(configs[c]) << "\"";
@@ -815,7 +784,17 @@ int main(int argc, char** argv) {
           << ", \"missed_by_cause\": " << countsJson(diags[k].missed_by_cause)
           << ", \"false_by_content\": " << countsJson(diags[k].false_by_class)
           << ", \"object_filter\": " << (params.object_filter.enabled ? "true" : "false")
-          << ", \"rejected_by_content\": " << countsJson(rejected_by_content[k]) << "}";
+          << ", \"rejected_by_content\": " << countsJson(rejected_by_content[k])
+          << ", \"classifier_rejected_by_content\": " << countsJson(classified_out[k])
+          << ", \"class_truth_to_given\": " << countsJson(class_pairs[k])
+          << ", \"by_sequence\": {";
+      bool first_group = true;
+      for (const auto& g : by_group[k]) {
+        out << (first_group ? "" : ", ") << "\"" << jsonEscape(g.first) << "\": {"
+            << scoreJson(g.second) << "}";
+        first_group = false;
+      }
+      out << "}}";
     }
     out << "\n  },\n  \"foreground_points_by_class\": " << countsJson(fg_composition) << "\n}\n";
     if (!out) {

@@ -61,6 +61,7 @@ struct PipelineParams {
   core::HierarchicalGridDetectorParams hierarchical;
   core::KdTreeDetectorParams kdtree;
   core::ObjectFilterParams object_filter;
+  core::ObjectClassifierParams classifier;
 };
 
 /// Applies the pipeline config files in order over the in-class defaults of `params`. Prints
@@ -70,7 +71,8 @@ inline bool loadConfigs(const std::vector<std::string>& paths, PipelineParams* p
     std::string err;
     if (!core::loadPipelineParamsYaml(path, &params->segmentation, &params->hierarchical,
                                       &params->kdtree, &err) ||
-        !core::loadObjectFilterParamsYaml(path, &params->object_filter, &err)) {
+        !core::loadObjectFilterParamsYaml(path, &params->object_filter, &err) ||
+        !core::loadObjectClassifierParamsYaml(path, &params->classifier, &err)) {
       std::fprintf(stderr, "error: %s\n", err.c_str());
       return false;
     }

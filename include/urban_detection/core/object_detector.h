@@ -14,6 +14,30 @@
 namespace urban_detection {
 namespace core {
 
+/// Class of a detected object, set by the ObjectClassifier (object_classifier.h). Values 0..4
+/// are the classifier model's class numbers (stable: they are stored in model files).
+enum class ObjectCategory : std::uint8_t {
+  kNonObject = 0,    // vegetation, terrain, building, fence, other structure
+  kVehicle = 1,      // cars, vans, trucks, buses, trams, other vehicles
+  kPedestrian = 2,   // people on foot
+  kCyclist = 3,      // riders and their bicycles or motorcycles, parked two-wheelers
+  kOtherObject = 4,  // other street objects (bins, benches, boxes, ...)
+  kUnknown = 255,    // not classified
+};
+
+/// Lower-case class name ("non_object", "vehicle", "pedestrian", "cyclist", "other_object";
+/// "unknown" for kUnknown and any other value).
+inline const char* toString(ObjectCategory c) {
+  switch (c) {
+    case ObjectCategory::kNonObject: return "non_object";
+    case ObjectCategory::kVehicle: return "vehicle";
+    case ObjectCategory::kPedestrian: return "pedestrian";
+    case ObjectCategory::kCyclist: return "cyclist";
+    case ObjectCategory::kOtherObject: return "other_object";
+    default: return "unknown";
+  }
+}
+
 /// One detected urban object: a distinct group of foreground points.
 struct DetectedObject {
   std::uint32_t id = 0;                // 1.. within one frame
@@ -25,6 +49,8 @@ struct DetectedObject {
   Eigen::Vector3f obb_center = Eigen::Vector3f::Zero();  // [m] yaw-oriented box centre
   Eigen::Vector3f obb_size = Eigen::Vector3f::Zero();    // [m] length (along yaw), width, height
   float obb_yaw_rad = 0.0f;                              // [rad] about z
+  ObjectCategory category = ObjectCategory::kUnknown;    // set by the ObjectClassifier
+  float class_confidence = 0.0f;                         // [0..1] probability of `category`
 };
 
 /// Finds objects in a foreground cloud (short street object points of the segmentation).

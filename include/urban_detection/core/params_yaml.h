@@ -9,6 +9,7 @@
 #include "urban_detection/core/grid_segmenter.h"
 #include "urban_detection/core/hierarchical_grid_detector.h"
 #include "urban_detection/core/kdtree_detector.h"
+#include "urban_detection/core/object_classifier.h"
 #include "urban_detection/core/object_filter.h"
 
 namespace urban_detection {
@@ -43,6 +44,12 @@ bool loadPipelineParamsYaml(const std::string& path, GridSegmenterParams* segmen
 /// file (top level, or under `detection:` in a combined file). A file without it changes nothing.
 bool loadObjectFilterParamsYaml(const std::string& path, ObjectFilterParams* params,
                                 std::string* error);
+
+/// Overrides the fields of `params` from the `classifier:` map of a detection.yaml style file
+/// (top level, or under `detection:`). A relative `model` path is taken relative to the
+/// folder of that file. A file without the map changes nothing.
+bool loadObjectClassifierParamsYaml(const std::string& path, ObjectClassifierParams* params,
+                                    std::string* error);
 
 }  // namespace core
 }  // namespace urban_detection

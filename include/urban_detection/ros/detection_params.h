@@ -9,6 +9,7 @@
 
 #include "urban_detection/core/hierarchical_grid_detector.h"
 #include "urban_detection/core/kdtree_detector.h"
+#include "urban_detection/core/object_classifier.h"
 #include "urban_detection/core/object_filter.h"
 #include "urban_detection/ros/param_loading.h"
 
@@ -33,6 +34,11 @@ std::string checkKdTreeParams(const ros::NodeHandle& nh, core::KdTreeDetectorPar
 
 /// Same for the object filter run after either detector (`object_filter:` section).
 void loadObjectFilterParams(const ros::NodeHandle& nh, core::ObjectFilterParams* params);
+
+/// Same for the object classifier run after either detector (`classifier:` section). A
+/// relative `model` path is taken relative to this package's config/ folder, as in
+/// config/detection.yaml.
+void loadObjectClassifierParams(const ros::NodeHandle& nh, core::ObjectClassifierParams* params);
 
 }  // namespace ros_conv
 }  // namespace urban_detection

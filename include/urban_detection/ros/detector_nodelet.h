@@ -8,7 +8,12 @@
 /// dynamic_reconfigure, swapping in a new detector between two revolutions. After the detector,
 /// core::ObjectFilter (params ~object_filter/*, `enabled: false` switches it off) removes
 /// vegetation objects: they are not published, and counted on /diagnostics
-/// ("rejected objects (porous)", "rejected objects (bright hedge)").
+/// ("rejected objects (porous)", "rejected objects (bright hedge)"). Then core::ObjectClassifier
+/// (params ~classifier/*: enabled, model, min_object_probability, reject_non_objects) gives
+/// each object its class (class_label, class_confidence); non-objects (vegetation, terrain,
+/// structure) are left out of `objects` by default and published on `objects/rejected`
+/// (lazy). A missing, corrupt or mismatched model file makes the nodelet refuse to start with
+/// one FATAL naming the file; the manager keeps running.
 #pragma once
 
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
@@ -23,6 +28,7 @@
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 
+#include "urban_detection/core/object_classifier.h"
 #include "urban_detection/core/object_detector.h"
 #include "urban_detection/core/object_filter.h"
 #include "urban_detection/ros/stage_diagnostics.h"
@@ -48,12 +54,14 @@ class DetectorNodelet : public nodelet::Nodelet {
   std::mutex detector_mutex_;  // detector_ between revolutions and reconfigure
   std::unique_ptr<core::ObjectDetector> detector_;
   std::unique_ptr<core::ObjectFilter> filter_;
+  std::unique_ptr<core::ObjectClassifier> classifier_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   int queue_size_ = 2;
-  std::vector<core::DetectedObject> objects_;  // reused between frames
+  std::vector<core::DetectedObject> objects_;   // reused between frames
+  std::vector<core::DetectedObject> rejected_;  // non-objects of the classifier
   std::unordered_map<std::uint32_t, std::uint32_t> id_of_index_;
   std::mutex connect_mutex_;
-  ros::Publisher objects_pub_, points_pub_;
+  ros::Publisher objects_pub_, points_pub_, rejected_pub_;
   ros::Subscriber sub_;
 };
 
