@@ -40,6 +40,7 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
   ground_state_.assign(n, kNoGround);
   fill_z_.assign(n, 0.0f);
   dense_.assign(n, kEmptyOrSparse);
+  vehicle_state_.assign(n, 0);
   grow_queue_.resize(n);
   touched_.resize(n);
   // Terrain bit map of fillTerrain: a zero word of padding on both sides of each row, so
@@ -63,6 +64,7 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
     cell_class_[c] = SegmentClass::kUnknown;
     wall_support_[c] = 0;
     dense_[c] = kEmptyOrSparse;
+    vehicle_state_[c] = kVehicleNone;
   }
   for (std::size_t i = 0; i < touched_count_; ++i) ground_state_[touched_[i]] = kNoGround;
   touched_count_ = 0;
@@ -94,6 +96,7 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   growGround();
   fillTerrain();
   classifyCells();
+  shortenVehicles();
   if (params_.hough.enabled) {
     stats_.hough = hough_.refine(grid_.rows(), grid_.cols(), grid_.params().cell_size_m,
                                  &cell_class_, &wall_support_);
@@ -469,6 +472,8 @@ void GridSegmenter::classifyCells() {
   // Ground-bearing short and tall cells are split; clutter (sparse) cells too when
   // ground_in_sparse_cells is set.
   const bool sparse_ground = params_.ground_in_sparse_cells;
+  const float vehicle_h = static_cast<float>(params_.vehicle_max_height_m);
+  vehicle_cells_.clear();
   constexpr float kNoSplit = -std::numeric_limits<float>::infinity();
   slot_label_.resize(occupied.size() + 1);
   slot_label_[0] = SlotLabel{kNoSplit, static_cast<std::uint32_t>(SegmentClass::kUnknown)};
@@ -488,6 +493,10 @@ void GridSegmenter::classifyCells() {
     SegmentClass cls = SegmentClass::kShort;
     if (cell.z_max - g > tall_h || cell.zRange() > tall_range) {
       cls = SegmentClass::kTall;
+      if (cell.z_max - g <= vehicle_h && cell.zRange() <= vehicle_h) {
+        vehicle_state_[c] = kVehicleCandidate;
+        vehicle_cells_.push_back(c);
+      }
     } else if (cell.z_max - g < tol) {
       cls = SegmentClass::kGround;
     } else if (state != kReached && cell.zRange() < flat &&
@@ -512,6 +521,103 @@ void GridSegmenter::classifyCells() {
     const bool split =
         (cls == SegmentClass::kShort || cls == SegmentClass::kTall) && state != kNoGround;
     table[s] = SlotLabel{split ? g + tol : kNoSplit, static_cast<std::uint32_t>(cls)};
+  }
+}
+
+// A truck, bus or van is taller than tall_min_height_m but lower than vehicle_max_height_m. Its
+// cells (tall ones at most vehicle_max_height_m high, and the short ones of its lower body)
+// form a group of non-ground cells that fits a vehicle box, touches no higher tall cell and is
+// seen whole (its top below the upper edge of the field of view); walls, hedges, facades cut by
+// the field of view and tree canopies are longer, higher, joined to higher structure or may be
+// any height. The group's extent is
+// measured along 8 directions 22.5 deg apart (cell centres in cell units, plus one cell): the
+// longest is its length, the shortest its width (within ~2 % of an oriented box's).
+void GridSegmenter::shortenVehicles() {
+  if (!(params_.vehicle_max_height_m > 0.0) || vehicle_cells_.empty()) return;
+  const int rows = grid_.rows(), cols = grid_.cols();
+  const float max_len = static_cast<float>(params_.vehicle_max_length_m / params_.cell_size_m);
+  const float max_wid = static_cast<float>(params_.vehicle_max_width_m / params_.cell_size_m);
+  const ConstArrayView<GridCell> stats = grid_.occupiedStats();
+  float dir_c[8], dir_s[8];
+  for (int d = 0; d < 8; ++d) {
+    dir_c[d] = static_cast<float>(std::cos(d * M_PI / 8.0));
+    dir_s[d] = static_cast<float>(std::sin(d * M_PI / 8.0));
+  }
+  const float sensor_h = static_cast<float>(params_.sensor_height_m);
+  const float tan_top = static_cast<float>(std::tan(params_.fov_top_elevation_deg * M_PI / 180.0));
+  const float half_diag = static_cast<float>(params_.cell_size_m * M_SQRT1_2);
+  for (const std::int32_t seed : vehicle_cells_) {
+    if (vehicle_state_[seed] != kVehicleCandidate) continue;
+    // The group: breadth first over 8-neighbours that are candidates or short.
+    bool touches_higher = false;
+    vehicle_group_.clear();
+    vehicle_group_.push_back(seed);
+    vehicle_state_[seed] = kVehicleGrouped;
+    for (std::size_t head = 0; head < vehicle_group_.size(); ++head) {
+      const std::int32_t c = vehicle_group_[head];
+      const int r = grid_.rowOf(c), k = c - r * cols;
+      for (int d = 0; d < 8; ++d) {
+        const int nr = r + kDr[d], nk = k + kDc[d];
+        if (nr < 0 || nr >= rows || nk < 0 || nk >= cols) continue;
+        const std::int32_t nc = nr * cols + nk;
+        const std::uint8_t st = vehicle_state_[nc];
+        if (st == kVehicleCandidate) {
+          vehicle_state_[nc] = kVehicleGrouped;
+          vehicle_group_.push_back(nc);
+        } else if (st == kVehicleNone) {
+          if (cell_class_[nc] == SegmentClass::kShort) {
+            vehicle_state_[nc] = kVehicleShort;
+            vehicle_group_.push_back(nc);
+          } else if (cell_class_[nc] == SegmentClass::kTall) {
+            touches_higher = true;
+          }
+        }
+      }
+    }
+    if (touches_higher) continue;
+    float lo[8], hi[8];
+    std::fill(lo, lo + 8, std::numeric_limits<float>::max());
+    std::fill(hi, hi + 8, std::numeric_limits<float>::lowest());
+    for (const std::int32_t c : vehicle_group_) {
+      const int r = grid_.rowOf(c);
+      const float x = static_cast<float>(c - r * cols), y = static_cast<float>(r);
+      for (int d = 0; d < 8; ++d) {
+        const float v = x * dir_c[d] + y * dir_s[d];
+        lo[d] = std::min(lo[d], v);
+        hi[d] = std::max(hi[d], v);
+      }
+    }
+    float len = 0.0f, wid = std::numeric_limits<float>::max();
+    for (int d = 0; d < 8; ++d) {
+      len = std::max(len, hi[d] - lo[d] + 1.0f);
+      wid = std::min(wid, hi[d] - lo[d] + 1.0f);
+    }
+    if (!(len <= max_len && wid <= max_wid)) continue;
+    // Its height must be known: where most tops are at the upper edge of the field of view
+    // (classifyCells' wall-support test) the structure may be any height, e.g. a facade beyond
+    // the Hough window seen up to ~2.5 m.
+    std::size_t tall = 0, cut = 0;
+    for (const std::int32_t c : vehicle_group_) {
+      if (vehicle_state_[c] != kVehicleGrouped) continue;
+      ++tall;
+      float x, y;
+      grid_.cellCenter(c, &x, &y);
+      const float dist = std::max(0.0f, std::sqrt(x * x + y * y) - half_diag);
+      cut += stats[grid_.slotOf(c)].z_max - sensor_h >= dist * tan_top ? 1 : 0;
+    }
+    if (2 * cut > tall) continue;
+    for (const std::int32_t c : vehicle_group_) {
+      if (vehicle_state_[c] != kVehicleGrouped) continue;
+      const std::int32_t s = grid_.slotOf(c);
+      cell_class_[c] = SegmentClass::kShort;
+      slot_label_[static_cast<std::size_t>(s) + 1].label =
+          static_cast<std::uint32_t>(SegmentClass::kShort);
+      // As any short cell: a top at the upper edge of the field of view supports walls.
+      float x, y;
+      grid_.cellCenter(c, &x, &y);
+      const float dist = std::max(0.0f, std::sqrt(x * x + y * y) - half_diag);
+      wall_support_[c] = stats[s].z_max - sensor_h >= dist * tan_top ? 1 : 0;
+    }
   }
 }
 

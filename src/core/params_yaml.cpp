@@ -97,6 +97,9 @@ bool applySegmentation(const YAML::Node& root, const std::string& where,
   t.bind("terrain_max_offset_m", &p->terrain_max_offset_m);
   t.bind("tall_min_height_m", &p->tall_min_height_m);
   t.bind("tall_min_range_m", &p->tall_min_range_m);
+  t.bind("vehicle_max_height_m", &p->vehicle_max_height_m);
+  t.bind("vehicle_max_length_m", &p->vehicle_max_length_m);
+  t.bind("vehicle_max_width_m", &p->vehicle_max_width_m);
   t.bind("fov_top_elevation_deg", &p->fov_top_elevation_deg);
   t.bindMap("hough", [&hough, where](const YAML::Node& n, std::string* err) {
     return hough.apply(n, where + "hough/", err);

@@ -46,6 +46,9 @@ bool validateGridSegmenterParams(const core::GridSegmenterParams& p, std::string
   c.check("terrain_max_offset_m", p.terrain_max_offset_m, 0.0, 5.0);
   c.check("tall_min_height_m", p.tall_min_height_m, 0.1, 20.0);
   c.check("tall_min_range_m", p.tall_min_range_m, 0.1, 50.0);
+  c.check("vehicle_max_height_m", p.vehicle_max_height_m, 0.0, 20.0);
+  c.check("vehicle_max_length_m", p.vehicle_max_length_m, 0.5, 100.0);
+  c.check("vehicle_max_width_m", p.vehicle_max_width_m, 0.5, 100.0);
   c.check("fov_top_elevation_deg", p.fov_top_elevation_deg, -30.0, 30.0);
   c.check("hough/max_range_m", p.hough.max_range_m, 1.0, 250.0);
   c.check("hough/votes", p.hough.votes, 1, 10000);
@@ -76,6 +79,9 @@ bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParam
   nh.param("terrain_max_offset_m", p->terrain_max_offset_m, p->terrain_max_offset_m);
   nh.param("tall_min_height_m", p->tall_min_height_m, p->tall_min_height_m);
   nh.param("tall_min_range_m", p->tall_min_range_m, p->tall_min_range_m);
+  nh.param("vehicle_max_height_m", p->vehicle_max_height_m, p->vehicle_max_height_m);
+  nh.param("vehicle_max_length_m", p->vehicle_max_length_m, p->vehicle_max_length_m);
+  nh.param("vehicle_max_width_m", p->vehicle_max_width_m, p->vehicle_max_width_m);
   nh.param("fov_top_elevation_deg", p->fov_top_elevation_deg, p->fov_top_elevation_deg);
   core::HoughWallRefinerParams& h = p->hough;
   nh.param("hough/enabled", h.enabled, h.enabled);

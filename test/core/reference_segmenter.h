@@ -216,6 +216,82 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
       support[c] = g.z_max - static_cast<float>(p.sensor_height_m) >= d * tan_top ? 1 : 0;
     }
   }
+  // Long vehicles: groups of 8-connected cells that are tall and at most vehicle_max_height_m
+  // high (top above the ground and z range) or short; a group touching no other tall cell, whose
+  // cell centres (in cell units) span at most vehicle_max_length_m along every one of 8
+  // directions 22.5 deg apart and vehicle_max_width_m along at least one (plus one cell each),
+  // and at most half of whose tall cells have their top at the upper edge of the field of view
+  // (the wall-support test), has its tall cells turned short (with the wall support of a short cell).
+  if (p.vehicle_max_height_m > 0.0) {
+    const float vmax = static_cast<float>(p.vehicle_max_height_m);
+    auto groundOf = [&](int c) { return state[c] != kNone ? ground[c] : 0.0f; };
+    auto lowTall = [&](int c) {
+      return cls[c] == SegmentClass::kTall && grid[c].z_max - groundOf(c) <= vmax &&
+             grid[c].range() <= vmax;
+    };
+    std::vector<int> group_of(cells, -1);
+    int groups = 0;
+    for (int seed : first_touch) {
+      if (!lowTall(seed) || group_of[seed] >= 0) continue;
+      const int id = groups++;
+      std::vector<int> members{seed};
+      group_of[seed] = id;
+      bool touches_higher = false;
+      for (std::size_t h = 0; h < members.size(); ++h) {
+        const int r = members[h] / side, k = members[h] % side;
+        for (int dr = -1; dr <= 1; ++dr) {
+          for (int dk = -1; dk <= 1; ++dk) {
+            const int nr = r + dr, nk = k + dk;
+            if ((dr == 0 && dk == 0) || nr < 0 || nr >= side || nk < 0 || nk >= side) continue;
+            const int nc = nr * side + nk;
+            if (group_of[nc] >= 0) continue;
+            if (lowTall(nc) || cls[nc] == SegmentClass::kShort) {
+              group_of[nc] = id;
+              members.push_back(nc);
+            } else if (cls[nc] == SegmentClass::kTall) {
+              touches_higher = true;
+            }
+          }
+        }
+      }
+      if (touches_higher) continue;
+      float len = 0.0f, wid = std::numeric_limits<float>::max();
+      for (int d = 0; d < 8; ++d) {
+        const float dc = static_cast<float>(std::cos(d * M_PI / 8.0));
+        const float ds = static_cast<float>(std::sin(d * M_PI / 8.0));
+        float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+        for (int c : members) {
+          const float v = static_cast<float>(c % side) * dc + static_cast<float>(c / side) * ds;
+          lo = std::min(lo, v);
+          hi = std::max(hi, v);
+        }
+        len = std::max(len, hi - lo + 1.0f);
+        wid = std::min(wid, hi - lo + 1.0f);
+      }
+      if (!(len <= static_cast<float>(p.vehicle_max_length_m / p.cell_size_m) &&
+            wid <= static_cast<float>(p.vehicle_max_width_m / p.cell_size_m))) {
+        continue;
+      }
+      std::size_t tall = 0, cut = 0;
+      for (int c : members) {
+        if (cls[c] != SegmentClass::kTall) continue;
+        ++tall;
+        float x, y;
+        centre(c / side, c % side, &x, &y);
+        const float d = std::max(0.0f, std::sqrt(x * x + y * y) - half_diag);
+        if (grid[c].z_max - static_cast<float>(p.sensor_height_m) >= d * tan_top) ++cut;
+      }
+      if (2 * cut > tall) continue;
+      for (int c : members) {
+        if (cls[c] != SegmentClass::kTall) continue;
+        cls[c] = SegmentClass::kShort;
+        float x, y;
+        centre(c / side, c % side, &x, &y);
+        const float d = std::max(0.0f, std::sqrt(x * x + y * y) - half_diag);
+        support[c] = grid[c].z_max - static_cast<float>(p.sensor_height_m) >= d * tan_top ? 1 : 0;
+      }
+    }
+  }
   if (p.hough.enabled) {
     core::HoughWallRefiner hough(p.hough);
     out.stats.hough = hough.refine(side, side, cell_m, &cls, &support);

@@ -184,6 +184,50 @@ TEST(GridSegmenter, FacadeIsTallAndCarIsShort) {
   EXPECT_EQ(ground_ok, ground);
 }
 
+// Share of the points of box `tag` (above twice the ground tolerance) labelled `cls`.
+double shareOf(const CloudXYZIRT& cloud, const std::vector<int>& tags,
+               const std::vector<SegmentClass>& labels, int tag, SegmentClass cls) {
+  int n = 0, k = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (tags[i] != tag || cloud[i].z + kKittiHeight < 0.16f) continue;
+    ++n;
+    k += labels[i] == cls;
+  }
+  return n == 0 ? -1.0 : static_cast<double>(k) / n;
+}
+
+TEST(GridSegmenter, BusSeenWholeIsShortButWallKioskByATreeAndCutOffStructureStayTall) {
+  // A sensor seeing up to 15 deg (so the objects are seen whole): a 12 x 2.5 x 3.2 m bus 15 m to
+  // the left; a wall as high, 30 m long, 15 m to the right; a 4 m high 4 x 4 m kiosk 12 m behind
+  // with a 5 m tree crown beside it. All but the crown are taller than tall_min_height_m and
+  // lower than vehicle_max_height_m; only the bus fits a vehicle box on its own.
+  std::vector<test::Box> boxes = {{-4.f, 15.f, 0.f, 8.f, 17.5f, 3.2f, 1},
+                                  {-15.f, -15.5f, 0.f, 15.f, -15.f, 3.2f, 2},
+                                  {-16.f, -2.f, 0.f, -12.f, 2.f, 3.8f, 3},
+                                  {-16.f, 2.f, 0.f, -12.f, 6.f, 5.0f, 4}};
+  std::vector<int> tags;
+  CloudXYZIRT cloud = test::rayCast(kKittiHeight, boxes, &tags, 64, 1500, 15.0f);
+  GridSegmenterParams p;
+  p.hough.enabled = false;  // judge the cell classes alone
+  p.fov_top_elevation_deg = 14.0;
+  p.vehicle_max_height_m = 0.0;
+  std::vector<SegmentClass> labels;
+  GridSegmenter(p).segment(cloud, &labels);
+  EXPECT_GT(shareOf(cloud, tags, labels, 1, SegmentClass::kTall), 0.5);  // the rule's case
+  p.vehicle_max_height_m = 4.0;
+  GridSegmenter on(p);
+  on.segment(cloud, &labels);
+  EXPECT_GT(shareOf(cloud, tags, labels, 1, SegmentClass::kShort), 0.95);
+  EXPECT_GT(shareOf(cloud, tags, labels, 2, SegmentClass::kTall), 0.9);
+  EXPECT_GT(shareOf(cloud, tags, labels, 3, SegmentClass::kTall), 0.9);  // joined to the crown
+  // Where the bus reaches the upper edge of the field of view its height is unknown (it could
+  // be a facade seen up to that edge): it stays tall.
+  p.fov_top_elevation_deg = 1.0;
+  on.setParams(p);
+  on.segment(cloud, &labels);
+  EXPECT_GT(shareOf(cloud, tags, labels, 1, SegmentClass::kTall), 0.5);
+}
+
 TEST(GridSegmenter, MixedCellIsSplitPerPointByHeightAboveLocalGround) {
   // One 0.5 m cell holding road points and the lower edge of a car body 0.4-1.2 m up.
   CloudXYZIRT cloud;

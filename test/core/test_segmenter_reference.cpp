@@ -101,7 +101,7 @@ void expectSameAsReference(core::GridSegmenter* seg, const CloudXYZIRT& cloud,
 }
 
 std::vector<core::GridSegmenterParams> variants() {
-  std::vector<core::GridSegmenterParams> v(7);
+  std::vector<core::GridSegmenterParams> v(9);
   v[1].hough.enabled = false;
   v[2].ground_in_sparse_cells = false;
   v[2].min_points_per_cell = 6;
@@ -113,6 +113,9 @@ std::vector<core::GridSegmenterParams> variants() {
   // 2 * terrain_fill_iterations + 1 rows; 3 and 57 do not divide the padded row count).
   v[5].terrain_fill_iterations = 1;
   v[6].terrain_fill_iterations = 28;
+  v[7].vehicle_max_height_m = 0.0;  // the long-vehicle rule off, and loosened (more groups)
+  v[8].vehicle_max_length_m = 40.0;
+  v[8].vehicle_max_width_m = 40.0;
   return v;
 }
 

@@ -18,6 +18,14 @@
 ///  4. Cell classes against the local ground g: tall when z_max - g > tall_min_height_m or
 ///     z_max - z_min > tall_min_range_m; ground when all points lie within ground_tolerance_m
 ///     of g; short otherwise.
+///  4b. Long vehicles (ours): tall cells whose top is at most vehicle_max_height_m above the
+///     ground (and z range at most that) and short cells form 8-connected groups; the tall
+///     cells of a group that touches no other tall cell, fits an oriented box of
+///     vehicle_max_length_m x vehicle_max_width_m (extents measured along 8 directions,
+///     22.5 deg apart) and at most half of whose tall cells reach the upper edge of the field
+///     of view (fov_top_elevation_deg: their true height is unknown) become short: a truck, bus
+///     or van, not a wall, hedge or facade, which are longer, higher, joined to higher
+///     structure or cut by the field of view.
 ///  5. HoughWallRefiner turns short cells on long straight walls into tall.
 ///  6. Per point: in ground-bearing cells a point within ground_tolerance_m of g is ground, the
 ///     others take the cell class (mixed cells are split per point). Sparse (clutter) cells of
@@ -64,6 +72,12 @@ struct GridSegmenterParams {
                                       //     1.40, which makes standing people (1.7-1.9 m) tall
                                       //     when heights are taken above the local ground)
   double tall_min_range_m = 3.10;     // [m] z_max - z_min beyond this: tall (paper)
+  double vehicle_max_height_m = 4.0;  // [m] 0 = off; a tall cell whose top above the local
+                                      //     ground and whose z range are at most this is short
+                                      //     when the 8-connected group of such cells it is in
+                                      //     fits a vehicle box (trucks, buses, vans: 2-4 m)
+  double vehicle_max_length_m = 13.0; // [m] ... that box's longer side at most this (a bus)
+  double vehicle_max_width_m = 3.5;   // [m] ... and its shorter side at most this
   double fov_top_elevation_deg = 1.0; // [deg] a cell whose highest point is seen at this
                                       //     elevation or more may extend above the vertical
                                       //     field of view (HDL-64E: +2 deg); it supports Hough
@@ -118,6 +132,7 @@ class GridSegmenter {
   void growGround();
   void fillTerrain();
   void classifyCells();
+  void shortenVehicles();
 
   GridSegmenterParams params_;
   SimpleGrid grid_;
@@ -128,6 +143,17 @@ class GridSegmenter {
   std::vector<std::uint8_t> wall_support_;  // cell top at the upper edge of the field of view
   std::vector<float> ground_z_;          // [m] local ground elevation per cell
   std::vector<std::uint8_t> ground_state_;
+  // shortenVehicles: per cell, a tall cell low enough for a vehicle (candidate), grouped, or a
+  // short cell of a group.
+  enum VehicleState : std::uint8_t {
+    kVehicleNone = 0,
+    kVehicleCandidate = 1,
+    kVehicleGrouped = 2,
+    kVehicleShort = 3
+  };
+  std::vector<std::uint8_t> vehicle_state_;  // VehicleState per cell
+  std::vector<std::int32_t> vehicle_cells_;  // the vehicle-high tall cells, in slot order
+  std::vector<std::int32_t> vehicle_group_;  // scratch: one group's cells (breadth first)
   std::vector<std::uint8_t> dense_;       // DenseState: min_points_per_cell points or more, flat
   std::vector<float> slot_elev_;          // [m] per slot: mean (flat cell) or lowest point
   std::vector<QueueEntry> grow_queue_;    // numCells() entries: each cell is queued at most once

@@ -40,6 +40,7 @@ struct GridSegmenterTunables {
     f(c.ground_max_step_m, p.ground_max_step_m);
     f(c.tall_min_height_m, p.tall_min_height_m);
     f(c.tall_min_range_m, p.tall_min_range_m);
+    f(c.vehicle_max_height_m, p.vehicle_max_height_m);
     f(c.hough_enabled, p.hough.enabled);
     f(c.hough_votes, p.hough.votes);
     f(c.hough_min_line_length_m, p.hough.min_line_length_m);
