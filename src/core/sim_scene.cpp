@@ -36,36 +36,35 @@ Eigen::AlignedBox3d Primitive::bounds(double t_s) const {
   return Eigen::AlignedBox3d(c - e, c + e);
 }
 
-double Primitive::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
-                            double t_s, double t_min) const {
+bool Primitive::span(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_s,
+                     double* t_in, double* t_out) const {
   const Eigen::Vector3d o = rotation.transpose() * (origin - center - velocity * t_s);
   const Eigen::Vector3d d = rotation.transpose() * dir;
   const Eigen::Vector3d& h = half_extents;
+  double t_near = -kInf, t_far = kInf;
   switch (shape) {
     case PrimitiveShape::kBox: {
-      double t_near = -kInf, t_far = kInf;
-      if (!clipSlab(o.x(), d.x(), h.x(), &t_near, &t_far)) return -1.0;
-      if (!clipSlab(o.y(), d.y(), h.y(), &t_near, &t_far)) return -1.0;
-      if (!clipSlab(o.z(), d.z(), h.z(), &t_near, &t_far)) return -1.0;
-      return t_near > t_min ? t_near : -1.0;
+      if (!clipSlab(o.x(), d.x(), h.x(), &t_near, &t_far)) return false;
+      if (!clipSlab(o.y(), d.y(), h.y(), &t_near, &t_far)) return false;
+      if (!clipSlab(o.z(), d.z(), h.z(), &t_near, &t_far)) return false;
+      break;
     }
     case PrimitiveShape::kCylinder: {
-      double t_near = -kInf, t_far = kInf;
-      if (!clipSlab(o.z(), d.z(), h.z(), &t_near, &t_far)) return -1.0;
+      if (!clipSlab(o.z(), d.z(), h.z(), &t_near, &t_far)) return false;
       const double a = d.x() * d.x() + d.y() * d.y();
       const double b = o.x() * d.x() + o.y() * d.y();  // half of the usual b
       const double c = o.x() * o.x() + o.y() * o.y() - h.x() * h.x();
       if (a < 1e-15) {
-        if (c > 0.0) return -1.0;
+        if (c > 0.0) return false;
       } else {
         const double disc = b * b - a * c;
-        if (disc < 0.0) return -1.0;
+        if (disc < 0.0) return false;
         const double s = std::sqrt(disc);
         t_near = std::max(t_near, (-b - s) / a);
         t_far = std::min(t_far, (-b + s) / a);
-        if (t_near > t_far) return -1.0;
+        if (t_near > t_far) return false;
       }
-      return t_near > t_min ? t_near : -1.0;
+      break;
     }
     case PrimitiveShape::kEllipsoid: {
       const Eigen::Vector3d os = o.cwiseQuotient(h);
@@ -74,12 +73,23 @@ double Primitive::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d
       const double b = os.dot(ds);
       const double c = os.squaredNorm() - 1.0;
       const double disc = b * b - a * c;
-      if (disc < 0.0 || a < 1e-30) return -1.0;
-      const double t0 = (-b - std::sqrt(disc)) / a;
-      return t0 > t_min ? t0 : -1.0;
+      if (disc < 0.0 || a < 1e-30) return false;
+      const double s = std::sqrt(disc);
+      t_near = (-b - s) / a;
+      t_far = (-b + s) / a;
+      break;
     }
   }
-  return -1.0;
+  *t_in = t_near;
+  *t_out = t_far;
+  return true;
+}
+
+double Primitive::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                            double t_s, double t_min) const {
+  double t_in, t_out;
+  if (!span(origin, dir, t_s, &t_in, &t_out)) return -1.0;
+  return t_in > t_min ? t_in : -1.0;
 }
 
 bool Primitive::contains(const Eigen::Vector3d& p, double t_s, double margin_m) const {
