@@ -20,7 +20,7 @@
 ///
 /// Intensity: the byte sent for a return is 255 x r x fade x jitter x partial, with r the
 /// surface's reflectivity drawn per return (Primitive::reflectivity + reflectivity_spread x a
-/// standard normal, clamped to [0, 1]), fade = 1 / (1 + 0.004 range [m]), jitter uniform in
+/// near-normal deviate of unit variance, clamped to [0, 1]), fade = 1 / (1 + 0.004 range [m]), jitter uniform in
 /// [0.85, 1.15], partial uniform in [0.5, 1] for a return from inside foliage (a partly covered
 /// footprint) and 1 otherwise. Without fade and jitter this is KITTI's scale, reflectance x 255;
 /// the materials behind r are listed in scene_generator.h.

@@ -111,8 +111,9 @@ struct RayCasterParams {
 };
 
 /// Casts rays against a scene with a uniform 2-D grid of primitive xy bounds. Static primitives
-/// are binned once; moving primitives are binned with their bounds swept over the time window
-/// given to setTimeWindow(). Not thread-safe (per-ray mailbox).
+/// are binned once, grouped by object (one box test skips an object's parts); moving primitives
+/// are binned with their bounds swept over the time window given to setTimeWindow(). Not
+/// thread-safe (per-ray mailbox).
 class RayCaster {
  public:
   /// Keeps a reference to `scene`, which must outlive the caster and not change.
@@ -145,7 +146,13 @@ class RayCaster {
   int nx_ = 1, ny_ = 1;
   double z_max_ = 0.0;  // [m] highest point of the scene (rays above it going up stop)
   double static_z_max_ = 0.0;  // [m] same, static primitives only
-  std::vector<std::uint32_t> static_start_, static_items_;  // CSR per cell
+  struct Group {  // consecutive static primitives of one object (or one background primitive)
+    std::uint32_t first = 0, count = 0;
+    Eigen::AlignedBox3d box;
+  };
+  std::vector<Group> groups_;
+  std::vector<std::uint32_t> group_mailbox_;
+  std::vector<std::uint32_t> static_start_, static_items_;  // CSR per cell (group indices)
   std::vector<std::uint32_t> moving_start_, moving_items_;  // CSR per cell (time window)
   std::vector<std::uint32_t> moving_prims_;
   std::vector<std::uint32_t> mailbox_;
