@@ -746,6 +746,18 @@ class Generator {
     }
   }
 
+  // Shrubs against a facade whose front (|y| = front) stands on the sidewalk.
+  void facadeShrubs(double x0, double x1, double front, int side) {
+    const VegetationParams& v = p_.vegetation;
+    for (double x = x0 + veg_.uniform(0.5, v.facade_shrub_spacing_m); x < x1 - 0.5;
+         x += v.facade_shrub_spacing_m * veg_.uniform(0.5, 1.5)) {
+      const double r = veg_.uniform(0.3, 0.45);
+      const double y = side * (front - r);
+      if (!clear(boxXY(x - r, x + r, y - r, y + r), 0.15)) continue;
+      bush(x, y, veg_.uniform(0.5, 1.2), r, 0.0);
+    }
+  }
+
   void vegetation() {
     const VegetationParams& v = p_.vegetation;
     collectFootprints();
@@ -781,7 +793,11 @@ class Generator {
             if (f.x0 - cursor >= 1.5) garden(cursor, f.x0, edge, v.garden_depth_m, side);
             const double recess = std::abs(f.y) - edge;
             const double fx0 = std::max(f.x0, gx0), fx1 = std::min(f.x1, gx1);
-            if (recess >= 0.5 && fx1 - fx0 >= 1.5) garden(fx0, fx1, edge, recess - 0.05, side);
+            if (recess >= 0.5 && fx1 - fx0 >= 1.5) {
+              garden(fx0, fx1, edge, recess - 0.05, side);
+            } else if (recess < 0.5 && sec.sidewalk_width_m >= 2.0) {
+              facadeShrubs(fx0, fx1, std::abs(f.y), side);
+            }
             cursor = std::max(cursor, f.x1);
           }
         }
@@ -962,6 +978,8 @@ void validate(const SceneParams& p) {
           "scene.vegetation: need 0.3 <= hedge_width_min_m <= hedge_width_max_m <= 3 m");
   require(v.hedge_gap_spacing_m >= 2.0, "scene.vegetation.hedge_gap_spacing_m must be >= 2 m");
   require(v.bush_spacing_m >= 1.0, "scene.vegetation.bush_spacing_m must be >= 1 m");
+  require(v.facade_shrub_spacing_m >= 1.0,
+          "scene.vegetation.facade_shrub_spacing_m must be >= 1 m");
   require(v.bush_height_min_m >= 0.2 && v.bush_height_max_m >= v.bush_height_min_m &&
               v.bush_height_max_m <= 4.0,
           "scene.vegetation: need 0.2 <= bush_height_min_m <= bush_height_max_m <= 4 m");

@@ -147,6 +147,7 @@ SimulationConfig parse(const YAML::Node& root, const std::string& source) {
       .get("hedge_width_max_m", &v.hedge_width_max_m)
       .get("hedge_gap_spacing_m", &v.hedge_gap_spacing_m)
       .get("bush_spacing_m", &v.bush_spacing_m)
+      .get("facade_shrub_spacing_m", &v.facade_shrub_spacing_m)
       .get("bush_height_min_m", &v.bush_height_min_m)
       .get("bush_height_max_m", &v.bush_height_max_m)
       .get("garden_tree_spacing_m", &v.garden_tree_spacing_m)

@@ -475,7 +475,9 @@ TEST_F(GeneratedScene, VegetationHasItsOwnRandomStream) {
   const ud::Scene bare = ud::generateScene(off, drive_);
   ud::SceneParams other = params_;
   other.vegetation.hedge_probability = 1.0;
-  other.vegetation.bush_spacing_m = 3.0;
+  other.vegetation.bush_spacing_m = 1.5;
+  other.vegetation.verge_bush_spacing_m = 3.0;
+  other.vegetation.facade_shrub_spacing_m = 2.0;
   const ud::Scene denser = ud::generateScene(other, drive_);
   for (const ud::Scene* s : {&bare, &denser}) {
     std::size_t street_objects = 0;

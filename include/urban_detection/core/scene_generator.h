@@ -12,7 +12,8 @@
 /// Vegetation (VegetationParams) makes the scene as hard as a real street, where most false
 /// objects are hedges, bushes, grass and terrain steps (issue 23): grass verges along the curb,
 /// front gardens wherever the facade line has no building front (gaps, setbacks, open sides)
-/// with a terrain step at the sidewalk's back edge, trimmed hedges and irregular bushes, and tree
+/// with a terrain step at the sidewalk's back edge, trimmed hedges and irregular bushes, shrubs
+/// against the facades that stand on the sidewalk, and tree
 /// crowns with low lobes overhanging parked cars and the walkway. Foliage is porous (sim_scene.h).
 /// Vegetation is drawn from its own random stream (derived from `seed`), so switching it off or
 /// changing its parameters leaves every other object of the scene where it was.
@@ -94,7 +95,7 @@ struct VegetationParams {
   double verge_offset_m = 0.2;      // [m] paved edge between the curb and the verge
   double verge_width_m = 1.0;       // [m] across the street (sidewalks >= verge + 1.5 m only)
   double verge_step_max_m = 0.08;   // [m] largest height of a verge above the sidewalk
-  double verge_bush_spacing_m = 25.0;  // [m] mean spacing of small shrubs in a verge
+  double verge_bush_spacing_m = 12.0;  // [m] mean spacing of small shrubs in a verge
   // Terrain (verges and gardens) is tiled; each tile is slightly raised and tilted.
   double terrain_tile_m = 1.0;       // [m] side of a terrain tile
   double terrain_roughness_m = 0.04; // [m] largest random extra height of a tile
@@ -102,13 +103,15 @@ struct VegetationParams {
   // Front gardens behind the sidewalk, where no building front stands on the facade line.
   double garden_depth_m = 4.0;       // [m] depth of a garden (a setback: up to the building)
   double garden_step_max_m = 0.3;    // [m] largest terrain step at the sidewalk's back edge
-  double hedge_probability = 0.6;    // [0..1] chance a garden stretch is lined with a hedge
+  double hedge_probability = 0.75;   // [0..1] chance a garden stretch is lined with a hedge
   double hedge_height_min_m = 0.8;   // [m]
   double hedge_height_max_m = 1.8;   // [m]
   double hedge_width_min_m = 0.5;    // [m]
   double hedge_width_max_m = 1.0;    // [m]
   double hedge_gap_spacing_m = 12.0; // [m] mean hedge length between entrance gaps
-  double bush_spacing_m = 5.0;       // [m] mean spacing of bushes along a garden
+  double bush_spacing_m = 4.0;       // [m] mean spacing of bushes along a garden
+  double facade_shrub_spacing_m = 8.0;  // [m] mean spacing of shrubs planted against facades
+                                        //     that stand on the sidewalk (sidewalks >= 2 m)
   double bush_height_min_m = 0.5;    // [m]
   double bush_height_max_m = 2.0;    // [m]
   double garden_tree_spacing_m = 16.0;  // [m] mean spacing of trees in deep gardens
