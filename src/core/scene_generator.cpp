@@ -96,8 +96,8 @@ constexpr Material kWallSpread{0.0f, 0.04f};  // mean drawn per building
 constexpr Material kGlass{0.03f, 0.03f};
 constexpr Material kPlate{0.90f, 0.06f};
 constexpr Material kLamp{0.70f, 0.15f};
-constexpr float kPaintSpread = 0.06f;
-constexpr float kClothSpread = 0.10f;
+constexpr float kPaintSpread = 0.10f;  // curvature and gloss under one colour
+constexpr float kClothSpread = 0.13f;
 constexpr Material kSkin{0.45f, 0.06f};
 constexpr Material kBicycle{0.35f, 0.15f};
 constexpr Material kFoliage{0.38f, 0.13f};
@@ -275,10 +275,11 @@ class Generator {
                            double scale = -1.0) {
     if (scale <= 0.0) scale = rng_.uniform(0.9, 1.08);
     const Placer pl = placer(x, y, yaw);
-    const float refl = static_cast<float>(rng_.uniform(0.2, 0.6));  // clothing
+    const float refl = static_cast<float>(rng_.uniform(0.2, 0.6));  // upper clothing
+    const float legs = static_cast<float>(mat_.uniform(0.15, 0.6));  // trousers, skirt
     std::vector<Primitive> parts;
     parts.push_back(withClass(pl.box(0, 0, 0.42 * scale, 0.28 * scale, 0.36 * scale, 0.84 * scale),
-                              ObjectClass::kPedestrian, refl, kClothSpread));
+                              ObjectClass::kPedestrian, legs, kClothSpread));
     Primitive torso = makeCylinder(pl.at(0, 0, 1.14 * scale), 0.2 * scale, 0.6 * scale);
     parts.push_back(withClass(torso, ObjectClass::kPedestrian, refl, kClothSpread));
     Primitive head = makeEllipsoid(pl.at(0, 0, 1.57 * scale), Eigen::Vector3d::Constant(0.11 * scale));
