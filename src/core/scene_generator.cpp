@@ -303,7 +303,8 @@ class Generator {
     return add(ObjectClass::kCyclist, x, y, yaw, {1.75, 0.4, 1.82}, v, parts);
   }
 
-  // A street tree (main stream); `toward` is the unit xy direction its low lobes lean to.
+  // A street tree: its size is drawn from the main stream as before the vegetation, its lobes
+  // from the vegetation stream.
   std::uint32_t tree(double x, double y) {
     const double trunk_h = rng_.uniform(2.4, 3.2);
     const double crown_r = rng_.uniform(1.4, 2.4);
@@ -313,6 +314,8 @@ class Generator {
     return treeObject(x, y, trunk_h, trunk_r, crown_r, crown_h, Eigen::Vector2d(0.0, y > 0 ? -1.0 : 1.0));
   }
 
+  // Trunk, crown and (with vegetation) porous lobes; `toward` is the unit xy direction about
+  // half of the lobes lean to.
   std::uint32_t treeObject(double x, double y, double trunk_h, double trunk_r, double crown_r,
                            double crown_h, const Eigen::Vector2d& toward) {
     const VegetationParams& v = p_.vegetation;
