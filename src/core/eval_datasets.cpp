@@ -364,9 +364,14 @@ void buildSimulatedGroundTruth(const GroundTruthFrame& frame,
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t id = frame.instance_ids[i];
     const auto cls = static_cast<ObjectClass>(i < frame.classes.size() ? frame.classes[i] : 0);
-    if (id == 0 || cls == ObjectClass::kGround || cls == ObjectClass::kWall) continue;
+    // Scored background: ground, terrain, walls and foliage (crowns, hedges, bushes), as
+    // SemanticKITTI's vegetation and terrain.
+    if (id == 0 || cls == ObjectClass::kGround || cls == ObjectClass::kWall ||
+        cls == ObjectClass::kTerrain || cls == ObjectClass::kVegetation) {
+      continue;
+    }
     if (!isStreetObject(cls)) {
-      gt->role[i] = PointRole::kDontCare;  // trees, trunks, poles, signs
+      gt->role[i] = PointRole::kDontCare;  // trunks, poles, signs
       continue;
     }
     auto it = object_of_instance.find(id);

@@ -20,6 +20,21 @@ inline std::uint64_t mix(std::uint64_t z) {
 inline double unit(std::uint64_t h) {  // (0, 1]
   return (static_cast<double>(h >> 11) + 1.0) * (1.0 / 9007199254740992.0);
 }
+// Standard normal from two counter-based uniforms (Box-Muller).
+inline double gaussian(std::uint64_t h1, std::uint64_t h2) {
+  return std::sqrt(-2.0 * std::log(unit(h1))) * std::cos(6.283185307179586 * unit(h2));
+}
+
+// Cheap near-normal deviate (mean 0, variance 1) from one hash: the sum of four 16-bit uniforms
+// (Irwin-Hall), for the per-return reflectivity, where the tails do not matter.
+inline double nearGaussian(std::uint64_t h) {
+  double sum = 0.0;
+  for (int k = 0; k < 4; ++k) sum += static_cast<double>((h >> (16 * k)) & 0xFFFFu) / 65535.0;
+  return (sum - 2.0) * 1.7320508075688772;  // sqrt(12 / 4)
+}
+
+constexpr int kMaxFoliagePasses = 8;  // porous volumes one ray may pass through
+constexpr double kStepM = 1e-4;       // [m] restart a cast this far past a surface
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument(what);
@@ -172,6 +187,50 @@ void LidarSimulator::simulateNext(SimRevolution* out) {
   }
 }
 
+bool LidarSimulator::throughFoliage(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                                    double t_s, std::uint64_t h, RayHit* hit, bool* inside,
+                                    SimStats* stats) {
+  *inside = false;
+  const double max_d = sensor_.max_range_m + 1.0;
+  for (int pass = 0; pass < kMaxFoliagePasses; ++pass) {
+    const Primitive& p = scene_.primitives[hit->primitive];
+    if (!p.porous()) return true;
+    double t_in, t_out;
+    if (!p.span(origin, dir, t_s, &t_in, &t_out)) return true;  // grazing: keep the surface
+    t_out = std::max(t_out, hit->distance_m);
+    const std::uint64_t hp = mix(h + 100 + 2 * static_cast<std::uint64_t>(pass));
+    if (unit(hp) <= p.transmission) {
+      // Through the gaps between the leaves: on to whatever lies behind the volume.
+      ++stats->transmitted;
+      const double start = t_out + kStepM;
+      if (start >= max_d) return false;
+      RayHit next = caster_->cast(origin + start * dir, dir, max_d - start, t_s);
+      if (next.distance_m < 0.0) return false;
+      next.distance_m += start;
+      *hit = next;
+      continue;
+    }
+    // Stopped by a leaf at an exponential depth, at the latest at the back of the volume or at
+    // a solid surface inside it (a trunk in a crown, a wall behind a hedge).
+    const double depth = std::min(-std::log(unit(mix(hp + 1))) * p.penetration_m,
+                                  0.98 * (t_out - hit->distance_m));
+    if (depth > kStepM) {
+      const double start = hit->distance_m + kStepM;
+      const RayHit in = caster_->cast(origin + start * dir, dir, depth, t_s);
+      if (in.distance_m >= 0.0 && !scene_.primitives[in.primitive].porous()) {
+        hit->distance_m = start + in.distance_m;
+        hit->primitive = in.primitive;
+        return true;
+      }
+      hit->distance_m += depth;
+      *inside = true;
+    }
+    ++stats->foliage_returns;
+    return true;
+  }
+  return true;
+}
+
 void LidarSimulator::simulatePacket(std::uint64_t packet, SimRevolution* out) {
   const Calibration& cal = encoder_.calibration();
   const double res = cal.distance_resolution_m;
@@ -201,20 +260,22 @@ void LidarSimulator::simulatePacket(std::uint64_t packet, SimRevolution* out) {
         origin = pose * Eigen::Vector3d(o[0], o[1], o[2]);
         dir = (rot * Eigen::Vector3d(d[0], d[1], d[2])).normalized();
       }
-      const RayHit hit = caster_->cast(origin, dir, sensor_.max_range_m + 1.0, t);
+      RayHit hit = caster_->cast(origin, dir, sensor_.max_range_m + 1.0, t);
       if (hit.distance_m < 0.0) {
         ++out->stats.no_hit;
         continue;
       }
       const std::uint64_t h = mix(sensor_.noise_seed * 0x9E3779B97F4A7C15ULL ^ mix(k * 64 + l));
+      bool inside = false;
+      if (!throughFoliage(origin, dir, t, h, &hit, &inside, &out->stats)) {
+        ++out->stats.no_hit;
+        continue;
+      }
       if (unit(mix(h)) <= sensor_.dropout_probability) {
         ++out->stats.dropped;
         continue;
       }
-      // Box-Muller from two independent uniforms.
-      const double u1 = unit(mix(h + 1)), u2 = unit(mix(h + 2));
-      const double gauss = std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
-      const double range = hit.distance_m + sensor_.range_noise_m * gauss;
+      const double range = hit.distance_m + sensor_.range_noise_m * gaussian(mix(h + 1), mix(h + 2));
       if (range < sensor_.min_range_m || range > sensor_.max_range_m) {
         ++out->stats.out_of_range;
         continue;
@@ -227,11 +288,16 @@ void LidarSimulator::simulatePacket(std::uint64_t packet, SimRevolution* out) {
       }
       const Primitive& prim = scene_.primitives[hit.primitive];
       fi.distance[l] = static_cast<std::uint16_t>(raw);
-      // Intensity by material, slightly fading with range and jittered.
+      // Intensity by material (a per-return draw around the surface's reflectivity), slightly
+      // fading with range and jittered; a return from inside foliage comes from a partly
+      // covered footprint and is dimmer.
+      const double refl = std::clamp(
+          prim.reflectivity + prim.reflectivity_spread * nearGaussian(mix(h + 4)), 0.0, 1.0);
       const double fade = 1.0 / (1.0 + 0.004 * hit.distance_m);
       const double jitter = 0.85 + 0.3 * unit(mix(h + 3));
+      const double partial = inside ? 0.5 + 0.5 * unit(mix(h + 6)) : 1.0;
       fi.intensity[l] = static_cast<std::uint8_t>(
-          std::clamp(255.0 * prim.reflectivity * fade * jitter, 1.0, 255.0));
+          std::clamp(255.0 * refl * fade * jitter * partial, 0.0, 255.0));
       out->instance_ids.push_back(prim.instance_id);
       out->classes.push_back(static_cast<std::uint8_t>(prim.object_class));
       out->world_points.push_back((origin + hit.distance_m * dir).cast<float>());

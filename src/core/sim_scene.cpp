@@ -36,36 +36,38 @@ Eigen::AlignedBox3d Primitive::bounds(double t_s) const {
   return Eigen::AlignedBox3d(c - e, c + e);
 }
 
-double Primitive::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
-                            double t_s, double t_min) const {
-  const Eigen::Vector3d o = rotation.transpose() * (origin - center - velocity * t_s);
-  const Eigen::Vector3d d = rotation.transpose() * dir;
-  const Eigen::Vector3d& h = half_extents;
-  switch (shape) {
+namespace {
+
+// The body of Primitive::span, inlined into intersect() (the ray caster's inner loop).
+inline bool spanOf(const Primitive& p, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                   double t_s, double* t_in, double* t_out) {
+  const Eigen::Vector3d o = p.rotation.transpose() * (origin - p.center - p.velocity * t_s);
+  const Eigen::Vector3d d = p.rotation.transpose() * dir;
+  const Eigen::Vector3d& h = p.half_extents;
+  double t_near = -kInf, t_far = kInf;
+  switch (p.shape) {
     case PrimitiveShape::kBox: {
-      double t_near = -kInf, t_far = kInf;
-      if (!clipSlab(o.x(), d.x(), h.x(), &t_near, &t_far)) return -1.0;
-      if (!clipSlab(o.y(), d.y(), h.y(), &t_near, &t_far)) return -1.0;
-      if (!clipSlab(o.z(), d.z(), h.z(), &t_near, &t_far)) return -1.0;
-      return t_near > t_min ? t_near : -1.0;
+      if (!clipSlab(o.x(), d.x(), h.x(), &t_near, &t_far)) return false;
+      if (!clipSlab(o.y(), d.y(), h.y(), &t_near, &t_far)) return false;
+      if (!clipSlab(o.z(), d.z(), h.z(), &t_near, &t_far)) return false;
+      break;
     }
     case PrimitiveShape::kCylinder: {
-      double t_near = -kInf, t_far = kInf;
-      if (!clipSlab(o.z(), d.z(), h.z(), &t_near, &t_far)) return -1.0;
+      if (!clipSlab(o.z(), d.z(), h.z(), &t_near, &t_far)) return false;
       const double a = d.x() * d.x() + d.y() * d.y();
       const double b = o.x() * d.x() + o.y() * d.y();  // half of the usual b
       const double c = o.x() * o.x() + o.y() * o.y() - h.x() * h.x();
       if (a < 1e-15) {
-        if (c > 0.0) return -1.0;
+        if (c > 0.0) return false;
       } else {
         const double disc = b * b - a * c;
-        if (disc < 0.0) return -1.0;
+        if (disc < 0.0) return false;
         const double s = std::sqrt(disc);
         t_near = std::max(t_near, (-b - s) / a);
         t_far = std::min(t_far, (-b + s) / a);
-        if (t_near > t_far) return -1.0;
+        if (t_near > t_far) return false;
       }
-      return t_near > t_min ? t_near : -1.0;
+      break;
     }
     case PrimitiveShape::kEllipsoid: {
       const Eigen::Vector3d os = o.cwiseQuotient(h);
@@ -74,12 +76,30 @@ double Primitive::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d
       const double b = os.dot(ds);
       const double c = os.squaredNorm() - 1.0;
       const double disc = b * b - a * c;
-      if (disc < 0.0 || a < 1e-30) return -1.0;
-      const double t0 = (-b - std::sqrt(disc)) / a;
-      return t0 > t_min ? t0 : -1.0;
+      if (disc < 0.0 || a < 1e-30) return false;
+      const double s = std::sqrt(disc);
+      t_near = (-b - s) / a;
+      t_far = (-b + s) / a;
+      break;
     }
   }
-  return -1.0;
+  *t_in = t_near;
+  *t_out = t_far;
+  return true;
+}
+
+}  // namespace
+
+bool Primitive::span(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_s,
+                     double* t_in, double* t_out) const {
+  return spanOf(*this, origin, dir, t_s, t_in, t_out);
+}
+
+double Primitive::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                            double t_s, double t_min) const {
+  double t_in, t_out;
+  if (!spanOf(*this, origin, dir, t_s, &t_in, &t_out)) return -1.0;
+  return t_in > t_min ? t_in : -1.0;
 }
 
 bool Primitive::contains(const Eigen::Vector3d& p, double t_s, double margin_m) const {
@@ -170,15 +190,36 @@ RayCaster::RayCaster(const Scene& scene, const RayCasterParams& params)
   ny_ = std::max(1, static_cast<int>(std::ceil(sy / params_.cell_m)));
   static_z_max_ = all.max().z();
 
+  // Static primitives are binned as groups: the consecutive primitives of one object (a car's
+  // body, cabin, plates and lamps; a tree's trunk and crown lobes), or up to kTerrainGroup
+  // consecutive terrain tiles (a stretch of a verge or garden), share one box, so a ray that
+  // misses the box skips them all. Other background primitives are groups of their own.
+  constexpr std::uint32_t kTerrainGroup = 8;
   std::vector<std::vector<std::uint32_t>> cells(static_cast<std::size_t>(nx_) * ny_);
   for (std::uint32_t i = 0; i < scene_.primitives.size(); ++i) {
     const Primitive& p = scene_.primitives[i];
     if (p.moving()) {
       moving_prims_.push_back(i);
-    } else {
-      binInto(p.bounds(0.0), i, &cells);
+      continue;
     }
+    const bool terrain = p.instance_id == 0 && p.object_class == ObjectClass::kTerrain;
+    if ((p.instance_id != 0 || terrain) && !groups_.empty()) {
+      Group& g = groups_.back();
+      const Primitive& last = scene_.primitives[g.first + g.count - 1];
+      const bool same = p.instance_id != 0
+                            ? last.instance_id == p.instance_id
+                            : last.instance_id == 0 && last.object_class == ObjectClass::kTerrain &&
+                                  g.count < kTerrainGroup;
+      if (g.first + g.count == i && same) {
+        ++g.count;
+        g.box.extend(p.bounds(0.0));
+        continue;
+      }
+    }
+    groups_.push_back(Group{i, 1, p.bounds(0.0)});
   }
+  for (std::uint32_t g = 0; g < groups_.size(); ++g) binInto(groups_[g].box, g, &cells);
+  group_mailbox_.assign(groups_.size(), 0);
   static_start_.assign(cells.size() + 1, 0);
   for (std::size_t c = 0; c < cells.size(); ++c) {
     static_start_[c + 1] = static_start_[c] + static_cast<std::uint32_t>(cells[c].size());
@@ -226,9 +267,7 @@ void RayCaster::setTimeWindow(double t0_s, double t1_s) {
 bool RayCaster::testCell(int cell, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
                          double t_s, RayHit* best) {
   bool improved = false;
-  auto test = [&](std::uint32_t prim) {
-    if (mailbox_[prim] == ray_id_) return;
-    mailbox_[prim] = ray_id_;
+  auto hit = [&](std::uint32_t prim) {
     const double t = scene_.primitives[prim].intersect(origin, dir, t_s);
     if (t > 0.0 && t < best->distance_m) {
       best->distance_m = t;
@@ -236,8 +275,28 @@ bool RayCaster::testCell(int cell, const Eigen::Vector3d& origin, const Eigen::V
       improved = true;
     }
   };
+  auto test = [&](std::uint32_t prim) {
+    if (mailbox_[prim] == ray_id_) return;
+    mailbox_[prim] = ray_id_;
+    hit(prim);
+  };
   for (std::uint32_t k = static_start_[cell]; k < static_start_[cell + 1]; ++k) {
-    test(static_items_[k]);
+    const std::uint32_t gi = static_items_[k];
+    if (group_mailbox_[gi] == ray_id_) continue;
+    group_mailbox_[gi] = ray_id_;
+    const Group& g = groups_[gi];
+    if (g.count > 1) {
+      // Skip the group when the ray misses its box or enters it beyond the best hit.
+      double t_near = 0.0, t_far = best->distance_m;
+      bool in = true;
+      for (int a = 0; a < 3 && in; ++a) {
+        const double o = origin[a] - g.box.center()[a];
+        const double h = 0.5 * (g.box.max()[a] - g.box.min()[a]) + 1e-9;
+        in = clipSlab(o, dir[a], h, &t_near, &t_far);
+      }
+      if (!in) continue;
+    }
+    for (std::uint32_t q = g.first; q < g.first + g.count; ++q) hit(q);
   }
   for (std::uint32_t k = moving_start_[cell]; k < moving_start_[cell + 1]; ++k) {
     test(moving_items_[k]);
@@ -251,6 +310,7 @@ RayHit RayCaster::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir
   if (!(max_range_m > 0.0)) return miss;
   if (++ray_id_ == 0) {  // wrapped: forget all marks
     std::fill(mailbox_.begin(), mailbox_.end(), 0);
+    std::fill(group_mailbox_.begin(), group_mailbox_.end(), 0);
     ray_id_ = 1;
   }
   // Clip the ray to the grid's xy rectangle.

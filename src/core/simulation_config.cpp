@@ -127,6 +127,42 @@ SimulationConfig parse(const YAML::Node& root, const std::string& source) {
       .get("benches", &o.benches)
       .get("hard_cases", &o.hard_cases);
   orr.done();
+  VegetationParams& v = c.scene.vegetation;
+  MapReader vr(sc.child("vegetation"), "scene.vegetation", source);
+  vr.get("enabled", &v.enabled)
+      .get("verge_probability", &v.verge_probability)
+      .get("verge_offset_m", &v.verge_offset_m)
+      .get("verge_width_m", &v.verge_width_m)
+      .get("verge_step_max_m", &v.verge_step_max_m)
+      .get("verge_bush_spacing_m", &v.verge_bush_spacing_m)
+      .get("terrain_tile_m", &v.terrain_tile_m)
+      .get("terrain_roughness_m", &v.terrain_roughness_m)
+      .get("terrain_tilt_deg", &v.terrain_tilt_deg)
+      .get("garden_depth_m", &v.garden_depth_m)
+      .get("garden_step_max_m", &v.garden_step_max_m)
+      .get("hedge_probability", &v.hedge_probability)
+      .get("hedge_height_min_m", &v.hedge_height_min_m)
+      .get("hedge_height_max_m", &v.hedge_height_max_m)
+      .get("hedge_width_min_m", &v.hedge_width_min_m)
+      .get("hedge_width_max_m", &v.hedge_width_max_m)
+      .get("hedge_gap_spacing_m", &v.hedge_gap_spacing_m)
+      .get("bush_spacing_m", &v.bush_spacing_m)
+      .get("facade_shrub_spacing_m", &v.facade_shrub_spacing_m)
+      .get("bush_height_min_m", &v.bush_height_min_m)
+      .get("bush_height_max_m", &v.bush_height_max_m)
+      .get("garden_tree_spacing_m", &v.garden_tree_spacing_m)
+      .get("canopy_lobes_min", &v.canopy_lobes_min)
+      .get("canopy_lobes_max", &v.canopy_lobes_max)
+      .get("canopy_overhang_max_m", &v.canopy_overhang_max_m)
+      .get("canopy_clearance_min_m", &v.canopy_clearance_min_m)
+      .get("canopy_clearance_max_m", &v.canopy_clearance_max_m)
+      .get("hedge_transmission", &v.hedge_transmission)
+      .get("hedge_penetration_m", &v.hedge_penetration_m)
+      .get("bush_transmission", &v.bush_transmission)
+      .get("bush_penetration_m", &v.bush_penetration_m)
+      .get("crown_transmission", &v.crown_transmission)
+      .get("crown_penetration_m", &v.crown_penetration_m);
+  vr.done();
   sc.done();
 
   MapReader dr(top.child("drive"), "drive", source);

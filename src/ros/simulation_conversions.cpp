@@ -17,7 +17,10 @@ static_assert(GroundTruth::BENCH == static_cast<std::uint8_t>(core::ObjectClass:
                   GroundTruth::GROUND == static_cast<std::uint8_t>(core::ObjectClass::kGround) &&
                   GroundTruth::PEDESTRIAN ==
                       static_cast<std::uint8_t>(core::ObjectClass::kPedestrian) &&
-                  core::kNumObjectClasses == 13,
+                  GroundTruth::VEGETATION ==
+                      static_cast<std::uint8_t>(core::ObjectClass::kVegetation) &&
+                  GroundTruth::TERRAIN == static_cast<std::uint8_t>(core::ObjectClass::kTerrain) &&
+                  core::kNumObjectClasses == 14,
               "GroundTruth.msg constants and core::ObjectClass differ");
 
 void toScanMsg(const core::SimRevolution& rev, const std::string& frame_id,

@@ -75,7 +75,7 @@ Group semanticKittiGroup(std::uint32_t label) {
 
 Group simulatedGroup(std::uint8_t c) {
   switch (static_cast<ObjectClass>(c)) {
-    case ObjectClass::kGround: return Group::kGround;
+    case ObjectClass::kGround: case ObjectClass::kTerrain: return Group::kGround;
     case ObjectClass::kWall: return Group::kWall;
     case ObjectClass::kCar: return Group::kCar;
     case ObjectClass::kVan: return Group::kOtherVehicle;

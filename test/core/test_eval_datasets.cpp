@@ -432,6 +432,66 @@ TEST(SimulatedDrive, GroundTruthRulesAndAPerfectDetector) {
   std::remove(d.gt.c_str());
 }
 
+TEST(SimulatedDrive, VegetationAndTerrainAreScoredBackgroundTrunksPolesSignsDontCare) {
+  // As SemanticKITTI's protocol: a detection made mostly of foliage (crowns, hedges, bushes) or
+  // terrain is a false object; trunks, poles and signs are real objects without a target class.
+  const sim_test::Drive d = sim_test::simulate("ud_eval_sim_veg", 1);
+  const GroundTruthFrame& frame = d.frames[0];
+  EvalFrame gt;
+  buildSimulatedGroundTruth(frame, SimulatedGroundTruthParams(), &gt);
+  ASSERT_EQ(gt.role.size(), frame.classes.size());
+  std::map<ObjectClass, std::vector<std::uint32_t>> by_class;
+  for (std::size_t i = 0; i < frame.classes.size(); ++i) {
+    const auto cls = static_cast<ObjectClass>(frame.classes[i]);
+    by_class[cls].push_back(static_cast<std::uint32_t>(i));
+    switch (cls) {
+      case ObjectClass::kVegetation:
+      case ObjectClass::kTerrain:
+      case ObjectClass::kGround:
+      case ObjectClass::kWall:
+        ASSERT_EQ(gt.role[i], PointRole::kScored) << toString(cls);
+        ASSERT_EQ(gt.object_of_point[i], -1) << toString(cls);
+        break;
+      case ObjectClass::kTrunk:
+      case ObjectClass::kPole:
+      case ObjectClass::kSign:
+        ASSERT_EQ(gt.role[i], PointRole::kDontCare) << toString(cls);
+        ASSERT_EQ(gt.object_of_point[i], -1) << toString(cls);
+        break;
+      default:
+        ASSERT_TRUE(isStreetObject(cls)) << toString(cls);
+        ASSERT_GE(gt.object_of_point[i], 0);
+    }
+  }
+  for (ObjectClass c : {ObjectClass::kVegetation, ObjectClass::kTerrain, ObjectClass::kTrunk}) {
+    ASSERT_GE(by_class[c].size(), 50u) << toString(c);
+  }
+  // Foliage points come from hedge, bush and tree objects; terrain is background.
+  std::set<std::uint32_t> foliage_objects;
+  for (std::uint32_t i : by_class[ObjectClass::kVegetation]) {
+    EXPECT_GT(frame.instance_ids[i], 0u);
+    foliage_objects.insert(frame.instance_ids[i]);
+  }
+  EXPECT_GT(foliage_objects.size(), 5u);
+  for (std::uint32_t i : by_class[ObjectClass::kTerrain]) EXPECT_EQ(frame.instance_ids[i], 0u);
+
+  std::vector<DetectedObject> dets(3);
+  for (int k = 0; k < 3; ++k) {
+    const ObjectClass c = k == 0 ? ObjectClass::kVegetation
+                                 : (k == 1 ? ObjectClass::kTerrain : ObjectClass::kTrunk);
+    dets[k].indices.assign(by_class[c].begin(), by_class[c].begin() + 50);
+  }
+  DetectionEvaluator eval;
+  FrameMatch m;
+  eval.evaluate(gt, dets, &m);
+  EXPECT_EQ(m.verdict[0], DetectionVerdict::kFalse);    // a piece of foliage
+  EXPECT_EQ(m.verdict[1], DetectionVerdict::kFalse);    // a piece of grass
+  EXPECT_EQ(m.verdict[2], DetectionVerdict::kIgnored);  // a trunk
+  EXPECT_EQ(m.score.fo, 2u);
+  std::remove(d.pcap.c_str());
+  std::remove(d.gt.c_str());
+}
+
 }  // namespace
 }  // namespace core
 }  // namespace urban_detection

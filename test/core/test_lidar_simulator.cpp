@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <set>
 
 #include "urban_detection/core/ground_truth.h"
@@ -105,6 +106,188 @@ TEST(LidarSimulator, SingleBoxRangesMatchHandComputation) {
   EXPECT_GT(worst, 0.002);  // the noise is really there
 }
 
+namespace {
+
+// A standing sensor at the origin (flat road) facing a hedge, a box 1 m deep whose front face is
+// the plane x = 6 m (|y| < 8 m, z in [-5, 5] m), in front of a wall whose face is x = 12 m.
+// Returns the revolution's true hit points and classes for the rays aimed at the hedge's
+// middle (|y / x| < 1: they cross the hedge from its front to its back face).
+struct HedgeShot {
+  std::vector<Vector3d> points;
+  std::vector<ud::ObjectClass> classes;
+  ud::SimStats stats;
+  std::vector<std::uint8_t> intensities;  // of the same returns, from the packets
+};
+
+HedgeShot shootHedge(float transmission, float penetration_m, std::uint64_t noise_seed = 1) {
+  ud::SceneParams flat;
+  flat.slope = 0.0;
+  flat.camber = 0.0;
+  ud::Scene scene;
+  scene.addBackground(ud::makeBox(Vector3d(12.5, 0, 0), Vector3d(1, 40, 60), 0.0));
+  scene.primitives.back().object_class = ud::ObjectClass::kWall;
+  ud::Primitive hedge = ud::makeBox(Vector3d(6.5, 0, 0), Vector3d(1, 16, 10), 0.0);
+  hedge.object_class = ud::ObjectClass::kVegetation;
+  hedge.transmission = transmission;
+  hedge.penetration_m = penetration_m;
+  ud::SceneObject o;
+  o.object_class = ud::ObjectClass::kVegetation;
+  scene.addObject(o, {hedge});
+  ud::DriveParams standing;
+  standing.waypoints = {Eigen::Vector2d(0, 0), Eigen::Vector2d(1, 0)};
+  standing.speed_mps = 0.0;
+  ud::SimSensorParams sensor;
+  sensor.dropout_probability = 0.0;
+  sensor.noise_seed = noise_seed;
+  ud::LidarSimulator sim(std::move(scene), flat, standing, ud::Calibration::nominalHdl64eS2(),
+                         sensor);
+  ud::SimRevolution rev;
+  sim.simulateNext(&rev);
+  ud::PacketDecoder decoder(sim.calibration(), ud::DecoderParams());
+  urban_detection::CloudXYZIRT cloud;
+  decodeRevolution(rev, decoder, &cloud, nullptr, nullptr);
+  HedgeShot shot;
+  shot.stats = rev.stats;
+  for (std::size_t i = 0; i < rev.world_points.size(); ++i) {
+    const Vector3d p = rev.world_points[i].cast<double>();
+    if (p.x() <= 0.0 || std::abs(p.y() / p.x()) >= 1.0) continue;
+    // Elevation inside the hedge's height at its back face.
+    const double z_at_back = 1.73 + (p.z() - 1.73) * 7.0 / p.x();
+    if (std::abs(z_at_back) > 4.5) continue;
+    shot.points.push_back(p);
+    shot.classes.push_back(static_cast<ud::ObjectClass>(rev.classes[i]));
+    shot.intensities.push_back(static_cast<std::uint8_t>(cloud[i].intensity));
+  }
+  return shot;
+}
+
+}  // namespace
+
+TEST(LidarSimulator, PorousHedgeTransmitsItsShareOfRaysToTheWallBehind) {
+  for (float transmission : {0.0f, 0.12f, 0.3f, 0.6f}) {
+    const HedgeShot shot = shootHedge(transmission, 0.12f);
+    ASSERT_GT(shot.points.size(), 5000u);
+    std::size_t wall = 0;
+    for (std::size_t i = 0; i < shot.points.size(); ++i) {
+      const Vector3d& p = shot.points[i];
+      if (shot.classes[i] == ud::ObjectClass::kWall) {
+        ++wall;
+        EXPECT_NEAR(p.x(), 12.0, 1e-6);  // transmitted rays end on the wall
+      } else {
+        ASSERT_EQ(shot.classes[i], ud::ObjectClass::kVegetation);
+        EXPECT_GE(p.x(), 6.0 - 1e-6);  // inside the hedge, never in front of it
+        EXPECT_LE(p.x(), 7.0 + 1e-6);
+      }
+    }
+    const double fraction = static_cast<double>(wall) / shot.points.size();
+    // Binomial: with > 5000 rays the standard deviation is below 0.007.
+    EXPECT_NEAR(fraction, transmission, 0.03) << "transmission " << transmission;
+    if (transmission == 0.0f) {
+      EXPECT_EQ(wall, 0u);
+    }
+  }
+}
+
+TEST(LidarSimulator, ReturnsFromInsideFoliageGiveARoughRangeProfile) {
+  // Returns of the vegetation: depth behind the front face exponential with the mean
+  // penetration; an opaque hedge (penetration 0) returns from its face only.
+  auto depths = [](const HedgeShot& shot) {
+    std::vector<double> d;
+    for (std::size_t i = 0; i < shot.points.size(); ++i) {
+      if (shot.classes[i] == ud::ObjectClass::kVegetation) {
+        const Vector3d& p = shot.points[i];
+        d.push_back((p - Vector3d(0, 0, 1.73)).norm() * (1.0 - 6.0 / p.x()));  // along the ray
+      }
+    }
+    return d;
+  };
+  const std::vector<double> porous = depths(shootHedge(0.0f, 0.15f));
+  const std::vector<double> opaque = depths(shootHedge(0.0f, 0.0f));
+  ASSERT_GT(porous.size(), 5000u);
+  ASSERT_GT(opaque.size(), 5000u);
+  double mean = 0.0, deep = 0.0;
+  for (double d : porous) {
+    mean += d;
+    deep += d > 0.3 ? 1.0 : 0.0;
+  }
+  mean /= porous.size();
+  deep /= porous.size();
+  EXPECT_NEAR(mean, 0.15, 0.02);
+  EXPECT_NEAR(deep, std::exp(-0.3 / 0.15), 0.03);  // exponential tail
+  for (double d : opaque) EXPECT_NEAR(d, 0.0, 1e-6);
+}
+
+TEST(LidarSimulator, FoliageIsDeterministicForASeed) {
+  const HedgeShot a = shootHedge(0.3f, 0.15f, 5), b = shootHedge(0.3f, 0.15f, 5);
+  const HedgeShot c = shootHedge(0.3f, 0.15f, 6);
+  ASSERT_EQ(a.points.size(), b.points.size());
+  for (std::size_t i = 0; i < a.points.size(); ++i) {
+    ASSERT_EQ(a.points[i], b.points[i]);
+    ASSERT_EQ(a.intensities[i], b.intensities[i]);
+  }
+  EXPECT_EQ(a.stats.transmitted, b.stats.transmitted);
+  EXPECT_GT(a.stats.transmitted, 0u);
+  EXPECT_GT(a.stats.foliage_returns, 0u);
+  // Another noise seed: other rays pass through, other depths.
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < std::min(a.points.size(), c.points.size()); ++i) {
+    differ += a.points[i] != c.points[i] ? 1 : 0;
+  }
+  EXPECT_GT(differ, a.points.size() / 4);
+}
+
+TEST(LidarSimulator, IntensitiesSpreadByMaterial) {
+  // One revolution of the demo drive's street: per class, the standard deviation of the
+  // intensity bytes. Vehicles (paint, glass, plates, lamps) spread more than foliage, foliage
+  // more than walls and ground; foliage is brighter than the road.
+  ud::SimulationConfig c = demoConfig();
+  c.drive.waypoints = {Eigen::Vector2d(20.0, -1.9), Eigen::Vector2d(60.0, -1.9)};
+  auto sim = makeSim(c);
+  ud::SimRevolution rev;
+  sim->simulateNext(&rev);
+  sim->simulateNext(&rev);
+  ud::PacketDecoder decoder(sim->calibration(), ud::DecoderParams());
+  urban_detection::CloudXYZIRT cloud;
+  decodeRevolution(rev, decoder, &cloud, nullptr, nullptr);
+  ASSERT_EQ(cloud.size(), rev.classes.size());
+  struct Acc {
+    double n = 0, sum = 0, sq = 0;
+    double mean() const { return sum / n; }
+    double sd() const { return std::sqrt(std::max(0.0, sq / n - mean() * mean())); }
+  };
+  std::map<ud::ObjectClass, Acc> acc;
+  std::map<std::uint32_t, Acc> per_car;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const auto p = cloud[i];
+    if (std::hypot(p.x, p.y) > 30.0) continue;  // near returns: little fading
+    const auto cls = static_cast<ud::ObjectClass>(rev.classes[i]);
+    Acc& a = acc[cls == ud::ObjectClass::kVan ? ud::ObjectClass::kCar : cls];
+    a.n += 1, a.sum += p.intensity, a.sq += p.intensity * p.intensity;
+    if (cls == ud::ObjectClass::kCar || cls == ud::ObjectClass::kVan) {
+      Acc& b = per_car[rev.instance_ids[i]];
+      b.n += 1, b.sum += p.intensity, b.sq += p.intensity * p.intensity;
+    }
+  }
+  for (auto cls : {ud::ObjectClass::kCar, ud::ObjectClass::kPedestrian, ud::ObjectClass::kVegetation,
+                   ud::ObjectClass::kTerrain, ud::ObjectClass::kWall, ud::ObjectClass::kGround}) {
+    ASSERT_GT(acc[cls].n, 200) << ud::toString(cls);
+  }
+  const double car = acc[ud::ObjectClass::kCar].sd(), veg = acc[ud::ObjectClass::kVegetation].sd();
+  EXPECT_GT(car, 1.3 * veg);
+  EXPECT_GT(veg, 1.3 * acc[ud::ObjectClass::kGround].sd());
+  EXPECT_GT(acc[ud::ObjectClass::kPedestrian].sd(), acc[ud::ObjectClass::kWall].sd());
+  EXPECT_GT(acc[ud::ObjectClass::kVegetation].mean(), acc[ud::ObjectClass::kGround].mean());
+  // Each well-seen vehicle mixes materials by itself: most spread more than the foliage.
+  int wide = 0, seen = 0;
+  for (const auto& kv : per_car) {
+    if (kv.second.n < 200) continue;
+    ++seen;
+    wide += kv.second.sd() > veg ? 1 : 0;
+  }
+  ASSERT_GE(seen, 3);
+  EXPECT_GE(wide * 2, seen);
+}
+
 TEST(LidarSimulator, SameSeedSamePacketsOtherSeedOtherPackets) {
   const ud::SimulationConfig c = demoConfig();
   auto a = makeSim(c), b = makeSim(c);
@@ -188,7 +371,8 @@ TEST(LidarSimulator, LabelledPointsLieInsideTheirObjects) {
       const auto cls = static_cast<ud::ObjectClass>(rev.classes[i]);
       seen.insert(cls);
       if (id == 0) {
-        ASSERT_TRUE(cls == ud::ObjectClass::kGround || cls == ud::ObjectClass::kWall);
+        ASSERT_TRUE(cls == ud::ObjectClass::kGround || cls == ud::ObjectClass::kWall ||
+                    cls == ud::ObjectClass::kTerrain);
         continue;
       }
       instances.insert(id);
@@ -208,7 +392,7 @@ TEST(LidarSimulator, LabelledPointsLieInsideTheirObjects) {
   }
   for (auto cls : {ud::ObjectClass::kGround, ud::ObjectClass::kWall, ud::ObjectClass::kCar,
                    ud::ObjectClass::kPedestrian, ud::ObjectClass::kVegetation,
-                   ud::ObjectClass::kTrunk, ud::ObjectClass::kPole}) {
+                   ud::ObjectClass::kTrunk, ud::ObjectClass::kPole, ud::ObjectClass::kTerrain}) {
     EXPECT_TRUE(seen.count(cls)) << ud::toString(cls);
   }
   EXPECT_GT(instances.size(), 40u);

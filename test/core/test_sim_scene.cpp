@@ -64,6 +64,33 @@ TEST(SimPrimitive, CylinderAndEllipsoidDistancesByHand) {
   EXPECT_NEAR(bb.max().z(), 1.0, 1e-12);
 }
 
+TEST(SimPrimitive, SpanIsTheEntryAndExitOfTheWholeLine) {
+  double t_in = 0, t_out = 0;
+  // Box centred at (10, 0, 1), 2 m wide: the line along x from the origin is inside for
+  // x in [9, 11].
+  const ud::Primitive b = ud::makeBox(Vector3d(10, 0, 1), Vector3d(2, 2, 2), 0.0);
+  ASSERT_TRUE(b.span(Vector3d(0, 0, 1), kX, 0.0, &t_in, &t_out));
+  EXPECT_NEAR(t_in, 9.0, 1e-12);
+  EXPECT_NEAR(t_out, 11.0, 1e-12);
+  // From inside: the entry lies behind the origin (negative), the exit ahead.
+  ASSERT_TRUE(b.span(Vector3d(10, 0, 1), kX, 0.0, &t_in, &t_out));
+  EXPECT_NEAR(t_in, -1.0, 1e-12);
+  EXPECT_NEAR(t_out, 1.0, 1e-12);
+  EXPECT_FALSE(b.span(Vector3d(0, 1.5, 1), kX, 0.0, &t_in, &t_out));
+  // Cylinder radius 1 at (5, 0, 0), 0.6 off its axis: chord half-length sqrt(1 - 0.36) = 0.8.
+  const ud::Primitive c = ud::makeCylinder(Vector3d(5, 0, 0), 1.0, 2.0);
+  ASSERT_TRUE(c.span(Vector3d(0, 0.6, 0), kX, 0.0, &t_in, &t_out));
+  EXPECT_NEAR(t_in, 4.2, 1e-12);
+  EXPECT_NEAR(t_out, 5.8, 1e-12);
+  // Ellipsoid with semi-axes (1, 2, 3) at the origin, crossed along y: y in [-2, 2].
+  const ud::Primitive e = ud::makeEllipsoid(Vector3d::Zero(), Vector3d(1, 2, 3));
+  ASSERT_TRUE(e.span(Vector3d(0, -10, 0), kY, 0.0, &t_in, &t_out));
+  EXPECT_NEAR(t_in, 8.0, 1e-12);
+  EXPECT_NEAR(t_out, 12.0, 1e-12);
+  // intersect() is the span's entry when it lies ahead.
+  EXPECT_NEAR(e.intersect(Vector3d(0, -10, 0), kY, 0.0), 8.0, 1e-12);
+}
+
 TEST(SimRayCaster, NearestOfSeveralAndRangeLimit) {
   ud::Scene s;
   s.addBackground(ud::makeBox(Vector3d(20, 0, 0), Vector3d(2, 10, 10), 0.0));  // face x = 19
@@ -295,4 +322,183 @@ TEST(SimConfig, DemoDriveFileParsesAndTyposAreRejected) {
   EXPECT_THROW(ud::parseSimulationConfig("drive: {waypoints: [[0, 0]]}"), std::invalid_argument);
   EXPECT_THROW(ud::parseSimulationConfig("drive: {speed_mps: abc}"), std::invalid_argument);
   EXPECT_NO_THROW(ud::parseSimulationConfig(""));
+  // The vegetation block mirrors VegetationParams, with the same checks.
+  EXPECT_TRUE(c.scene.vegetation.enabled);
+  EXPECT_DOUBLE_EQ(c.scene.vegetation.hedge_transmission, ud::VegetationParams().hedge_transmission);
+  EXPECT_DOUBLE_EQ(
+      ud::parseSimulationConfig("scene: {vegetation: {crown_transmission: 0.7}}").scene.vegetation.crown_transmission,
+      0.7);
+  EXPECT_THROW(ud::parseSimulationConfig("scene: {vegetation: {hedge_trasmission: 0.1}}"),
+               std::invalid_argument);
+  try {
+    ud::parseSimulationConfig("scene: {vegetation: {bush_transmission: 1.5}}");
+    FAIL() << "transmission 1.5 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("bush_transmission"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ud::parseSimulationConfig(
+                   "scene: {vegetation: {canopy_clearance_min_m: 3.0, canopy_clearance_max_m: 2.0}}"),
+               std::invalid_argument);
+}
+
+// ---- vegetation (issue 23) ---------------------------------------------------------------------
+
+namespace {
+
+bool isTree(const ud::Scene& s, const ud::SceneObject& o) {
+  for (std::uint32_t k = 0; k < o.num_primitives; ++k) {
+    if (s.primitives[o.first_primitive + k].object_class == ud::ObjectClass::kTrunk) return true;
+  }
+  return false;
+}
+
+// Lowest point of an unrotated-in-z-axis ellipsoid or box (all the generator makes).
+double lowestZ(const ud::Primitive& p) { return p.bounds().min().z(); }
+
+}  // namespace
+
+TEST_F(GeneratedScene, DefaultStreetHasHedgesBushesVergesGardensAndLowCanopies) {
+  const ud::VegetationParams& v = params_.vegetation;
+  int hedges = 0, bushes = 0, trees = 0, lobes = 0, terrain_tiles = 0;
+  double terrain_above_min = 1e9, terrain_above_max = -1e9;
+  for (const ud::Primitive& p : scene_.primitives) {
+    if (p.object_class != ud::ObjectClass::kTerrain) continue;
+    ++terrain_tiles;
+    EXPECT_EQ(p.instance_id, 0u);  // terrain is background
+    const Eigen::Vector3d c = p.center + p.half_extents.z() * p.rotation.col(2);  // top centre
+    const double above = c.z() - ud::groundHeight(params_, c.x(), c.y());
+    terrain_above_min = std::min(terrain_above_min, above);
+    terrain_above_max = std::max(terrain_above_max, above);
+  }
+  EXPECT_GT(terrain_tiles, 300);
+  // Tile tops lie at most the largest step plus the roughness above the paved ground.
+  EXPECT_GE(terrain_above_min, -1e-9);
+  EXPECT_LE(terrain_above_max, v.garden_step_max_m + v.terrain_roughness_m + 1e-9);
+  EXPECT_GT(terrain_above_max, 0.1);  // some gardens are raised (a terrain step)
+
+  for (const ud::SceneObject& o : scene_.objects) {
+    if (o.object_class != ud::ObjectClass::kVegetation) continue;
+    const double gz = o.position.z();
+    if (isTree(scene_, o)) {
+      ++trees;
+      for (std::uint32_t k = 1; k < o.num_primitives; ++k) {
+        const ud::Primitive& p = scene_.primitives[o.first_primitive + k];
+        ASSERT_EQ(p.object_class, ud::ObjectClass::kVegetation);
+        EXPECT_TRUE(p.porous());
+        EXPECT_FLOAT_EQ(p.transmission, static_cast<float>(v.crown_transmission));
+        if (k < 2) continue;  // the main crown
+        ++lobes;
+        // A lobe's lowest leaves (at its centre's xy) keep the clearance above the ground.
+        const double above = lowestZ(p) - ud::groundHeight(params_, p.center.x(), p.center.y());
+        EXPECT_GE(above, v.canopy_clearance_min_m - 1e-9);
+        EXPECT_LE(above, v.canopy_clearance_max_m + 1e-9);
+        // ... and it reaches at most canopy_overhang_max_m from the trunk.
+        const double reach = std::hypot(p.center.x() - o.position.x(), p.center.y() - o.position.y()) +
+                             p.half_extents.x();
+        EXPECT_LE(reach, v.canopy_overhang_max_m + 1e-9);
+      }
+      continue;
+    }
+    const ud::Primitive& first = scene_.primitives[o.first_primitive];
+    const double height = scene_.objectBounds(o.instance_id, 0.0).max().z() - gz;
+    if (first.shape == ud::PrimitiveShape::kBox) {
+      ++hedges;
+      EXPECT_GE(height, v.hedge_height_min_m - 0.07);
+      EXPECT_LE(height, v.hedge_height_max_m + v.garden_step_max_m + 0.07);
+      EXPECT_FLOAT_EQ(first.transmission, static_cast<float>(v.hedge_transmission));
+    } else {
+      ++bushes;
+      EXPECT_GE(height, v.bush_height_min_m - 1e-9);
+      EXPECT_LE(height, v.bush_height_max_m + v.garden_step_max_m + 1e-9);
+      EXPECT_FLOAT_EQ(first.transmission, static_cast<float>(v.bush_transmission));
+    }
+  }
+  EXPECT_GE(hedges, 5);
+  EXPECT_GE(bushes, 10);
+  EXPECT_GE(trees, 15);
+  EXPECT_GE(lobes, 2 * trees);
+}
+
+TEST_F(GeneratedScene, CanopiesOverhangCarsAndPedestriansButNeverSwallowThem) {
+  std::vector<const ud::Primitive*> foliage;
+  for (const ud::Primitive& p : scene_.primitives) {
+    if (p.object_class == ud::ObjectClass::kVegetation) foliage.push_back(&p);
+  }
+  ASSERT_FALSE(foliage.empty());
+  int cars = 0, cars_under = 0, peds = 0, peds_under = 0;
+  const double t_end = drive_.duration();
+  for (const ud::SceneObject& o : scene_.objects) {
+    const bool car = o.object_class == ud::ObjectClass::kCar || o.object_class == ud::ObjectClass::kVan;
+    const bool ped = o.object_class == ud::ObjectClass::kPedestrian;
+    if (!(car && o.velocity.isZero()) && !ped) continue;
+    bool under = false;
+    for (double t = 0.0; t <= t_end; t += o.velocity.isZero() ? 2.0 * t_end + 1.0 : 1.0) {
+      const Eigen::AlignedBox3d b = scene_.objectBounds(o.instance_id, t);
+      for (const ud::Primitive* f : foliage) {
+        const Eigen::AlignedBox3d fb = f->bounds();
+        if (fb.min().x() > b.max().x() || fb.max().x() < b.min().x() ||
+            fb.min().y() > b.max().y() || fb.max().y() < b.min().y()) {
+          continue;
+        }
+        for (double fx : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+          for (double fy : {0.0, 0.5, 1.0}) {
+            const Vector3d top(b.min().x() + fx * b.sizes().x(), b.min().y() + fy * b.sizes().y(),
+                               b.max().z());
+            // No foliage within 0.2 m above the object's box (a crown or bush swallowing it
+            // would hide it for no real reason) ...
+            ASSERT_FALSE(f->contains(top + Vector3d(0, 0, 0.2), t))
+                << ud::toString(o.object_class) << " " << o.instance_id << " at t=" << t;
+            // ... but foliage within 2 m above it: it stands under a canopy.
+            for (double dz = 0.3; dz <= 2.0 && !under; dz += 0.1) {
+              under = f->contains(top + Vector3d(0, 0, dz), t);
+            }
+          }
+        }
+      }
+    }
+    (car ? cars : peds) += 1;
+    if (under) ++(car ? cars_under : peds_under);
+  }
+  EXPECT_GT(cars, 20);
+  EXPECT_GT(peds, 10);
+  // Some, not all, stand under crowns.
+  EXPECT_GE(cars_under, 3);
+  EXPECT_LT(cars_under, cars);
+  EXPECT_GE(peds_under, 1);
+  EXPECT_LT(peds_under, peds);
+}
+
+TEST_F(GeneratedScene, VegetationHasItsOwnRandomStream) {
+  // Switching the vegetation off (or changing it) moves none of the other objects.
+  ud::SceneParams off = params_;
+  off.vegetation.enabled = false;
+  const ud::Scene bare = ud::generateScene(off, drive_);
+  ud::SceneParams other = params_;
+  other.vegetation.hedge_probability = 1.0;
+  other.vegetation.bush_spacing_m = 1.5;
+  other.vegetation.verge_bush_spacing_m = 3.0;
+  other.vegetation.facade_shrub_spacing_m = 2.0;
+  const ud::Scene denser = ud::generateScene(other, drive_);
+  for (const ud::Scene* s : {&bare, &denser}) {
+    std::size_t street_objects = 0;
+    for (const ud::SceneObject& o : s->objects) {
+      if (!ud::isStreetObject(o.object_class)) continue;
+      ++street_objects;
+      ASSERT_LE(o.instance_id, scene_.objects.size());
+      const ud::SceneObject& a = scene_.objects[o.instance_id - 1];
+      EXPECT_EQ(a.object_class, o.object_class);
+      EXPECT_EQ(a.position, o.position);
+      EXPECT_EQ(a.velocity, o.velocity);
+    }
+    EXPECT_GT(street_objects, 50u);
+  }
+  int terrain = 0, porous = 0;
+  for (const ud::Primitive& p : bare.primitives) {
+    terrain += p.object_class == ud::ObjectClass::kTerrain;
+    porous += p.porous();
+  }
+  EXPECT_EQ(terrain, 0);
+  EXPECT_EQ(porous, 0);
+  // The denser variant really has more vegetation.
+  EXPECT_GT(denser.objects.size(), scene_.objects.size());
 }

@@ -16,10 +16,12 @@
 ///   classes) is scored background: a detection made mostly of it is false.
 /// - Simulated drives (urban_detection_simulate: a pcap plus its ground-truth file): exact
 ///   per-point instances. GT objects are the instances of the street-object classes
-///   (isStreetObject: cars, vans, pedestrians, cyclists, bins, benches). Points of the other
-///   scene objects (tree crowns and trunks, poles, signs) are don't-care: real, but not
-///   targets of the detector (the segmentation labels them tall). Ground and walls are scored
-///   background. GT objects with fewer than `min_points` points are ignored.
+///   (isStreetObject: cars, vans, pedestrians, cyclists, bins, benches). Ground, terrain (grass
+///   verges, gardens), walls and vegetation (tree crowns, hedges, bushes) are scored
+///   background, as in the SemanticKITTI rule: a detection made mostly of them is false, as it
+///   is for a user. Trunks, poles and signs are don't-care: real objects, but not targets of
+///   the detector (as SemanticKITTI's trunk, pole and traffic-sign). GT objects with fewer
+///   than `min_points` points are ignored.
 #pragma once
 
 #include <array>

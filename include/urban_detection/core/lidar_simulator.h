@@ -9,6 +9,24 @@
 /// pose at its own time (the motion skew of a real drive), with moving objects placed at that
 /// time. The stream starts at the cut angle and is cut into revolutions by the core
 /// RevolutionCutter, exactly as PacketSource/PacketToCloud cut it.
+///
+/// Foliage (Primitive::porous(), sim_scene.h): a ray that reaches a porous primitive passes
+/// through it with the primitive's `transmission` probability and goes on to the next surface
+/// (possibly another porous one); otherwise it returns from an exponential depth inside the
+/// volume (mean `penetration_m`), cut at the back of the volume and at any solid surface inside
+/// it. Leaves therefore give rough range profiles along a scan line and let part of the rays
+/// reach what stands behind a hedge or under a crown. Each return is labelled with the surface
+/// or volume it came from.
+///
+/// Intensity: the byte sent for a return is 255 x r x fade x jitter x partial, with r the
+/// surface's reflectivity drawn per return (Primitive::reflectivity + reflectivity_spread x a
+/// near-normal deviate of unit variance, clamped to [0, 1]), fade = 1 / (1 + 0.004 range [m]), jitter uniform in
+/// [0.85, 1.15], partial uniform in [0.5, 1] for a return from inside foliage (a partly covered
+/// footprint) and 1 otherwise. Without fade and jitter this is KITTI's scale, reflectance x 255;
+/// the materials behind r are listed in scene_generator.h.
+///
+/// Every random draw (noise, dropout, foliage, intensity) is a hash of (noise_seed, firing,
+/// laser), so a revolution is the same whichever revolutions were simulated before it.
 #pragma once
 
 #include <cmath>
@@ -52,6 +70,8 @@ struct SimStats {
   std::size_t no_hit = 0;      // rays that hit nothing within max range
   std::size_t dropped = 0;     // hits lost by dropout
   std::size_t out_of_range = 0;  // hits outside [min_range_m, max_range_m] after noise
+  std::size_t transmitted = 0;   // passes of a ray through a porous volume
+  std::size_t foliage_returns = 0;  // rays stopped inside a porous volume
 };
 
 /// Output of one simulated revolution.
@@ -119,6 +139,10 @@ class LidarSimulator {
   std::uint16_t rawAzimuth(std::uint64_t firing) const;
   double firingTime(std::uint64_t firing) const;
   void simulatePacket(std::uint64_t packet, SimRevolution* out);
+  /// Follows a ray that hit `*hit` through porous primitives (see the file comment); false
+  /// when it leaves the range. `*inside`: the return lies inside a porous volume.
+  bool throughFoliage(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_s,
+                      std::uint64_t h, RayHit* hit, bool* inside, SimStats* stats);
 
   Scene scene_;
   SceneParams scene_params_;

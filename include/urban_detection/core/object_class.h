@@ -14,9 +14,9 @@ namespace core {
 /// Class of a scene surface / of a ground-truth point.
 enum class ObjectClass : std::uint8_t {
   kUnlabeled = 0,    // not a scene surface (never emitted for a real return)
-  kGround = 1,       // road, curb, sidewalk, terrain
+  kGround = 1,       // road, curb, sidewalk, paved ground
   kWall = 2,         // building facades
-  kVegetation = 3,   // tree crowns
+  kVegetation = 3,   // tree crowns, hedges, bushes
   kTrunk = 4,        // tree trunks
   kPole = 5,         // lamp posts, sign posts
   kSign = 6,         // traffic-sign plates
@@ -26,10 +26,11 @@ enum class ObjectClass : std::uint8_t {
   kCyclist = 10,     // cyclists with their bicycle
   kBin = 11,         // waste bins
   kBench = 12,       // benches
+  kTerrain = 13,     // natural ground: grass verges, lawns, garden beds
 };
 
 /// Number of classes (one past the largest value).
-constexpr int kNumObjectClasses = 13;
+constexpr int kNumObjectClasses = 14;
 
 /// Lower-case name of a class ("car", "pedestrian", ...); "unlabeled" for unknown values.
 inline const char* toString(ObjectClass c) {
@@ -46,13 +47,15 @@ inline const char* toString(ObjectClass c) {
     case ObjectClass::kCyclist: return "cyclist";
     case ObjectClass::kBin: return "bin";
     case ObjectClass::kBench: return "bench";
+    case ObjectClass::kTerrain: return "terrain";
     default: return "unlabeled";
   }
 }
 
 /// True for the short street objects the detectors of paper Sec. 3.2 must find (vehicles,
-/// pedestrians, cyclists, bins, benches). Tall structures (trees, poles, signs, walls) and the
-/// ground are background, as in the paper's segmentation (Sec. 3.1).
+/// pedestrians, cyclists, bins, benches). Tall structures (trees, poles, signs, walls), the
+/// ground and the low vegetation and terrain (hedges, bushes, grass) are not, as in the paper's
+/// segmentation (Sec. 3.1).
 inline bool isStreetObject(ObjectClass c) {
   switch (c) {
     case ObjectClass::kCar:

@@ -8,6 +8,26 @@
 /// from the crown (y = 0) to the curbs. Street objects include on purpose the hard cases of the
 /// paper's Fig. 4 / Fig. 7 (objects closer than one 0.6 m coarse cell, a pedestrian beside a car,
 /// objects touching a wall, a narrow street whose facade is within 3 m of the sensor).
+///
+/// Vegetation (VegetationParams) makes the scene as hard as a real street, where most false
+/// objects are hedges, bushes, grass and terrain steps (issue 23): grass verges along the curb,
+/// front gardens wherever the facade line has no building front (gaps, setbacks, open sides)
+/// with a terrain step at the sidewalk's back edge, trimmed hedges and irregular bushes, shrubs
+/// against the facades that stand on the sidewalk, and tree
+/// crowns with low lobes overhanging parked cars and the walkway. Foliage is porous (sim_scene.h).
+/// Vegetation is drawn from its own random stream (derived from `seed`), so switching it off or
+/// changing its parameters leaves every other object of the scene where it was.
+///
+/// Materials (Primitive::reflectivity, mean and per-return spread, at 905 nm; the simulated
+/// intensity is reflectivity x 255, the scale of KITTI's reflectance x 255):
+/// - vehicles mix materials: body paint (one colour per vehicle, dark to light), window glass
+///   (very low), and retro-reflective number plates and lamps (high), so a vehicle's returns
+///   spread widely;
+/// - people: clothing (one colour per person) with a moderate spread, skin on the head;
+/// - foliage (crowns, hedges, bushes) is bright in the near infrared, with a moderate spread
+///   from leaf orientation and the partial footprints of porous returns; grass likewise;
+/// - walls (one value per building), road and sidewalk are uniform materials: narrow spreads;
+/// - sign plates are retro-reflective (near the top of the scale).
 #pragma once
 
 #include <cstdint>
@@ -66,6 +86,50 @@ struct StreetObjectParams {
   bool hard_cases = true;               // add the paper's Fig. 4 / 7 hard cases
 };
 
+/// Vegetation and natural ground (see the file comment). Lengths are along the street (x),
+/// depths across it; heights are above the local sidewalk or road surface.
+struct VegetationParams {
+  bool enabled = true;  // false: the scene without any of the below (crowns stay solid)
+  // Grass verges: a strip of terrain beside the curb on streets with furniture.
+  double verge_probability = 0.7;   // [0..1] chance a street side has a verge
+  double verge_offset_m = 0.2;      // [m] paved edge between the curb and the verge
+  double verge_width_m = 1.0;       // [m] across the street (sidewalks >= verge + 1.5 m only)
+  double verge_step_max_m = 0.08;   // [m] largest height of a verge above the sidewalk
+  double verge_bush_spacing_m = 12.0;  // [m] mean spacing of small shrubs in a verge
+  // Terrain (verges and gardens) is tiled; each tile is slightly raised and tilted.
+  double terrain_tile_m = 1.0;       // [m] side of a terrain tile
+  double terrain_roughness_m = 0.04; // [m] largest random extra height of a tile
+  double terrain_tilt_deg = 2.0;     // [deg] largest random tilt of a tile
+  // Front gardens behind the sidewalk, where no building front stands on the facade line.
+  double garden_depth_m = 4.0;       // [m] depth of a garden (a setback: up to the building)
+  double garden_step_max_m = 0.3;    // [m] largest terrain step at the sidewalk's back edge
+  double hedge_probability = 0.75;   // [0..1] chance a garden stretch is lined with a hedge
+  double hedge_height_min_m = 0.8;   // [m]
+  double hedge_height_max_m = 1.8;   // [m]
+  double hedge_width_min_m = 0.5;    // [m]
+  double hedge_width_max_m = 1.0;    // [m]
+  double hedge_gap_spacing_m = 12.0; // [m] mean hedge length between entrance gaps
+  double bush_spacing_m = 4.0;       // [m] mean spacing of bushes along a garden
+  double facade_shrub_spacing_m = 8.0;  // [m] mean spacing of shrubs planted against facades
+                                        //     that stand on the sidewalk (sidewalks >= 2 m)
+  double bush_height_min_m = 0.5;    // [m]
+  double bush_height_max_m = 2.0;    // [m]
+  double garden_tree_spacing_m = 16.0;  // [m] mean spacing of trees in deep gardens
+  // Tree crowns: lobes of foliage hanging over the road and the walkway.
+  int canopy_lobes_min = 2;             // [-] per tree
+  int canopy_lobes_max = 4;             // [-] per tree
+  double canopy_overhang_max_m = 3.2;   // [m] farthest reach of a lobe's edge from the trunk
+  double canopy_clearance_min_m = 2.5;  // [m] lowest leaves above the ground under them
+  double canopy_clearance_max_m = 3.2;  // [m]
+  // Porosity per material: chance a ray passes through, mean depth of a return inside.
+  double hedge_transmission = 0.12;   // [0..1]
+  double hedge_penetration_m = 0.12;  // [m]
+  double bush_transmission = 0.3;     // [0..1]
+  double bush_penetration_m = 0.2;    // [m]
+  double crown_transmission = 0.45;   // [0..1]
+  double crown_penetration_m = 0.4;   // [m]
+};
+
 /// The ego drive the scene is generated for (moving objects are placed so that they meet the
 /// ego vehicle during the drive, and never drive through it).
 struct DriveParams {
@@ -93,6 +157,7 @@ struct SceneParams {
   std::vector<StreetSection> sections = defaultSections();
   BuildingParams buildings;
   StreetObjectParams objects;
+  VegetationParams vegetation;
 
   /// The default street: a two-side street, an intersection, a one-side street with a square,
   /// a narrow street (facades 2.8 m from the right lane), and a last two-side street.
@@ -102,8 +167,9 @@ struct SceneParams {
 /// Builds the scene. Throws std::invalid_argument naming the field if a parameter is invalid.
 Scene generateScene(const SceneParams& scene, const DriveParams& drive);
 
-/// Height [m] of the walkable ground (road, sidewalk, terrain) at (x, y) of the generated
-/// street: the surface the objects stand on and the platform drives on.
+/// Height [m] of the paved ground (road, sidewalk, the ground beyond) at (x, y) of the
+/// generated street: the surface the objects stand on and the platform drives on. Terrain tiles
+/// (verges, gardens) lie up to a few decimetres above it.
 double groundHeight(const SceneParams& scene, double x_m, double y_m);
 
 /// Checks the parameters; throws std::invalid_argument naming the field and accepted range.

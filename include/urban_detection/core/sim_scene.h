@@ -2,11 +2,18 @@
 /// Scene description of the simulated urban drive and an exact ray caster over it (ROS-free).
 ///
 /// A scene is a flat list of solid primitives (oriented boxes, cylinders, ellipsoids), each
-/// labelled with an instance id (0 = background: ground, walls) and an ObjectClass. Objects are
-/// groups of primitives sharing an instance id (a car is a body box plus a cabin box). Moving
-/// objects translate linearly: a primitive's centre at time t is `center + velocity * t`.
-/// The ray caster finds the first surface along a ray exactly (closed-form intersections),
-/// accelerated by a uniform 2-D grid over the primitives' xy bounds.
+/// labelled with an instance id (0 = background: ground, terrain, walls) and an ObjectClass.
+/// Objects are groups of primitives sharing an instance id (a car is a body box, a cabin box, a
+/// roof, plates and lamps). Moving objects translate linearly: a primitive's centre at time t is
+/// `center + velocity * t`. The ray caster finds the first surface along a ray exactly
+/// (closed-form intersections), accelerated by a uniform 2-D grid over the primitives' xy bounds.
+///
+/// Materials: each primitive carries the surface's diffuse reflectivity at the sensor's 905 nm
+/// (mean and per-return spread) and, for foliage, a porosity: LidarSimulator lets a ray that
+/// enters a porous primitive pass through it with probability `transmission` (it goes on to the
+/// surface behind), and otherwise returns it from a random depth inside the volume (exponential
+/// with mean `penetration_m`), as a laser footprint among leaves returns from the first leaf it
+/// meets. The caster itself treats every primitive as solid.
 #pragma once
 
 #include <cstdint>
@@ -36,9 +43,16 @@ struct Primitive {
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      // [m/s] linear motion
   std::uint32_t instance_id = 0;                           // 0 = background
   ObjectClass object_class = ObjectClass::kUnlabeled;
-  float reflectivity = 0.2f;  // [0..1] diffuse reflectivity, drives the simulated intensity
+  float reflectivity = 0.2f;         // [0..1] mean diffuse reflectivity at 905 nm
+  float reflectivity_spread = 0.0f;  // [0..1] std dev of the reflectivity from return to return
+                                     //   (texture, leaf orientation, paint wear)
+  float transmission = 0.0f;         // [0..1] chance a ray passes through (porous foliage)
+  float penetration_m = 0.0f;        // [m] mean depth inside the volume of a return that does
+                                     //   not pass through (0 with transmission 0: opaque)
 
   bool moving() const { return !velocity.isZero(); }
+  /// True for foliage: rays may pass through or return from inside (see the file comment).
+  bool porous() const { return transmission > 0.0f || penetration_m > 0.0f; }
   /// World axis-aligned bounds at time `t_s` [s].
   Eigen::AlignedBox3d bounds(double t_s = 0.0) const;
   /// Distance t > t_min [m] along the ray `origin + t * dir` where it enters the solid at time
@@ -46,6 +60,10 @@ struct Primitive {
   /// `dir` need not be normalised; t is in units of |dir|.
   double intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_s,
                    double t_min = 1e-6) const;
+  /// The interval [*t_in, *t_out] of the whole line `origin + t * dir` (any sign of t) inside
+  /// the solid at time `t_s`; false if the line misses it. Same units as intersect().
+  bool span(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_s,
+            double* t_in, double* t_out) const;
   /// True if `p` [m] lies inside the solid (grown by `margin_m`) at time `t_s`. For the box
   /// and the cylinder the margin is exact; for the ellipsoid it grows each semi-axis.
   bool contains(const Eigen::Vector3d& p, double t_s, double margin_m = 0.0) const;
@@ -93,8 +111,9 @@ struct RayCasterParams {
 };
 
 /// Casts rays against a scene with a uniform 2-D grid of primitive xy bounds. Static primitives
-/// are binned once; moving primitives are binned with their bounds swept over the time window
-/// given to setTimeWindow(). Not thread-safe (per-ray mailbox).
+/// are binned once, grouped by object (one box test skips an object's parts); moving primitives
+/// are binned with their bounds swept over the time window given to setTimeWindow(). Not
+/// thread-safe (per-ray mailbox).
 class RayCaster {
  public:
   /// Keeps a reference to `scene`, which must outlive the caster and not change.
@@ -127,7 +146,13 @@ class RayCaster {
   int nx_ = 1, ny_ = 1;
   double z_max_ = 0.0;  // [m] highest point of the scene (rays above it going up stop)
   double static_z_max_ = 0.0;  // [m] same, static primitives only
-  std::vector<std::uint32_t> static_start_, static_items_;  // CSR per cell
+  struct Group {  // consecutive static primitives of one object (or one background primitive)
+    std::uint32_t first = 0, count = 0;
+    Eigen::AlignedBox3d box;
+  };
+  std::vector<Group> groups_;
+  std::vector<std::uint32_t> group_mailbox_;
+  std::vector<std::uint32_t> static_start_, static_items_;  // CSR per cell (group indices)
   std::vector<std::uint32_t> moving_start_, moving_items_;  // CSR per cell (time window)
   std::vector<std::uint32_t> moving_prims_;
   std::vector<std::uint32_t> mailbox_;

@@ -8,7 +8,8 @@
 /// scene:   {start_x_m, slope, camber, curb_height_m, terrain_width_m,
 ///           sections: [{type: street|intersection, length_m, road_half_width_m,
 ///                       sidewalk_width_m, buildings_left, buildings_right, parking, furniture}],
-///           buildings: {BuildingParams fields}, objects: {StreetObjectParams fields}}
+///           buildings: {BuildingParams fields}, objects: {StreetObjectParams fields},
+///           vegetation: {VegetationParams fields}}
 /// drive:   {waypoints: [[x, y], ...], speed_mps}
 /// sensor:  {SimSensorParams fields, calibration: ""}   # "" = nominal HDL-64E S2
 /// ```
