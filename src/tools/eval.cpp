@@ -69,8 +69,16 @@ const char* segName(core::SegmentClass c) { return core::toString(c); }
 // and, when `out` is not null, prints one line per object.
 void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::SegmentClass>& seg,
               const std::vector<core::DetectedObject>& dets, const core::FrameMatch& m,
+              const std::vector<core::DetectedObject>& classifier_rejected,
               const std::string& detector, Diagnostics* diag, FILE* out) {
   const std::size_t n = f.cloud.size();
+  // Points of the detections the classifier rejected: the object it took, if any.
+  std::vector<std::int32_t> rejected_of_point(n, -1);
+  for (std::size_t d = 0; d < classifier_rejected.size(); ++d) {
+    for (std::uint32_t idx : classifier_rejected[d].indices) {
+      if (idx < n) rejected_of_point[idx] = static_cast<std::int32_t>(d);
+    }
+  }
   std::vector<std::int32_t> det_of_point(n, -1);
   for (std::size_t d = 0; d < dets.size(); ++d) {
     for (std::uint32_t idx : dets[d].indices) {
@@ -123,7 +131,10 @@ void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::Segment
         }
       }
       if (in_dets < 0.5 * fg) {
-        cause = "detector:dropped(small_or_noise)";
+        std::size_t in_rejected = 0;
+        for (std::uint32_t i : pts[g]) in_rejected += rejected_of_point[i] >= 0;
+        cause = in_rejected >= 0.5 * fg ? "classifier:rejected_as_non_object"
+                                        : "detector:dropped(small_or_noise)";
       } else if (best_n >= 0.5 * np) {
         // Holds most of the object but IoU < 0.5: the detection is much larger.
         std::map<std::string, std::size_t> content;
@@ -697,7 +708,8 @@ int main(int argc, char** argv) {
         ++class_pairs[k][std::string(core::toString(truth)) + "->" +
                          core::toString(objects[d].category)];
       }
-      diagnose(f, *dataset, seg, objects, match, detectors[k]->name(), &diags[k],
+      if (!classifier) rejected.clear();
+      diagnose(f, *dataset, seg, objects, match, rejected, detectors[k]->name(), &diags[k],
                details ? stdout : nullptr);
       if (!png_dir.empty() && k == 0) {
         std::string id = f.id;
