@@ -24,13 +24,6 @@ const char* const kFeatureNames[kNumObjectFeatures] = {
     "mean_second_diff_m", "intensity_mean",  "intensity_std",   "intensity_q10",
     "intensity_q50",   "intensity_q90",      "intensity_max"};
 
-// The value at quantile q of `v` (partially reorders it); v is not empty.
-float quantile(std::vector<float>* v, double q) {
-  const std::size_t k =
-      std::min(v->size() - 1, static_cast<std::size_t>(q * static_cast<double>(v->size())));
-  std::nth_element(v->begin(), v->begin() + static_cast<std::ptrdiff_t>(k), v->end());
-  return (*v)[k];
-}
 
 }  // namespace
 
@@ -213,9 +206,19 @@ ObjectFeatureVector ObjectFeatureExtractor::compute(const LabeledCloud& foregrou
       while (end < n && rows_[end].elevation - rows_[end - 1].elevation <= row_gap) ++end;
     }
     ++num_rows;
-    std::sort(rows_.begin() + static_cast<std::ptrdiff_t>(begin),
-              rows_.begin() + static_cast<std::ptrdiff_t>(end),
-              [](const RowPoint& a, const RowPoint& b) { return a.azimuth < b.azimuth; });
+    // Decoded packets and KITTI files list a ring's returns in azimuth order, so a row is
+    // usually sorted already (or reversed): check before sorting.
+    const auto row_begin = rows_.begin() + static_cast<std::ptrdiff_t>(begin);
+    const auto row_end = rows_.begin() + static_cast<std::ptrdiff_t>(end);
+    auto by_azimuth = [](const RowPoint& a, const RowPoint& b) { return a.azimuth < b.azimuth; };
+    if (!std::is_sorted(row_begin, row_end, by_azimuth)) {
+      auto reversed = [](const RowPoint& a, const RowPoint& b) { return a.azimuth > b.azimuth; };
+      if (std::is_sorted(row_begin, row_end, reversed)) {
+        std::reverse(row_begin, row_end);
+      } else {
+        std::sort(row_begin, row_end, by_azimuth);
+      }
+    }
     for (std::size_t k = begin + 1; k < end; ++k) {
       const float step = rows_[k].azimuth - rows_[k - 1].azimuth;
       if (step <= max_gap) {
@@ -260,9 +263,21 @@ ObjectFeatureVector ObjectFeatureExtractor::compute(const LabeledCloud& foregrou
   f[kFeatIntensityMean] = static_cast<float>(imean);
   f[kFeatIntensityStd] = static_cast<float>(std::sqrt(std::max(0.0, isq / nd - imean * imean)));
   f[kFeatIntensityMax] = imax;
-  f[kFeatIntensityQ10] = quantile(&intensities_, 0.1);
-  f[kFeatIntensityQ50] = quantile(&intensities_, 0.5);
-  f[kFeatIntensityQ90] = quantile(&intensities_, 0.9);
+  // The median first; the 10 % and 90 % quantiles then lie in its lower and upper parts.
+  const std::size_t k50 = std::min(n - 1, static_cast<std::size_t>(0.5 * nd));
+  const std::size_t k10 = std::min(n - 1, static_cast<std::size_t>(0.1 * nd));
+  const std::size_t k90 = std::min(n - 1, static_cast<std::size_t>(0.9 * nd));
+  const auto mid = intensities_.begin() + static_cast<std::ptrdiff_t>(k50);
+  std::nth_element(intensities_.begin(), mid, intensities_.end());
+  f[kFeatIntensityQ50] = *mid;
+  std::nth_element(intensities_.begin(), intensities_.begin() + static_cast<std::ptrdiff_t>(k10),
+                   mid);
+  f[kFeatIntensityQ10] = intensities_[k10];
+  if (k90 > k50) {
+    std::nth_element(mid + 1, intensities_.begin() + static_cast<std::ptrdiff_t>(k90),
+                     intensities_.end());
+  }
+  f[kFeatIntensityQ90] = intensities_[k90];
   return f;
 }
 

@@ -430,8 +430,8 @@ void usage() {
       "                  (mirrored by config/*.yaml) are used.\n"
       "  --object-filter on|off  the vegetation rejection stage after the detector (default:\n"
       "                  object_filter/enabled of the config, else off)\n"
-      "  --features CSV  write the object filter's features of every detection (before the\n"
-      "                  filter) with its verdict and content, to measure their separation\n"
+      "  --features CSV  write the object classifier's features of every detection (before the\n"
+      "                  object filter and the classifier) with its verdict and content\n"
       "  --classifier MODEL|off  the object classifier after the detector (default: classifier/\n"
       "                  of the config, e.g. config/detection.yaml's shipped model; else off)\n"
       "  --detections DIR  score another system's output instead of this package's detectors:\n"
@@ -537,15 +537,21 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::FILE* features_out = nullptr;
+  core::ObjectFeatureParams feature_params;
+  feature_params.sensor_height_m = params.segmentation.sensor_height_m;
+  core::ObjectFeatureExtractor feature_extractor(feature_params);
+  std::vector<core::ObjectFeatureVector> feature_rows;
   if (!features_path.empty()) {
     features_out = std::fopen(features_path.c_str(), "w");
     if (!features_out) {
       std::fprintf(stderr, "error: cannot write %s\n", features_path.c_str());
       return 1;
     }
-    std::fprintf(features_out,
-                 "dataset,frame,detector,verdict,content,points,range_m,length_m,width_m,"
-                 "height_m,triplets,jumps,jump_fraction,mean_intensity,std_intensity\n");
+    std::fprintf(features_out, "dataset,frame,detector,verdict,content");
+    for (int k = 0; k < core::kNumObjectFeatures; ++k) {
+      std::fprintf(features_out, ",%s", core::featureName(k));
+    }
+    std::fprintf(features_out, "\n");
   }
 
   // The classifier: the config's, replaced or switched off by --classifier.
@@ -679,16 +685,13 @@ int main(int argc, char** argv) {
       detectors[k]->detect(foreground, &objects);
       if (features_out) {
         unfiltered[k].evaluate(f.gt, objects, &match);
-        object_filter->indexForeground(foreground);
+        feature_extractor.computeAll(foreground, objects, &feature_rows);
         for (std::size_t d = 0; d < objects.size(); ++d) {
-          const core::DetectedObject& o = objects[d];
-          const core::ObjectFeatures ft = object_filter->features(foreground, o);
-          std::fprintf(features_out, "%s,%s,%s,%s,%s,%zu,%.2f,%.2f,%.2f,%.2f,%zu,%zu,%.4f,%.4f,%.4f\n",
-                       dataset->name().c_str(), f.id.c_str(), detectors[k]->name().c_str(),
-                       core::toString(match.verdict[d]), detectionContent(f, *dataset, o).c_str(),
-                       ft.points, std::hypot(o.centroid.x(), o.centroid.y()), o.obb_size.x(),
-                       o.obb_size.y(), ft.height_m, ft.triplets, ft.jumps, ft.jump_fraction,
-                       ft.mean_intensity, ft.std_intensity);
+          std::fprintf(features_out, "%s,%s,%s,%s,%s", dataset->name().c_str(), f.id.c_str(),
+                       detectors[k]->name().c_str(), core::toString(match.verdict[d]),
+                       detectionContent(f, *dataset, objects[d]).c_str());
+          for (const float v : feature_rows[d]) std::fprintf(features_out, ",%.6g", v);
+          std::fprintf(features_out, "\n");
         }
       }
       object_filter->apply(foreground, &objects, &rejected);

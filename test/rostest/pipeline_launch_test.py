@@ -14,6 +14,8 @@ Each asserts the output rate on /objects (>= 9 Hz, measured on header stamps, i.
 sensor's time, while the bag is played at half speed so a loaded machine does not drop
 revolutions), that (nearly) every revolution was processed, and the number of objects per
 revolution: exact for the synthetic scene, against the simulator's ground truth otherwise.
+The counts are the detector's: the object classifier is switched off (classifier:=false); its
+output on the demo drive is checked by demo_classes.test.
 """
 import bisect
 import argparse
@@ -230,7 +232,7 @@ class PipelineLaunchTest(unittest.TestCase):
                                str(revolutions), '--bag', bag], stdout=subprocess.DEVNULL)
         gt = gt_object_counts(bag)
         self.assertGreaterEqual(len(gt), revolutions - 2)
-        self.start('bag.launch', 'bag:=' + bag, 'rate:=0.5', 'delay:=3')
+        self.start('bag.launch', 'bag:=' + bag, 'rate:=0.5', 'delay:=3', 'classifier:=false')
         received = self.wait_for(len(gt), 50.0)
         # The first revolution may be played before the chain has connected.
         rate = self.check_rate(received, len(gt), 0.9)
@@ -247,7 +249,7 @@ class PipelineLaunchTest(unittest.TestCase):
         sweeps = 30
         subprocess.check_call([tool('urban_detection_kitti_to_bag'), scan, bag, '--repeat',
                                str(sweeps)], stdout=subprocess.DEVNULL)
-        self.start('bag.launch', 'bag:=' + bag, 'rate:=0.5', 'delay:=3')
+        self.start('bag.launch', 'bag:=' + bag, 'rate:=0.5', 'delay:=3', 'classifier:=false')
         received = self.wait_for(sweeps, 50.0)
         rate = self.check_rate(received, sweeps, 0.9)
         counts = [n for _, n, _ in received]
@@ -269,7 +271,7 @@ class PipelineLaunchTest(unittest.TestCase):
         packets = read_pcap_packets(pcap)
         self.assertGreater(len(packets), 300 * revolutions)
         port = free_udp_port()
-        self.start('live.launch', 'port:=%d' % port, 'device_ip:=127.0.0.1')
+        self.start('live.launch', 'port:=%d' % port, 'device_ip:=127.0.0.1', 'classifier:=false')
         # Until the chain is connected (it is lazy: PacketSource reads the socket from the start
         # but the detectors subscribe when /objects has a listener), send nothing.
         deadline = time.time() + 30.0
