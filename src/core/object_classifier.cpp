@@ -431,9 +431,7 @@ ObjectClassifierStats ObjectClassifier::apply(const LabeledCloud& foreground,
     kept_.push_back(std::move(o));
   }
   objects->swap(kept_);
-  for (std::size_t k = 0; k < objects->size(); ++k) {
-    (*objects)[k].id = static_cast<std::uint32_t>(k + 1);
-  }
+  renumberObjects(objects);
   s.kept = objects->size();
   return s;
 }

@@ -58,18 +58,7 @@ ObjectFeatureExtractor::ObjectFeatureExtractor(const ObjectFeatureParams& params
 }
 
 void ObjectFeatureExtractor::indexForeground(const LabeledCloud& foreground) {
-  for (std::uint32_t i : touched_) fg_of_index_[i] = -1;
-  touched_.clear();
-  for (std::size_t k = 0; k < foreground.size(); ++k) {
-    const std::uint32_t idx = foreground[k].index;
-    if (idx >= fg_of_index_.size()) {
-      // Input clouds are at most a few 100k points; a corrupt huge index is simply not found.
-      if (idx > (1u << 26)) continue;
-      fg_of_index_.resize(static_cast<std::size_t>(idx) + 1, -1);
-    }
-    fg_of_index_[idx] = static_cast<std::int32_t>(k);
-    touched_.push_back(idx);
-  }
+  index_.build(foreground);
 }
 
 ObjectFeatureVector ObjectFeatureExtractor::compute(const LabeledCloud& foreground,
@@ -93,8 +82,9 @@ ObjectFeatureVector ObjectFeatureExtractor::compute(const LabeledCloud& foregrou
   Eigen::Matrix3d sq = Eigen::Matrix3d::Zero();
   double zmin = 0.0, zmax = 0.0;
   for (const std::uint32_t idx : object.indices) {
-    if (idx >= fg_of_index_.size() || fg_of_index_[idx] < 0) continue;
-    const LabeledPoint& p = foreground[static_cast<std::size_t>(fg_of_index_[idx])];
+    const LabeledPoint* found = index_.find(foreground, idx);
+    if (!found) continue;
+    const LabeledPoint& p = *found;
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
     const double rho = std::sqrt(static_cast<double>(p.x) * p.x + static_cast<double>(p.y) * p.y);
     if (!(rho > 1e-3)) continue;

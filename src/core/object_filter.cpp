@@ -55,18 +55,7 @@ void ObjectFilter::setParams(const ObjectFilterParams& params) {
 }
 
 void ObjectFilter::indexForeground(const LabeledCloud& foreground) {
-  for (std::uint32_t i : touched_) fg_of_index_[i] = -1;
-  touched_.clear();
-  for (std::size_t k = 0; k < foreground.size(); ++k) {
-    const std::uint32_t idx = foreground[k].index;
-    if (idx >= fg_of_index_.size()) {
-      // Input clouds are at most a few 100k points; a corrupt huge index is simply not found.
-      if (idx > (1u << 26)) continue;
-      fg_of_index_.resize(static_cast<std::size_t>(idx) + 1, -1);
-    }
-    fg_of_index_[idx] = static_cast<std::int32_t>(k);
-    touched_.push_back(idx);
-  }
+  index_.build(foreground);
 }
 
 ObjectFeatures ObjectFilter::features(const LabeledCloud& foreground,
@@ -77,8 +66,9 @@ ObjectFeatures ObjectFilter::features(const LabeledCloud& foreground,
   // Azimuths relative to the object's centroid azimuth: no wrap at +-pi inside one object.
   const double az0 = std::atan2(object.centroid.y(), object.centroid.x());
   for (std::uint32_t idx : object.indices) {
-    if (idx >= fg_of_index_.size() || fg_of_index_[idx] < 0) continue;
-    const LabeledPoint& p = foreground[static_cast<std::size_t>(fg_of_index_[idx])];
+    const LabeledPoint* found = index_.find(foreground, idx);
+    if (!found) continue;
+    const LabeledPoint& p = *found;
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
     const double rho = std::hypot(p.x, p.y);
     const double r = std::sqrt(rho * rho + static_cast<double>(p.z) * p.z);
@@ -184,9 +174,7 @@ ObjectFilterStats ObjectFilter::apply(const LabeledCloud& foreground,
     kept_.push_back(std::move(o));
   }
   objects->swap(kept_);
-  for (std::size_t k = 0; k < objects->size(); ++k) {
-    (*objects)[k].id = static_cast<std::uint32_t>(k + 1);
-  }
+  renumberObjects(objects);
   s.kept = objects->size();
   return s;
 }

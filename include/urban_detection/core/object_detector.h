@@ -3,6 +3,7 @@
 /// kd-tree baseline), so nodelets, the benchmark and the evaluator take either. ROS-free.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -52,6 +53,13 @@ struct DetectedObject {
   ObjectCategory category = ObjectCategory::kUnknown;    // set by the ObjectClassifier
   float class_confidence = 0.0f;                         // [0..1] probability of `category`
 };
+
+/// Numbers objects 1..N in their order, as the detectors do (after a stage removed some).
+inline void renumberObjects(std::vector<DetectedObject>* objects) {
+  for (std::size_t k = 0; k < objects->size(); ++k) {
+    (*objects)[k].id = static_cast<std::uint32_t>(k + 1);
+  }
+}
 
 /// Finds objects in a foreground cloud (short street object points of the segmentation).
 class ObjectDetector {

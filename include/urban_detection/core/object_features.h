@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "urban_detection/core/foreground_index.h"
 #include "urban_detection/core/object_detector.h"
 #include "urban_detection/core/point_types.h"
 
@@ -126,8 +127,7 @@ class ObjectFeatureExtractor {
     float z;          // [m]
   };
   ObjectFeatureParams params_;
-  std::vector<std::int32_t> fg_of_index_;  // input-cloud index -> foreground position, or -1
-  std::vector<std::uint32_t> touched_;     // entries of fg_of_index_ set for this foreground
+  ForegroundIndex index_;
   std::vector<RowPoint> rows_, sorted_;    // scratch: points, ordered by elevation bin
   std::vector<std::uint32_t> bin_start_, fill_;  // scratch of the counting sort
   std::vector<float> intensities_;         // scratch

@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "urban_detection/core/foreground_index.h"
 #include "urban_detection/core/object_detector.h"
 #include "urban_detection/core/point_types.h"
 
@@ -115,8 +116,7 @@ class ObjectFilter {
     float elevation, azimuth, range;
   };
   ObjectFilterParams params_;
-  std::vector<std::int32_t> fg_of_index_;  // input-cloud index -> foreground position, or -1
-  std::vector<std::uint32_t> touched_;     // entries of fg_of_index_ set for this foreground
+  ForegroundIndex index_;
   std::vector<RowPoint> row_points_;       // scratch
   std::vector<DetectedObject> kept_;       // scratch
 };
