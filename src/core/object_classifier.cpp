@@ -392,6 +392,15 @@ double ObjectClassifier::threshold() const {
                                                : model_.objectThreshold();
 }
 
+void ObjectClassifier::setDecision(double min_object_probability, bool reject_non_objects) {
+  if (!std::isfinite(min_object_probability) || min_object_probability < -1.0 ||
+      min_object_probability > 1.0) {
+    throw std::invalid_argument("ObjectClassifier: min_object_probability must be in [-1, 1]");
+  }
+  params_.min_object_probability = min_object_probability;
+  params_.reject_non_objects = reject_non_objects;
+}
+
 ObjectClassifierStats ObjectClassifier::apply(const LabeledCloud& foreground,
                                               std::vector<DetectedObject>* objects,
                                               std::vector<DetectedObject>* rejected) {

@@ -1,5 +1,8 @@
 #include "urban_detection/ros/detector_nodelet.h"
 
+#include <cmath>
+#include <sstream>
+
 #include <boost/make_shared.hpp>
 #include <pcl_conversions/pcl_conversions.h>
 #include <pcl_ros/point_cloud.h>
@@ -29,6 +32,28 @@ void DetectorNodelet::onInit() {
     return;
   }
   startReconfigure(getPrivateNodeHandle());
+  if (classifier_->params().enabled) {
+    const ros::NodeHandle classifier_nh(getPrivateNodeHandle(), "classifier");
+    ObjectClassifierConfig initial;
+    initial.min_object_probability = classifier_->params().min_object_probability;
+    initial.reject_non_objects = classifier_->params().reject_non_objects;
+    const std::string ns = classifier_nh.getNamespace();
+    auto apply = [this, ns](const ObjectClassifierConfig& c) -> std::string {
+      const double p = c.min_object_probability;
+      if (!std::isfinite(p) || p < -1.0 || p > 1.0) {
+        std::ostringstream why;
+        why << "'" << ns << "/min_object_probability' = " << p
+            << " is out of range: accepted [-1, 1] (negative: the model's threshold)";
+        return why.str();
+      }
+      std::lock_guard<std::mutex> lock(detector_mutex_);  // between two revolutions
+      classifier_->setDecision(p, c.reject_non_objects);
+      return "";
+    };
+    classifier_reconfigure_ =
+        std::make_unique<ros_conv::ValidatedReconfigure<ObjectClassifierConfig>>(classifier_nh,
+                                                                                 initial, apply);
+  }
   diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(nh, getPrivateNodeHandle(),
                                                               getName(), "detection");
   diagnostics_->setActive(false);

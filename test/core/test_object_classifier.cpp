@@ -339,6 +339,19 @@ TEST(ObjectClassifier, RejectsNonObjectsAndLabelsTheRest) {
   out = objects;
   core::ObjectClassifier(params).apply(fg, &out, &rejected);
   EXPECT_EQ(out.size(), 2u);
+  // The decision changes without reloading the model.
+  {
+    core::ObjectClassifierParams strict = params;
+    core::ObjectClassifier tunable(strict);
+    tunable.setDecision(0.0, true);
+    EXPECT_DOUBLE_EQ(tunable.threshold(), 0.0);
+    out = objects;
+    tunable.apply(fg, &out, &rejected);
+    EXPECT_EQ(out.size(), 2u);
+    tunable.setDecision(-1.0, true);
+    EXPECT_DOUBLE_EQ(tunable.threshold(), tunable.model().objectThreshold());
+    EXPECT_THROW(tunable.setDecision(1.5, true), std::invalid_argument);
+  }
   // Disabled: unchanged, unknown.
   params.enabled = false;
   out = objects;

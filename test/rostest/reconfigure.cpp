@@ -241,6 +241,29 @@ TEST(Reconfigure, OutOfRangeValuesAreRejectedByEveryNodelet) {
       5.0));
 }
 
+TEST(Reconfigure, ClassifierThresholdIsTunableAndOutOfRangeIsRefused) {
+  RosoutWatcher rosout;
+  ros::param::set("/rcl/detector/classifier/enabled", true);
+  ros::param::set("/rcl/detector/classifier/model",
+                  std::string(UD_SOURCE_DIR) + "/config/object_classifier.yml.gz");
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/rcl/detector", "urban_detection/HierarchicalGridDetector", {}, {}));
+  const std::string ns = "/rcl/detector/classifier";
+  EXPECT_DOUBLE_EQ(doubleOf(current(ns), "min_object_probability"), -1.0);
+  dynamic_reconfigure::Config c = setParameters(ns, {}, {{"min_object_probability", 0.8}});
+  EXPECT_DOUBLE_EQ(doubleOf(c, "min_object_probability"), 0.8);
+  c = setParameters(ns, {}, {{"min_object_probability", 1.5}});
+  EXPECT_DOUBLE_EQ(doubleOf(c, "min_object_probability"), 0.8);
+  EXPECT_DOUBLE_EQ(doubleOf(current(ns), "min_object_probability"), 0.8);
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return rosout.contains(rosgraph_msgs::Log::ERROR,
+                               "'" + ns + "/min_object_probability' = 1.5 is out of range: "
+                               "accepted [-1, 1]");
+      },
+      5.0));
+}
+
 TEST(Reconfigure, MarkersApplyFromTheNextMessage) {
   nodelet::Loader manager(false);
   ASSERT_TRUE(manager.load("/rc_mk/markers", "urban_detection/ObjectMarkers", {}, {}));

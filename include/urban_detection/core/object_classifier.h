@@ -156,6 +156,9 @@ class ObjectClassifier {
   const ObjectClassifierModel& model() const { return model_; }
   /// The P(object) threshold in force.
   double threshold() const;
+  /// Changes the decision (threshold override, rejection) without reloading the model; throws
+  /// std::invalid_argument when min_object_probability is not in [-1, 1].
+  void setDecision(double min_object_probability, bool reject_non_objects);
 
   /// Classifies the objects of one frame (`foreground` is the detector's input) and fills
   /// category and class_confidence. Non-objects are moved to `rejected` (when not null) and

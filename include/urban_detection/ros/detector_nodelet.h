@@ -13,7 +13,9 @@
 /// each object its class (class_label, class_confidence); non-objects (vegetation, terrain,
 /// structure) are left out of `objects` by default and published on `objects/rejected`
 /// (lazy). A missing, corrupt or mismatched model file makes the nodelet refuse to start with
-/// one FATAL naming the file; the manager keeps running.
+/// one FATAL naming the file; the manager keeps running. min_object_probability and
+/// reject_non_objects are dynamic_reconfigure parameters in ~classifier (config/
+/// ObjectClassifier.cfg), applied from the next revolution.
 #pragma once
 
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
@@ -28,10 +30,12 @@
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 
+#include "urban_detection/ObjectClassifierConfig.h"
 #include "urban_detection/core/object_classifier.h"
 #include "urban_detection/core/object_detector.h"
 #include "urban_detection/core/object_filter.h"
 #include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
 
@@ -55,6 +59,8 @@ class DetectorNodelet : public nodelet::Nodelet {
   std::unique_ptr<core::ObjectDetector> detector_;
   std::unique_ptr<core::ObjectFilter> filter_;
   std::unique_ptr<core::ObjectClassifier> classifier_;
+  // ~classifier: threshold and rejection, while the classifier is enabled.
+  std::unique_ptr<ros_conv::ValidatedReconfigure<ObjectClassifierConfig>> classifier_reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   int queue_size_ = 2;
   std::vector<core::DetectedObject> objects_;   // reused between frames
