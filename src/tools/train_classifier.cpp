@@ -134,8 +134,7 @@ std::vector<double> thresholdGrid() {
   return t;
 }
 
-// Trains on `groups`, fills the probabilities of `target` frames' detections of every
-// detector into `out(frame, detector)`.
+// A forest trained on the hierarchical-grid detections of the frames of `groups`.
 core::ObjectClassifierModel trainOn(const std::vector<FrameData>& frames,
                                     const std::set<std::string>& groups,
                                     const core::ClassifierTrainingParams& params,

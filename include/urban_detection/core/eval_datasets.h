@@ -2,7 +2,7 @@
 /// Readers that turn public LiDAR datasets into (cloud, per-point ground truth) frames for the
 /// detection scoring of evaluation.h (paper Sec. 5). ROS-free.
 ///
-/// Ground-truth rules (they are what makes the F-rate honest; the README repeats them):
+/// Ground-truth rules (they are what makes the F-rate honest; docs/measurements.md repeats them):
 /// - KITTI object: a GT object is the set of points inside a labelled 3-D box (every class but
 ///   DontCare) enlarged by `box_margin_m` on each side; points in the bottom `ground_band_m` of
 ///   the box (the road under the object) are excluded from both point sets. KITTI labels only

@@ -25,7 +25,7 @@
 /// `uniform_min_points` points whose intensity standard deviation is below
 /// `uniform_max_intensity_std` is rejected, at any range and whatever the porosity gates above.
 /// On KITTI's HDL-64E (reflectance x 255) cars spread 33-70 and SemanticKITTI's vegetation
-/// 13-33 (README); a simulator that gives each object one reflectivity cannot use it.
+/// 13-33 (docs/measurements.md); a simulator that gives each object one reflectivity cannot use it.
 #pragma once
 
 #include <cstddef>
@@ -43,7 +43,7 @@ namespace core {
 struct ObjectFilterParams {
   bool enabled = false;       // [-] false: apply() keeps every object. Off by default: on the
                               //     shared data it removed ~1 false object per revolution for
-                              //     ~1.3 ms (README, results)
+                              //     ~1.3 ms (docs/measurements.md)
   int min_points = 30;        // [-] objects with fewer points are always kept
   double max_range_m = 30.0;  // [m] objects whose centroid is farther are always kept
   // Porosity rule (geometry, any sensor):
