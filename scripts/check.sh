@@ -9,7 +9,9 @@
 # Fits in ~15 min on 2 cores from a fresh clone (two builds of the core + 6 x 30 s).
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-WS="${UD_WS:-$REPO/.ws}"
+# shellcheck source=scripts/workspace.sh
+source "$REPO/scripts/workspace.sh"
+WS="$(ud_workspace "$REPO")"
 ASAN_WS="${UD_ASAN_WS:-$WS-asan}"
 JOBS="${UD_JOBS:-$(nproc)}"
 FUZZ_SECONDS="${1:-30}"

@@ -13,7 +13,9 @@
 # Environment: UD_WS, UD_JOBS, UD_FUZZ_BUILD (default $UD_WS-fuzz), CXX_FUZZ (clang++).
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-WS="${UD_WS:-$REPO/.ws}"
+# shellcheck source=scripts/workspace.sh
+source "$REPO/scripts/workspace.sh"
+WS="$(ud_workspace "$REPO")"
 BUILD="${UD_FUZZ_BUILD:-$WS-fuzz}"
 JOBS="${UD_JOBS:-$(nproc)}"
 SECONDS_PER_TARGET="${1:-600}"

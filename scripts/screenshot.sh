@@ -10,6 +10,8 @@
 # simulated drive (also the fallback when demo.launch is absent); further args go to roslaunch.
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# shellcheck source=scripts/workspace.sh
+source "$REPO/scripts/workspace.sh"
 OUT="$REPO/results"
 DATA="${UD_SHARED_DATA:-$REPO/../shared/data}"
 WAIT_S=25
@@ -27,7 +29,7 @@ LAUNCH=(demo.launch)
 if [ "$KITTI" = 1 ]; then
   DRIVE="$DATA/kitti_raw/drive_0048"
   [ -d "$DRIVE" ] || { echo "screenshot: no demo.launch and no $DRIVE" >&2; exit 1; }
-  BIN="${UD_WS:-$REPO/.ws}/devel/lib/urban_detection"
+  BIN="$(ud_workspace "$REPO")/devel/lib/urban_detection"
   "$BIN/urban_detection_kitti_to_bag" "$DRIVE" "$OUT/screenshot_kitti.bag" >/dev/null
   LAUNCH=(bag.launch "bag:=$OUT/screenshot_kitti.bag" loop:=true delay:=1)
 fi

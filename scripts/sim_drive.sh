@@ -3,7 +3,9 @@
 # unless it is already there and newer than the simulator. Used by eval.sh and bench.sh.
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-BIN="${UD_WS:-$REPO/.ws}/devel/lib/urban_detection"
+# shellcheck source=scripts/workspace.sh
+source "$REPO/scripts/workspace.sh"
+BIN="$(ud_workspace "$REPO")/devel/lib/urban_detection"
 DIR="${1:-$REPO/results/sim}"
 mkdir -p "$DIR"
 SIM="$BIN/urban_detection_simulate"

@@ -19,6 +19,8 @@
 # `nice -n 10 scripts/run soak`.
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# shellcheck source=scripts/workspace.sh
+source "$REPO/scripts/workspace.sh"
 OUT="$REPO/results"
 MINUTES="${1:-30}"
 [ $# -gt 0 ] && shift
@@ -46,7 +48,7 @@ trap cleanup EXIT
 echo "soak: ${MINUTES} min after ${WARMUP} s warm-up, source $SOURCE, master $ROS_MASTER_URI, log $LOG" >&2
 if [ "$SOURCE" = pcap ]; then
   PCAP="$OUT/soak_drive.pcap"
-  SIM="${UD_WS:-$REPO/.ws}/devel/lib/urban_detection/urban_detection_simulate"
+  SIM="$(ud_workspace "$REPO")/devel/lib/urban_detection/urban_detection_simulate"
   # Regenerated when the simulator or the drive description is newer than the cached file.
   if [ ! -s "$PCAP" ] || [ "$SIM" -nt "$PCAP" ] || [ "$REPO/config/demo_drive.yaml" -nt "$PCAP" ]; then
     echo "soak: writing $PCAP (600 simulated revolutions)" >&2

@@ -444,5 +444,35 @@ bool RevolutionCutter::startsNewRevolution(std::uint16_t first_block_azimuth) {
 
 void RevolutionCutter::reset() { last_ = -1; }
 
+RevolutionBoundary::Action RevolutionBoundary::add(std::uint16_t first_block_azimuth) {
+  Action action = Action::kAppend;
+  if (cutter_.startsNewRevolution(first_block_azimuth)) {
+    if (packets_ > 0) {
+      action = whole_ ? Action::kClose : Action::kDrop;
+      if (!whole_) ++partial_dropped_;
+    } else {
+      action = Action::kOpen;
+    }
+    whole_ = true;
+    packets_ = 0;
+  } else if (packets_ >= kMaxPacketsPerRevolution) {
+    ++forced_cuts_;
+    action = Action::kForcedCut;
+    whole_ = false;
+    packets_ = 0;
+  } else if (packets_ == 0) {
+    action = Action::kOpen;
+  }
+  ++packets_;
+  return action;
+}
+
+void RevolutionBoundary::reset() {
+  if (packets_ > 0) ++partial_dropped_;
+  packets_ = 0;
+  whole_ = false;
+  cutter_.reset();
+}
+
 }  // namespace core
 }  // namespace urban_detection

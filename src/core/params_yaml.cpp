@@ -166,7 +166,7 @@ bool applyKdTree(const YAML::Node& node, const std::string& where, KdTreeDetecto
   return t.apply(node, where, error);
 }
 
-// A detection.yaml: `hierarchical_grid:` and `kdtree:` maps (other top-level keys are left to
+// A detector file (config/hierarchical_grid.yaml, config/kdtree.yaml): `hierarchical_grid:` and `kdtree:` maps (other top-level keys are left to
 // the ROS layer, e.g. marker settings, and ignored here).
 bool applyDetection(const YAML::Node& root, const std::string& where,
                     HierarchicalGridDetectorParams* hier, KdTreeDetectorParams* kd,

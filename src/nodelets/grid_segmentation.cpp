@@ -1,6 +1,9 @@
-// urban_detection/GridSegmentation: velodyne_points -> segmentation/labeled_points and
-// segmentation/foreground (paper Sec. 3.1). Thin wrapper around core::GridSegmenter; thresholds
-// tunable through dynamic_reconfigure (config/GridSegmentation.cfg).
+// urban_detection/GridSegmentation: velodyne_points (CloudXYZIRT) -> segmentation/labeled_points
+// and segmentation/foreground (paper Sec. 3.1). Thin wrapper around core::GridSegmenter;
+// thresholds tunable through dynamic_reconfigure (config/GridSegmentation.cfg). Subscribes with
+// the publisher's C++ type, so inside one manager the cloud of PacketSource / PacketToCloud
+// arrives as a pointer, never serialised (a PointCloud2 from elsewhere goes through CloudInput).
+// Runs its callback on a thread of its own (StageThread), never behind another stage.
 #include "urban_detection/core/point_types.h"
 
 #include <memory>
@@ -13,20 +16,24 @@
 #include <pcl_ros/point_cloud.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
-#include <sensor_msgs/PointCloud2.h>
 
 #include "urban_detection/GridSegmentationConfig.h"
 #include "urban_detection/core/grid_segmenter.h"
 #include "urban_detection/ros/param_loading.h"
-#include "urban_detection/ros/pointcloud2_input.h"
 #include "urban_detection/ros/segmentation_params.h"
 #include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/stage_thread.h"
 #include "urban_detection/ros/tunable_fields.h"
 #include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
 
 class GridSegmentation : public nodelet::Nodelet {
+ public:
+  ~GridSegmentation() override {
+    if (thread_) thread_->stop();  // no callback runs on the members below any more
+  }
+
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
@@ -55,6 +62,7 @@ class GridSegmentation : public nodelet::Nodelet {
           return std::string();
         });
     diagnostics_.reset(new ros_conv::StageDiagnostics(nh, pnh, getName(), "segmentation"));
+    thread_ = std::make_unique<ros_conv::StageThread>();
     diagnostics_->setActive(false);
     // Lazy: subscribe upstream only while someone listens to an output.
     ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
@@ -71,41 +79,26 @@ class GridSegmentation : public nodelet::Nodelet {
         labeled_pub_.getNumSubscribers() > 0 || foreground_pub_.getNumSubscribers() > 0;
     diagnostics_->setActive(wanted);
     if (wanted && !sub_) {  // input queue_size: the newest revolutions win when we are slow
-      sub_ = getNodeHandle().subscribe("velodyne_points", queue_size_,
-                                       &GridSegmentation::cloudCb, this);
+      sub_ = thread_->handle(getNodeHandle())
+                 .subscribe("velodyne_points", queue_size_, &GridSegmentation::cloudCb, this);
     } else if (!wanted && sub_) {
       sub_.shutdown();
     }
   }
 
-  void cloudCb(const sensor_msgs::PointCloud2ConstPtr& msg) {
+  void cloudCb(const boost::shared_ptr<const CloudXYZIRT>& cloud) {  // zero copy
     const ros::WallTime start = ros::WallTime::now();
-    diagnostics_->input(msg->header.seq);
-    ros_conv::PointCloud2InputInfo info;
-    std::string error;
-    if (!ros_conv::fromPointCloud2(*msg, &cloud_, &info, &error)) {
-      if (error != last_error_) {  // once per kind of malformed input; counted on /diagnostics
-        NODELET_ERROR("GridSegmentation: dropping velodyne_points: %s", error.c_str());
-        last_error_ = error;
-      }
-      diagnostics_->rejected();
-      return;
-    }
-    if (!info.has_ring || !info.has_time) {
-      NODELET_INFO_ONCE("GridSegmentation: input has no ring/time fields (e.g. KITTI); "
-                        "they are set to 0");
-    }
-    diagnostics_->count("non_finite_points", info.non_finite, false);
+    diagnostics_->input(cloud->header.seq);
     std::lock_guard<std::mutex> segment_lock(segment_mutex_);  // vs. reconfigure
-    segmenter_->segment(cloud_, &labels_);
+    segmenter_->segment(*cloud, &labels_);
     if (labeled_pub_.getNumSubscribers() > 0) {
       auto labeled = boost::make_shared<LabeledCloud>();
-      core::buildLabeledCloud(cloud_, labels_, labeled.get());
+      core::buildLabeledCloud(*cloud, labels_, labeled.get());
       labeled_pub_.publish(boost::shared_ptr<const LabeledCloud>(labeled));
     }
     if (foreground_pub_.getNumSubscribers() > 0) {
       auto foreground = boost::make_shared<LabeledCloud>();
-      core::extractForeground(cloud_, labels_, foreground.get());
+      core::extractForeground(*cloud, labels_, foreground.get());
       foreground_pub_.publish(boost::shared_ptr<const LabeledCloud>(foreground));
     }
     diagnostics_->frame((ros::WallTime::now() - start).toSec());
@@ -118,9 +111,8 @@ class GridSegmentation : public nodelet::Nodelet {
   int queue_size_ = 2;
   std::unique_ptr<Reconfigure> reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
-  CloudXYZIRT cloud_;                       // scratch: converted input
   std::vector<core::SegmentClass> labels_;  // scratch: per-point classes
-  std::string last_error_;                  // last malformed-input reason logged
+  std::unique_ptr<ros_conv::StageThread> thread_;  // runs cloudCb
   std::mutex connect_mutex_;
   ros::Publisher labeled_pub_, foreground_pub_;
   ros::Subscriber sub_;

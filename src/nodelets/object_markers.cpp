@@ -1,6 +1,6 @@
 // urban_detection/ObjectMarkers: objects -> objects/markers (MarkerArray) for rviz: DELETEALL,
 // then a yaw-oriented box and an id text per object. Lazy. Parameters: ~markers/*
-// (config/detection.yaml), tunable in ~markers (config/ObjectMarkers.cfg).
+// (config/markers.yaml), tunable in ~markers (config/ObjectMarkers.cfg).
 #include <memory>
 #include <mutex>
 
@@ -71,6 +71,7 @@ class ObjectMarkers : public nodelet::Nodelet {
       ros_conv::buildObjectMarkers(*objects, params_, markers.get());
     }
     pub_.publish(boost::shared_ptr<const visualization_msgs::MarkerArray>(markers));
+    diagnostics_->latency(objects->header.stamp, ros::Time::now());
     diagnostics_->frame((ros::WallTime::now() - start).toSec());
     diagnostics_->output();
   }

@@ -1,12 +1,17 @@
 // urban_detection/PacketSource: HDL-64E packets from a live UDP socket or a pcap replay,
 // published as one urban_detection/VelodyneScan per whole revolution on `velodyne_packets`
-// (the partial revolutions at the start and the end of a stream are dropped). The reading
-// thread is PacketSourceWorker (ros/packet_source_worker.h); this file wires it to ROS.
+// (the partial revolutions at the start and the end of a stream are dropped). With ~decode,
+// also `velodyne_points` (CloudXYZIRT), decoded packet by packet as they arrive and published
+// one packet after the revolution's last (the live chain's low-latency path; PacketToCloud
+// then is not needed). Both outputs are lazy. The reading thread is PacketSourceWorker
+// (ros/packet_source_worker.h); this file wires it to ROS.
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 
 #include <memory>
+
+#include <pcl_ros/point_cloud.h>
 
 #include "urban_detection/ros/packet_params.h"
 #include "urban_detection/ros/packet_source_worker.h"
@@ -31,23 +36,35 @@ class PacketSource : public nodelet::Nodelet {
         getNodeHandle(), getPrivateNodeHandle(), getName(), "packets", "packets");
     diagnostics_->setExpectedRate(params.expectedRevolutionRateHz());
     pub_ = getNodeHandle().advertise<VelodyneScan>("velodyne_packets", params.queue_size);
+    if (params.decode) {
+      cloud_pub_ = getNodeHandle().advertise<CloudXYZIRT>("velodyne_points", params.queue_size);
+    }
     try {
       worker_ = std::make_unique<PacketSourceWorker>(
           params, diagnostics_.get(), [this](const VelodyneScan::Ptr& scan) { pub_.publish(scan); },
-          [this] { return pub_.getNumSubscribers() > 0; });
-    } catch (const std::exception& e) {  // socket or file errors
+          [this] { return pub_.getNumSubscribers() > 0; },
+          [this](const boost::shared_ptr<CloudXYZIRT>& cloud) {
+            cloud_pub_.publish(boost::shared_ptr<const CloudXYZIRT>(cloud));
+          },
+          [this] { return cloud_pub_ && cloud_pub_.getNumSubscribers() > 0; });
+    } catch (const std::exception& e) {  // socket, file or calibration errors
       NODELET_FATAL("PacketSource inactive: %s", e.what());
       return;
     }
     diagnostics_->setHardwareId(worker_->describe());
-    NODELET_INFO("PacketSource: %s, %.0f rpm (%.1f revolutions/s expected)",
-                 worker_->describe().c_str(), params.rpm, params.expectedRevolutionRateHz());
+    const std::string decoding =
+        params.decode ? "; streaming decoding, calibration " + worker_->decoder()->calibration().source
+                      : "";
+    NODELET_INFO("PacketSource: %s, %.0f rpm (%.1f revolutions/s expected), stamped with the "
+                 "%s packet of a revolution%s", worker_->describe().c_str(), params.rpm,
+                 params.expectedRevolutionRateHz(),
+                 params.timestamp_first_packet ? "first" : "last", decoding.c_str());
     if (!worker_->warning().empty()) NODELET_WARN("PacketSource: %s", worker_->warning().c_str());
     worker_->start();
   }
 
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
-  ros::Publisher pub_;
+  ros::Publisher pub_, cloud_pub_;
   std::unique_ptr<PacketSourceWorker> worker_;
 };
 

@@ -54,6 +54,9 @@ class SimulatedSensor : public nodelet::Nodelet {
     pnh.param("rate_factor", rate_factor_, 1.0);
     pnh.param("loop", loop_, true);
     pnh.param("publish_tf", publish_tf_, true);
+    bool first_packet = false;  // header.stamp convention of velodyne_driver (and PacketSource)
+    pnh.param("timestamp_first_packet", first_packet, false);
+    stamp_ = first_packet ? ScanStamp::kFirstPacket : ScanStamp::kLastPacket;
     pnh.param("frame_id", frames_.sensor, frames_.sensor);
     pnh.param("odom_frame", frames_.odom, frames_.odom);
     pnh.param("base_frame", frames_.base_link, frames_.base_link);
@@ -100,13 +103,13 @@ class SimulatedSensor : public nodelet::Nodelet {
         if (publish_tf_) publishTf(sim, rev, rev_s, first);
         first = false;
         auto scan = boost::make_shared<VelodyneScan>();
-        ros_conv::toScanMsg(rev, frames_.sensor, scan.get());
+        ros_conv::toScanMsg(rev, frames_.sensor, scan.get(), stamp_);
         scan->header.seq = ++revolutions_;  // numbered: consumers count what they never got
         scan_pub_.publish(boost::shared_ptr<const VelodyneScan>(scan));
         diagnostics_->output();
         if (gt_pub_.getNumSubscribers() > 0) {
           auto gt = boost::make_shared<GroundTruth>();
-          ros_conv::toGroundTruthMsg(rev, frames_.sensor, gt.get());
+          ros_conv::toGroundTruthMsg(rev, frames_.sensor, gt.get(), stamp_);
           gt_pub_.publish(boost::shared_ptr<const GroundTruth>(gt));
         }
         if (!realtime_ && rev.stats.returns == 0) {
@@ -136,6 +139,7 @@ class SimulatedSensor : public nodelet::Nodelet {
   core::Calibration calibration_;
   ros_conv::SimulationFrames frames_;
   bool realtime_ = true, loop_ = true, publish_tf_ = true;
+  ScanStamp stamp_ = ScanStamp::kLastPacket;  // header.stamp of scans and ground truth
   double rate_factor_ = 1.0;
   ros::Publisher scan_pub_, gt_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;

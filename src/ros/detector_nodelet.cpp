@@ -18,6 +18,8 @@ void DetectorNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   try {
     loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
+    loadParam(getPrivateNodeHandle(), "thread_nice", &thread_nice_, 0, 19,
+              "(nice value of the stage's thread, 0 = the manager's)");
     detector_ = createDetector(getPrivateNodeHandle());
     core::ObjectFilterParams filter_params;
     ros_conv::loadObjectFilterParams(ros::NodeHandle(getPrivateNodeHandle(), "object_filter"),
@@ -57,6 +59,7 @@ void DetectorNodelet::onInit() {
   diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(nh, getPrivateNodeHandle(),
                                                               getName(), "detection");
   diagnostics_->setActive(false);
+  thread_ = std::make_unique<ros_conv::StageThread>(thread_nice_);
   ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
     connectCb();
   };
@@ -65,13 +68,21 @@ void DetectorNodelet::onInit() {
   points_pub_ = nh.advertise<LabeledCloud>("objects/points", 2, connect, connect);
   rejected_pub_ = nh.advertise<DetectedObjectArray>("objects/rejected", 2, connect, connect);
   if (classifier_->params().enabled) {
-    NODELET_INFO("%s: %s detector ready, classifier %s (P(object) >= %.2f)", getName().c_str(),
+  if (!thread_->niceError().empty()) {
+    NODELET_WARN("%s: thread_nice %d not applied: %s", getName().c_str(), thread_nice_,
+                 thread_->niceError().c_str());
+  }
+  NODELET_INFO("%s: %s detector ready, classifier %s (P(object) >= %.2f)", getName().c_str(),
                  detector_->name().c_str(), classifier_->params().model_path.c_str(),
                  classifier_->threshold());
   } else {
     NODELET_INFO("%s: %s detector ready, classifier off", getName().c_str(),
                  detector_->name().c_str());
   }
+}
+
+DetectorNodelet::~DetectorNodelet() {
+  if (thread_) thread_->stop();  // no callback runs on the members below any more
 }
 
 void DetectorNodelet::replaceDetector(std::unique_ptr<core::ObjectDetector> detector) {
@@ -86,8 +97,9 @@ void DetectorNodelet::connectCb() {
                       rejected_pub_.getNumSubscribers() > 0;
   diagnostics_->setActive(wanted);
   if (wanted && !sub_) {
-    sub_ = getNodeHandle().subscribe("segmentation/foreground", queue_size_,
-                                     &DetectorNodelet::foregroundCb, this);
+    sub_ = thread_->handle(getNodeHandle())
+               .subscribe("segmentation/foreground", queue_size_, &DetectorNodelet::foregroundCb,
+                          this);
   } else if (!wanted && sub_) {
     sub_.shutdown();
   }
@@ -118,6 +130,7 @@ void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& 
     auto msg = boost::make_shared<DetectedObjectArray>();
     ros_conv::toMsg(objects_, detector_->name(), header, msg.get());
     objects_pub_.publish(boost::shared_ptr<const DetectedObjectArray>(msg));
+    diagnostics_->latency(header.stamp, ros::Time::now());
   }
   if (rejected_pub_.getNumSubscribers() > 0) {
     auto msg = boost::make_shared<DetectedObjectArray>();

@@ -26,6 +26,9 @@ PacketSourceParams loadPacketSourceParams(const ros::NodeHandle& nh) {
   if (p.frame_id.empty()) throw ParamError("parameter '" + nh.resolveName("frame_id") +
                                            "' must not be empty");
   loadParam(nh, "queue_size", &p.queue_size, 1, 1000);
+  loadParam(nh, "timestamp_first_packet", &p.timestamp_first_packet);
+  loadParam(nh, "decode", &p.decode);
+  if (p.decode) loadDecoderParams(nh, &p.calibration, &p.decoder);
   return p;
 }
 
@@ -40,18 +43,23 @@ std::size_t PacketSourceParams::expectedPacketsPerRevolution() const {
   return static_cast<std::size_t>(std::lround(60.0 / rpm / packet_period_s));
 }
 
-PacketToCloudParams loadPacketToCloudParams(const ros::NodeHandle& nh) {
-  PacketToCloudParams p;
-  loadParam(nh, "calibration", &p.calibration);
-  loadParam(nh, "min_range", &p.decoder.min_range_m, 0.0, 250.0, "m");
-  loadParam(nh, "max_range", &p.decoder.max_range_m, 0.1, 250.0, "m");
-  if (p.decoder.min_range_m >= p.decoder.max_range_m) {
+void loadDecoderParams(const ros::NodeHandle& nh, std::string* calibration,
+                       core::DecoderParams* decoder) {
+  loadParam(nh, "calibration", calibration);
+  loadParam(nh, "min_range", &decoder->min_range_m, 0.0, 250.0, "m");
+  loadParam(nh, "max_range", &decoder->max_range_m, 0.1, 250.0, "m");
+  if (decoder->min_range_m >= decoder->max_range_m) {
     std::ostringstream msg;
-    msg << "parameters '" << nh.resolveName("min_range") << "' = " << p.decoder.min_range_m
-        << " and '" << nh.resolveName("max_range") << "' = " << p.decoder.max_range_m
+    msg << "parameters '" << nh.resolveName("min_range") << "' = " << decoder->min_range_m
+        << " and '" << nh.resolveName("max_range") << "' = " << decoder->max_range_m
         << ": accepted min_range < max_range";
     throw ParamError(msg.str());
   }
+}
+
+PacketToCloudParams loadPacketToCloudParams(const ros::NodeHandle& nh) {
+  PacketToCloudParams p;
+  loadDecoderParams(nh, &p.calibration, &p.decoder);
   loadParam(nh, "fixed_frame", &p.fixed_frame);
   loadParam(nh, "target_frame", &p.target_frame);
   loadParam(nh, "tf_timeout", &p.tf_timeout_s, 0.0, 10.0, "s");

@@ -10,18 +10,37 @@ namespace urban_detection {
 
 PacketSourceWorker::PacketSourceWorker(const PacketSourceParams& params,
                                        ros_conv::StageDiagnostics* diagnostics,
-                                       PublishFn publish, ListenedFn listened)
+                                       PublishFn publish, ListenedFn scans_listened,
+                                       PublishCloudFn publish_cloud, ListenedFn clouds_listened)
     : params_(params),
       diagnostics_(diagnostics),
       publish_(std::move(publish)),
-      listened_(std::move(listened)),
-      assembler_(params.cut_angle_deg, params.frame_id, params.expectedPacketsPerRevolution()) {
+      scans_listened_(std::move(scans_listened)),
+      publish_cloud_(std::move(publish_cloud)),
+      clouds_listened_(std::move(clouds_listened)),
+      assembler_(params.cut_angle_deg, params.frame_id, params.expectedPacketsPerRevolution(),
+                 params.timestamp_first_packet ? ScanStamp::kFirstPacket : ScanStamp::kLastPacket) {
+  if (params_.decode) {
+    if (!publish_cloud_ || !clouds_listened_) {
+      throw std::invalid_argument("PacketSourceWorker: decode needs a cloud publish function");
+    }
+    decoder_ = std::make_unique<core::PacketDecoder>(core::loadCalibration(params_.calibration),
+                                                     params_.decoder);
+    streamer_ = std::make_unique<StreamingScanDecoder>(
+        decoder_.get(), params_.cut_angle_deg, params_.frame_id,
+        params_.expectedPacketsPerRevolution(),
+        params_.timestamp_first_packet ? ScanStamp::kFirstPacket : ScanStamp::kLastPacket);
+  }
   if (params_.pcap.empty()) {
     receiver_ = std::make_unique<core::UdpReceiver>(
         core::UdpReceiverParams{params_.port, params_.device_ip, params_.rcvbuf_bytes});
   } else {
     pcap_ = std::make_unique<core::PcapReader>(params_.pcap, params_.port);
   }
+}
+
+bool PacketSourceWorker::listened() const {
+  return scans_listened_() || (clouds_listened_ && clouds_listened_());
 }
 
 PacketSourceWorker::~PacketSourceWorker() {
@@ -91,7 +110,7 @@ void PacketSourceWorker::pcapLoop() {
   double first_s = 0, last_s = 0;
   std::size_t in_pass = 0;
   while (running_ && ros::ok()) {
-    if (!listened_()) {  // lazy: pause, and resume without a burst
+    if (!listened()) {  // lazy: pause, and resume without a burst
       anchored = false;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       continue;
@@ -114,6 +133,7 @@ void PacketSourceWorker::pcapLoop() {
       loop_shift_s += span_s + (in_pass > 1 ? span_s / static_cast<double>(in_pass - 1) : 0.1);
       pcap_->rewind();
       assembler_.reset();  // never splice the end of the file to its start in one scan
+      if (streamer_) streamer_->reset();
       in_pass = 0;
       continue;
     }
@@ -141,6 +161,7 @@ void PacketSourceWorker::pcapLoop() {
     addPacket(packet.data, ros::Time(std::max(0.0, replay_s + stamp_offset_s)));
   }
   assembler_.reset();  // the revolution open at the end of the file is partial
+  if (streamer_) streamer_->reset();
   diagnostics_->setTotal("partial_revolutions_dropped", assembler_.partialDropped(), false);
   if (pcap_->skipped() > 0) {
     diagnostics_->setTotal("skipped_pcap_records", pcap_->skipped(), false);
@@ -156,6 +177,26 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
   const auto start = std::chrono::steady_clock::now();
   ++packets_;
   diagnostics_->input();
+  // Streaming decoding first: the closing packet hands the finished cloud on at once.
+  if (streamer_) {
+    if (clouds_listened_()) {
+      streaming_ = true;
+      boost::shared_ptr<CloudXYZIRT> cloud = streamer_->add(packet, stamp);
+      if (cloud) {
+        const ScanDecodeStats& stats = streamer_->lastStats();
+        diagnostics_->count("bad_packets", stats.decode.bad_packets);
+        if (stats.decode.bad_packets > 0) {
+          ROS_WARN_THROTTLE(5, "PacketSource: dropped %zu of %zu packets of a revolution "
+                               "(last: %s)", stats.decode.bad_packets, streamer_->lastPackets(),
+                            core::toString(stats.last_bad_status));
+        }
+        publish_cloud_(cloud);  // fresh, never touched again: zero copy inside the manager
+      }
+    } else if (streaming_) {  // nobody listens: the open revolution would be partial
+      streamer_->reset();
+      streaming_ = false;
+    }
+  }
   const std::size_t forced_before = assembler_.forcedCuts();
   VelodyneScan::Ptr scan = assembler_.add(packet, stamp);
   diagnostics_->setTotal("partial_revolutions_dropped", assembler_.partialDropped(), false);
@@ -170,7 +211,7 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
   ++scans_;
   diagnostics_->frame(revolution_s_);
   revolution_s_ = 0.0;
-  publish_(scan);  // a fresh message, never touched again: zero copy inside a manager
+  if (scans_listened_()) publish_(scan);  // a fresh message, never touched again: zero copy
   diagnostics_->output();
 }
 

@@ -15,7 +15,8 @@ ScanToCloud::ScanToCloud(const PacketToCloudParams& params, const ros::NodeHandl
 
 bool ScanToCloud::convert(const VelodyneScan& scan, CloudXYZIRT* cloud, ScanDecodeStats* stats,
                           std::string* tf_error) {
-  const ros::Time stamp = scan.packets.front().stamp;
+  // The scan's own stamp, as velodyne_pointcloud does: its driver chose first or last packet.
+  const ros::Time stamp = scan.header.stamp;
   const std::string& sensor_frame = scan.header.frame_id;
   const std::string& frame = outputFrame(sensor_frame);
   // Without a fixed frame, each packet is transformed at its own time into the target frame

@@ -23,9 +23,14 @@ static_assert(GroundTruth::BENCH == static_cast<std::uint8_t>(core::ObjectClass:
                   core::kNumObjectClasses == 14,
               "GroundTruth.msg constants and core::ObjectClass differ");
 
+double revolutionStamp(const core::SimRevolution& rev, ScanStamp stamp) {
+  if (stamp == ScanStamp::kFirstPacket || rev.packet_stamps_s.empty()) return rev.stamp_s;
+  return rev.packet_stamps_s.back();
+}
+
 void toScanMsg(const core::SimRevolution& rev, const std::string& frame_id,
-               urban_detection::VelodyneScan* msg) {
-  msg->header.stamp.fromSec(rev.stamp_s);
+               urban_detection::VelodyneScan* msg, ScanStamp stamp) {
+  msg->header.stamp.fromSec(revolutionStamp(rev, stamp));
   msg->header.frame_id = frame_id;
   msg->packets.resize(rev.packets.size());
   for (std::size_t i = 0; i < rev.packets.size(); ++i) {
@@ -35,8 +40,8 @@ void toScanMsg(const core::SimRevolution& rev, const std::string& frame_id,
 }
 
 void toGroundTruthMsg(const core::SimRevolution& rev, const std::string& frame_id,
-                      urban_detection::GroundTruth* msg) {
-  msg->header.stamp.fromSec(rev.stamp_s);
+                      urban_detection::GroundTruth* msg, ScanStamp stamp) {
+  msg->header.stamp.fromSec(revolutionStamp(rev, stamp));
   msg->header.frame_id = frame_id;
   msg->revolution = static_cast<std::uint32_t>(rev.index);
   msg->instance_ids = rev.instance_ids;

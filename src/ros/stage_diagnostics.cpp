@@ -42,6 +42,17 @@ void StageDiagnostics::output() {
   ++outputs_.window;
 }
 
+void StageDiagnostics::latency(const ros::Time& stamp, const ros::Time& now) {
+  if (stamp.isZero()) {
+    count("zero_stamps");
+    return;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  // Signed in nanoseconds: a stamp from the future (another clock) must not throw.
+  const double s = 1e-9 * (static_cast<double>(now.toNSec()) - static_cast<double>(stamp.toNSec()));
+  if (window_latency_s_.size() < 10000) window_latency_s_.push_back(s);
+}
+
 void StageDiagnostics::rejected() { count("rejected_inputs"); }
 
 void StageDiagnostics::count(const std::string& key, std::uint64_t n, bool warn) {
@@ -62,6 +73,8 @@ void StageDiagnostics::setTotal(const std::string& key, std::uint64_t total, boo
 
 void StageDiagnostics::setActive(bool active) {
   std::lock_guard<std::mutex> lock(mutex_);
+  // Revolutions that passed while nobody listened (a lazy stage unsubscribed) were not skipped.
+  if (active && !active_) gaps_.reset();
   active_ = active;
 }
 
@@ -111,6 +124,19 @@ void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("mean processing time [ms]", 1e3 * mean_s);
   stat.add("max processing time [ms]", 1e3 * window_max_s_);
   stat.add("busy fraction", load);
+  if (!window_latency_s_.empty()) {
+    std::vector<double>& l = window_latency_s_;
+    auto quantile = [&l](double q) {
+      const std::size_t k = static_cast<std::size_t>(q * static_cast<double>(l.size() - 1) + 0.5);
+      std::nth_element(l.begin(), l.begin() + static_cast<std::ptrdiff_t>(k), l.end());
+      return l[k];
+    };
+    stat.add("latency p50 [ms]", 1e3 * quantile(0.5));
+    stat.add("latency p95 [ms]", 1e3 * quantile(0.95));
+    stat.add("latency p99 [ms]", 1e3 * quantile(0.99));
+    stat.add("latency max [ms]", 1e3 * *std::max_element(l.begin(), l.end()));
+    l.clear();
+  }
   stat.add(input_name_, inputs_.total);
   stat.add("revolutions", frames_.total);
   stat.add("outputs", outputs_.total);

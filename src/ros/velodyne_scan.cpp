@@ -1,6 +1,7 @@
 #include "urban_detection/ros/velodyne_scan.h"
 
 #include <boost/make_shared.hpp>
+#include <pcl_conversions/pcl_conversions.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -15,25 +16,26 @@ void toMessage(const core::RawPacket& packet, const ros::Time& stamp, VelodynePa
 }
 
 ScanAssembler::ScanAssembler(double cut_angle_deg, const std::string& frame_id,
-                             std::size_t expected_packets)
-    : cutter_(cut_angle_deg), frame_id_(frame_id), expected_packets_(expected_packets) {}
+                             std::size_t expected_packets, ScanStamp stamp)
+    : boundary_(cut_angle_deg), frame_id_(frame_id), stamp_(stamp),
+      expected_packets_(expected_packets) {}
 
 VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::Time& stamp) {
   VelodyneScan::Ptr finished;
-  if (cutter_.startsNewRevolution(core::blockAzimuth(packet.data(), 0))) {
-    if (current_ && current_is_whole_) {
+  switch (boundary_.add(core::blockAzimuth(packet.data(), 0))) {
+    case core::RevolutionBoundary::Action::kAppend:
+      break;
+    case core::RevolutionBoundary::Action::kClose:
       expected_packets_ = current_->packets.size();
       current_->header.seq = ++revolutions_;
+      if (stamp_ == ScanStamp::kLastPacket) current_->header.stamp = current_->packets.back().stamp;
       finished.swap(current_);
-    } else if (current_) {
-      ++partial_dropped_;
-    }
-    current_.reset();
-    current_is_whole_ = true;
-  } else if (current_ && current_->packets.size() >= kMaxPacketsPerScan) {
-    ++forced_cuts_;
-    current_.reset();
-    current_is_whole_ = false;
+      break;
+    case core::RevolutionBoundary::Action::kDrop:
+    case core::RevolutionBoundary::Action::kForcedCut:
+    case core::RevolutionBoundary::Action::kOpen:
+      current_.reset();
+      break;
   }
   if (!current_) {
     current_ = boost::make_shared<VelodyneScan>();
@@ -47,10 +49,8 @@ VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::T
 }
 
 void ScanAssembler::reset() {
-  if (current_) ++partial_dropped_;
+  boundary_.reset();
   current_.reset();
-  current_is_whole_ = false;
-  cutter_.reset();
 }
 
 namespace {
@@ -60,6 +60,40 @@ void accumulate(const core::DecodeStats& in, core::DecodeStats* sum) {
   sum->points += in.points;
   sum->no_return += in.no_return;
   sum->out_of_range += in.out_of_range;
+}
+}  // namespace
+
+void decodePacket(const core::PacketDecoder& decoder, const std::uint8_t* data, std::size_t size,
+                  const ros::Time& stamp, const ros::Time& start,
+                  const Eigen::Affine3f* transform, CloudXYZIRT* cloud, ScanDecodeStats* stats) {
+  const std::size_t begin = cloud->points.size();
+  // In nanoseconds, not ros::Time - ros::Time: that Duration throws std::runtime_error when
+  // two stamps of one scan are more than 68 years apart (a corrupt or hostile message), and
+  // the exception would escape the subscriber callback and take the nodelet manager down.
+  const std::uint64_t t = stamp.toNSec(), t0 = start.toNSec();
+  const double packet_time_s =
+      t >= t0 ? static_cast<double>(t - t0) * 1e-9 : -static_cast<double>(t0 - t) * 1e-9;
+  // A fresh counter per packet: correct whether decode() adds to or overwrites its stats.
+  core::DecodeStats packet_stats;
+  const core::PacketStatus status = decoder.decode(data, size, packet_time_s, cloud, &packet_stats);
+  accumulate(packet_stats, &stats->decode);
+  if (status != core::PacketStatus::kOk) {
+    stats->last_bad_status = status;
+    return;
+  }
+  if (transform) {
+    for (std::size_t i = begin; i < cloud->points.size(); ++i) {
+      PointXYZIRT& p = cloud->points[i];
+      p.getVector3fMap() = *transform * p.getVector3fMap();
+    }
+  }
+}
+
+namespace {
+void finishCloud(CloudXYZIRT* cloud) {
+  cloud->width = static_cast<std::uint32_t>(cloud->points.size());
+  cloud->height = 1;
+  cloud->is_dense = true;
 }
 }  // namespace
 
@@ -74,32 +108,60 @@ void decodeScan(const core::PacketDecoder& decoder, const VelodyneScan& scan,
       ++stats->tf_failures;
       continue;
     }
-    const std::size_t begin = cloud->points.size();
-    // In nanoseconds, not ros::Time - ros::Time: that Duration throws std::runtime_error when
-    // two stamps of one scan are more than 68 years apart (a corrupt or hostile message), and
-    // the exception would escape the subscriber callback and take the nodelet manager down.
-    const std::uint64_t t = packet.stamp.toNSec(), t0 = start.toNSec();
-    const double packet_time_s = t >= t0 ? static_cast<double>(t - t0) * 1e-9
-                                         : -static_cast<double>(t0 - t) * 1e-9;
-    // A fresh counter per packet: correct whether decode() adds to or overwrites its stats.
-    core::DecodeStats packet_stats;
-    const core::PacketStatus status = decoder.decode(packet.data.data(), packet.data.size(),
-                                                     packet_time_s, cloud, &packet_stats);
-    accumulate(packet_stats, &stats->decode);
-    if (status != core::PacketStatus::kOk) {
-      stats->last_bad_status = status;
-      continue;
-    }
-    if (transform) {
-      for (std::size_t i = begin; i < cloud->points.size(); ++i) {
-        PointXYZIRT& p = cloud->points[i];
-        p.getVector3fMap() = packet_transform * p.getVector3fMap();
-      }
-    }
+    decodePacket(decoder, packet.data.data(), packet.data.size(), packet.stamp, start,
+                 transform ? &packet_transform : nullptr, cloud, stats);
   }
-  cloud->width = static_cast<std::uint32_t>(cloud->points.size());
-  cloud->height = 1;
-  cloud->is_dense = true;
+  finishCloud(cloud);
+}
+
+StreamingScanDecoder::StreamingScanDecoder(const core::PacketDecoder* decoder,
+                                           double cut_angle_deg, const std::string& frame_id,
+                                           std::size_t expected_packets, ScanStamp stamp)
+    : decoder_(decoder), boundary_(cut_angle_deg), frame_id_(frame_id), stamp_(stamp),
+      expected_packets_(expected_packets) {}
+
+void StreamingScanDecoder::open(const ros::Time& stamp) {
+  constexpr std::size_t kReturnsPerPacket = core::kBlocksPerPacket * core::kLasersPerBlock;
+  current_ = boost::make_shared<CloudXYZIRT>();
+  current_->header.frame_id = frame_id_;
+  current_->points.reserve((expected_packets_ + expected_packets_ / 8) * kReturnsPerPacket);
+  first_stamp_ = stamp;
+  stats_ = ScanDecodeStats();
+}
+
+boost::shared_ptr<CloudXYZIRT> StreamingScanDecoder::add(const core::RawPacket& packet,
+                                                         const ros::Time& stamp) {
+  boost::shared_ptr<CloudXYZIRT> finished;
+  switch (boundary_.add(core::blockAzimuth(packet.data(), 0))) {
+    case core::RevolutionBoundary::Action::kAppend:
+      break;
+    case core::RevolutionBoundary::Action::kClose: {
+      last_packets_ = stats_.decode.packets;
+      expected_packets_ = last_packets_;
+      finishCloud(current_.get());
+      const ros::Time& header_stamp = stamp_ == ScanStamp::kLastPacket ? last_stamp_ : first_stamp_;
+      current_->header.stamp = pcl_conversions::toPCL(header_stamp);
+      current_->header.seq = ++revolutions_;
+      last_stats_ = stats_;
+      finished.swap(current_);
+      break;
+    }
+    case core::RevolutionBoundary::Action::kDrop:
+    case core::RevolutionBoundary::Action::kForcedCut:
+    case core::RevolutionBoundary::Action::kOpen:
+      current_.reset();
+      break;
+  }
+  if (!current_) open(stamp);
+  last_stamp_ = stamp;
+  decodePacket(*decoder_, packet.data(), packet.size(), stamp, first_stamp_, nullptr,
+               current_.get(), &stats_);
+  return finished;
+}
+
+void StreamingScanDecoder::reset() {
+  boundary_.reset();
+  current_.reset();
 }
 
 }  // namespace urban_detection

@@ -14,7 +14,7 @@
 // "pipeline" = packet_decode (pcap input only) + segmentation (Hough refinement included) +
 // foreground_extraction + hierarchical_detection + object_filter (when enabled in the
 // config's object_filter section) + classification (features and forest, when the config's
-// classifier section enables it, as config/detection.yaml does), i.e. packets -> objects on a pcap (the
+// classifier section enables it, as config/classification.yaml does), i.e. packets -> objects on a pcap (the
 // simulated drive of scripts/run bench) and cloud -> objects on PCD / .bin sweeps (KITTI raw
 // comes as motion-compensated clouds, not packets); the JSON says which
 // (pipeline_includes_packet_decode). The pipeline's stages run back to back per revolution

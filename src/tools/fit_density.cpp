@@ -8,7 +8,7 @@
 // single files. Density per 1 m ring of horizontal distance from 1 to 80 m, normalised by the
 // ring area and by its maximum; least-squares polynomial fit of its logarithm (--linear: of
 // the density itself, the paper's literal reading; see distance_weight.h); prints and writes the YAML
-// `weight:` block of config/detection.yaml and a PNG of density, fit and resulting weight.
+// `weight:` block of config/hierarchical_grid.yaml and a PNG of density, fit and resulting weight.
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>

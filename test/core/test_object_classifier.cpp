@@ -418,7 +418,7 @@ TEST(ObjectClassifier, ShippedConfigNamesTheShippedModel) {
   core::ObjectClassifierParams p;
   std::string err;
   ASSERT_TRUE(core::loadObjectClassifierParamsYaml(std::string(UD_SOURCE_DIR) +
-                                                       "/config/detection.yaml",
+                                                       "/config/classification.yaml",
                                                    &p, &err))
       << err;
   EXPECT_TRUE(p.enabled);

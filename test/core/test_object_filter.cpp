@@ -32,7 +32,7 @@ struct Scene {
   std::vector<core::DetectedObject> objects;
 };
 
-// The stage is off by default (config/detection.yaml explains why); these tests switch it on.
+// The stage is off by default (config/classification.yaml explains why); these tests switch it on.
 core::ObjectFilterParams on() {
   core::ObjectFilterParams p;
   p.enabled = true;
@@ -240,7 +240,7 @@ TEST(ObjectFilter, DetectionYamlMirrorsTheParamsAndTyposAreErrors) {
   p.jump_m = 9.0;
   std::string error;
   ASSERT_TRUE(core::loadObjectFilterParamsYaml(
-      std::string(UD_SOURCE_DIR) + "/config/detection.yaml", &p, &error))
+      std::string(UD_SOURCE_DIR) + "/config/classification.yaml", &p, &error))
       << error;
   const core::ObjectFilterParams d;
   EXPECT_EQ(p.enabled, d.enabled);

@@ -1,6 +1,11 @@
 // Offline loading of config/*.yaml into the core params structs.
 #include <gtest/gtest.h>
 
+#include <map>
+#include <set>
+
+#include <yaml-cpp/yaml.h>
+
 #include <filesystem>
 #include <fstream>
 
@@ -102,13 +107,33 @@ TEST(ParamsYaml, DetectionFileAndAutoDetection) {
   for (const auto& f : {det, s, c, bad}) fs::remove(f);
 }
 
-TEST(ParamsYaml, ShippedDetectionConfigLoads) {
-  const std::string f = std::string(UD_SOURCE_DIR) + "/config/detection.yaml";
-  if (!fs::exists(f)) GTEST_SKIP() << f << " not present";
-  HierarchicalGridDetectorParams hier;
-  KdTreeDetectorParams kd;
-  std::string err;
-  EXPECT_TRUE(loadPipelineParamsYaml(f, nullptr, &hier, &kd, &err)) << err;
+TEST(ParamsYaml, ShippedDetectionConfigsLoad) {
+  for (const char* stage : {"hierarchical_grid", "kdtree"}) {
+    const std::string f = std::string(UD_SOURCE_DIR) + "/config/" + stage + ".yaml";
+    HierarchicalGridDetectorParams hier;
+    KdTreeDetectorParams kd;
+    std::string err;
+    EXPECT_TRUE(loadPipelineParamsYaml(f, nullptr, &hier, &kd, &err)) << f << ": " << err;
+  }
+}
+
+// Each stage's file holds that stage's sections only: a nodelet loads its own file into its
+// private namespace, and nothing without effect lands there.
+TEST(ParamsYaml, EachStageFileHoldsOnlyItsOwnSections) {
+  const std::map<std::string, std::set<std::string>> sections = {
+      {"hierarchical_grid", {"hierarchical_grid"}},
+      {"kdtree", {"kdtree"}},
+      {"classification", {"classifier", "object_filter"}},
+      {"markers", {"markers"}},
+  };
+  for (const auto& kv : sections) {
+    const YAML::Node y =
+        YAML::LoadFile(std::string(UD_SOURCE_DIR) + "/config/" + kv.first + ".yaml");
+    std::set<std::string> keys;
+    for (const auto& entry : y) keys.insert(entry.first.as<std::string>());
+    EXPECT_EQ(keys, kv.second) << kv.first;
+  }
+  EXPECT_FALSE(fs::exists(std::string(UD_SOURCE_DIR) + "/config/detection.yaml"));
 }
 
 }  // namespace

@@ -104,19 +104,33 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
   }
 
-  // PacketSource: the same packets through the revolution assembler.
-  ud::ScanAssembler assembler(scan.header.seq % 360, scan.header.frame_id);
+  // PacketSource: the same packets through the revolution assembler and, in step, through the
+  // streaming decoder, which must cut the same revolutions with the same points.
+  const ud::ScanStamp convention =
+      scan.header.seq % 2 ? ud::ScanStamp::kFirstPacket : ud::ScanStamp::kLastPacket;
+  ud::ScanAssembler assembler(scan.header.seq % 360, scan.header.frame_id, 700, convention);
+  ud::StreamingScanDecoder streamer(&decoder, scan.header.seq % 360, scan.header.frame_id, 700,
+                                    convention);
   std::uint32_t expected_seq = 1;
   for (const ud::VelodynePacket& p : scan.packets) {
     core::RawPacket raw;
     std::memcpy(raw.data(), p.data.data(), core::kPacketSize);
     const ud::VelodyneScan::Ptr rev = assembler.add(raw, p.stamp);
+    const boost::shared_ptr<ud::CloudXYZIRT> streamed = streamer.add(raw, p.stamp);
+    UD_FUZZ_CHECK(static_cast<bool>(rev) == static_cast<bool>(streamed));
     if (rev) {
+      ud::CloudXYZIRT batch;
+      ud::ScanDecodeStats batch_stats;
+      ud::decodeScan(decoder, *rev, ud::PacketTransformFn(), &batch, &batch_stats);
+      UD_FUZZ_CHECK(batch.size() == streamed->size());
+      UD_FUZZ_CHECK(streamed->header.seq == rev->header.seq);
       UD_FUZZ_CHECK(rev->header.seq == expected_seq);
       ++expected_seq;
       UD_FUZZ_CHECK(!rev->packets.empty() &&
                     rev->packets.size() <= ud::ScanAssembler::kMaxPacketsPerScan);
-      UD_FUZZ_CHECK(rev->header.stamp == rev->packets.front().stamp);
+      UD_FUZZ_CHECK(rev->header.stamp == (convention == ud::ScanStamp::kLastPacket
+                                               ? rev->packets.back().stamp
+                                               : rev->packets.front().stamp));
     }
   }
   return 0;

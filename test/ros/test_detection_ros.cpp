@@ -1,5 +1,5 @@
 // Detection ROS layer without a master: core -> message conversion, objects/points, markers,
-// and config/detection.yaml mirroring the params structs.
+// and config/{hierarchical_grid,kdtree,markers}.yaml mirroring the params structs.
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <cmath>
@@ -139,9 +139,9 @@ TEST(ObjectMarkers, ColourIsStablePerIdAndDistinctForNeighbours) {
 }
 
 TEST(DetectionConfig, YamlMirrorsTheParamsStructs) {
-  const YAML::Node y = YAML::LoadFile(std::string(UD_SOURCE_DIR) + "/config/detection.yaml");
+  const std::string dir = std::string(UD_SOURCE_DIR) + "/config/";
   const core::HierarchicalGridDetectorParams h;
-  const YAML::Node g = y["hierarchical_grid"];
+  const YAML::Node g = YAML::LoadFile(dir + "hierarchical_grid.yaml")["hierarchical_grid"];
   EXPECT_DOUBLE_EQ(g["coarse_cell_m"].as<double>(), h.coarse_cell_m);
   EXPECT_EQ(g["xi"].as<int>(), h.xi);
   EXPECT_DOUBLE_EQ(g["grid_half_extent_m"].as<double>(), h.grid_half_extent_m);
@@ -176,7 +176,7 @@ TEST(DetectionConfig, YamlMirrorsTheParamsStructs) {
   EXPECT_DOUBLE_EQ(fm["max_length_m"].as<double>(), h.far_merge.max_length_m);
   EXPECT_DOUBLE_EQ(fm["max_width_m"].as<double>(), h.far_merge.max_width_m);
   const core::KdTreeDetectorParams k;
-  const YAML::Node kd = y["kdtree"];
+  const YAML::Node kd = YAML::LoadFile(dir + "kdtree.yaml")["kdtree"];
   EXPECT_DOUBLE_EQ(kd["cluster_tolerance_m"].as<double>(), k.cluster_tolerance_m);
   EXPECT_EQ(kd["min_cluster_size"].as<int>(), k.min_cluster_size);
   EXPECT_EQ(kd["max_cluster_size"].as<int>(), k.max_cluster_size);
@@ -184,7 +184,7 @@ TEST(DetectionConfig, YamlMirrorsTheParamsStructs) {
   EXPECT_DOUBLE_EQ(kd["max_abs_coordinate_m"].as<double>(), k.max_abs_coordinate_m);
   EXPECT_EQ(kd["sorted_search"].as<bool>(), k.sorted_search);
   const ros_conv::ObjectMarkerParams mp;
-  const YAML::Node m = y["markers"];
+  const YAML::Node m = YAML::LoadFile(dir + "markers.yaml")["markers"];
   EXPECT_EQ(m["show_ids"].as<bool>(), mp.show_ids);
   EXPECT_DOUBLE_EQ(m["box_alpha"].as<double>(), mp.box_alpha);
   EXPECT_DOUBLE_EQ(m["text_size_m"].as<double>(), mp.text_size_m);

@@ -75,10 +75,11 @@ TEST(SimulationBag, WrittenBagReplaysThroughTheDecoder) {
   EXPECT_EQ(decoded, labels);  // same stamps, same lengths
   std::size_t r = 0;
   for (const auto& kv : decoded) EXPECT_EQ(kv.second, expected_points[r++]);
-  // tf brackets the drive: first sample at the first scan, last one after the last packet.
+  // tf brackets the drive: first sample at the first scan's first packet (a scan is stamped
+  // with its last packet, one revolution later), last one after the last packet.
   ASSERT_EQ(tf_stamps.size(), 4u);
-  EXPECT_DOUBLE_EQ(tf_stamps.front(), decoded.begin()->first);
-  EXPECT_GT(tf_stamps.back(), decoded.rbegin()->first + 0.099);
+  EXPECT_NEAR(tf_stamps.front(), decoded.begin()->first - 0.1, 0.001);
+  EXPECT_GE(tf_stamps.back(), decoded.rbegin()->first);
   bag.close();
   std::remove(path.c_str());
 }
@@ -96,7 +97,11 @@ TEST(SimulationBag, ScanAndGroundTruthMessagesCopyTheRevolution) {
   ud::ros_conv::toScanMsg(rev, "velodyne", &scan);
   ASSERT_EQ(scan.packets.size(), 2u);
   EXPECT_EQ(scan.packets[1].data[5], 42);
-  EXPECT_DOUBLE_EQ(scan.header.stamp.toSec(), ros::Time().fromSec(1700000000.25).toSec());
+  // velodyne_driver's convention: the last packet's stamp, or the first's on request.
+  EXPECT_DOUBLE_EQ(scan.header.stamp.toSec(), ros::Time().fromSec(1700000000.250288).toSec());
+  ud::VelodyneScan first;
+  ud::ros_conv::toScanMsg(rev, "velodyne", &first, ud::ScanStamp::kFirstPacket);
+  EXPECT_DOUBLE_EQ(first.header.stamp.toSec(), ros::Time().fromSec(1700000000.25).toSec());
   EXPECT_NEAR(scan.packets[1].stamp.toSec(), 1700000000.250288, 1e-6);
   ud::GroundTruth gt;
   ud::ros_conv::toGroundTruthMsg(rev, "velodyne", &gt);

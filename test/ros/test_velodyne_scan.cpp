@@ -2,7 +2,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <string>
 #include <vector>
+
+#include <pcl_conversions/pcl_conversions.h>
+
+#include "urban_detection/core/lidar_simulator.h"
+#include "urban_detection/core/scene_generator.h"
+#include "urban_detection/core/simulation_config.h"
 
 #include "urban_detection/ros/velodyne_scan.h"
 #include "../core/spin_packets.h"
@@ -34,7 +42,7 @@ TEST(ScanAssembler, PublishesOnlyWholeRevolutionsCutAtTheCutAngle) {
   for (std::size_t s = 0; s < 2; ++s) {
     ASSERT_EQ(scans[s]->packets.size(), 60u);
     EXPECT_EQ(scans[s]->header.frame_id, "lidar");
-    EXPECT_EQ(scans[s]->header.stamp, scans[s]->packets.front().stamp);
+    EXPECT_EQ(scans[s]->header.stamp, scans[s]->packets.back().stamp);  // velodyne_driver's
     EXPECT_EQ(scans[s]->header.seq, s + 1);
     EXPECT_EQ(core::blockAzimuth(scans[s]->packets.front().data.data(), 0), 9050);
     const std::size_t first = 10 + 60 * s;
@@ -142,4 +150,80 @@ TEST(DecodeScan, EmptyScanGivesAnEmptyCloud) {
 }
 
 }  // namespace
+}  // namespace urban_detection
+
+// ------------------------------------------------------------------------------------------
+// Streaming decoding (PacketSource ~decode) against the batch path (ScanAssembler +
+// decodeScan, as PacketToCloud decodes a VelodyneScan): on the simulated drive's packet stream,
+// starting mid-revolution, the same revolutions with the same points bit for bit, the same
+// header stamps under both stamp conventions, and the same seq.
+namespace urban_detection {
+namespace stream_test {
+
+bool samePointBits(const PointXYZIRT& a, const PointXYZIRT& b) {
+  return std::memcmp(a.data, b.data, sizeof(a.data)) == 0 && a.intensity == b.intensity &&
+         a.ring == b.ring && std::memcmp(&a.time, &b.time, sizeof(a.time)) == 0;
+}
+
+void compareOnSimulatedDrive(ScanStamp convention) {
+  core::SimulationConfig c =
+      core::loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
+  const core::Calibration cal = core::loadCalibration(c.calibration_file);
+  core::LidarSimulator sim(core::generateScene(c.scene, c.drive), c.scene, c.drive, cal,
+                           c.sensor);
+  const core::PacketDecoder decoder(cal, core::DecoderParams());
+  ScanAssembler assembler(0.0, "velodyne", 700, convention);
+  StreamingScanDecoder streamer(&decoder, 0.0, "velodyne", 700, convention);
+  core::SimRevolution rev;
+  std::size_t compared = 0, packets_seen = 0;
+  for (int r = 0; r < 5; ++r) {
+    sim.simulateNext(&rev);
+    // Start the stream a third into the first revolution: the partial one must be dropped.
+    const std::size_t first = r == 0 ? rev.packets.size() / 3 : 0;
+    for (std::size_t i = first; i < rev.packets.size(); ++i) {
+      const ros::Time stamp(rev.packet_stamps_s[i]);
+      ++packets_seen;
+      const VelodyneScan::Ptr scan = assembler.add(rev.packets[i], stamp);
+      const boost::shared_ptr<CloudXYZIRT> streamed = streamer.add(rev.packets[i], stamp);
+      ASSERT_EQ(static_cast<bool>(scan), static_cast<bool>(streamed)) << "packet " << packets_seen;
+      if (!scan) continue;
+      CloudXYZIRT batch;
+      ScanDecodeStats stats;
+      decodeScan(decoder, *scan, PacketTransformFn(), &batch, &stats);
+      ASSERT_EQ(streamed->size(), batch.size());
+      ASSERT_GT(batch.size(), 100000u);
+      for (std::size_t k = 0; k < batch.size(); ++k) {
+        ASSERT_TRUE(samePointBits(streamed->points[k], batch.points[k])) << "point " << k;
+      }
+      EXPECT_EQ(streamed->width, batch.width);
+      EXPECT_EQ(streamed->height, 1u);
+      EXPECT_EQ(streamed->header.frame_id, "velodyne");
+      EXPECT_EQ(streamed->header.seq, scan->header.seq);
+      EXPECT_EQ(streamed->header.stamp, pcl_conversions::toPCL(scan->header.stamp));  // [us]
+      const ros::Time expected = convention == ScanStamp::kLastPacket
+                                     ? scan->packets.back().stamp
+                                     : scan->packets.front().stamp;
+      EXPECT_EQ(scan->header.stamp, expected);
+      EXPECT_EQ(streamer.lastPackets(), scan->packets.size());
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 3u);  // the partial first revolution is dropped by both
+  EXPECT_EQ(streamer.partialDropped(), assembler.partialDropped());
+}
+
+}  // namespace stream_test
+
+}  // namespace urban_detection
+
+namespace urban_detection {
+
+TEST(StreamingScanDecoder, EqualsTheBatchDecodeBitForBitOnTheSimulatedDrive) {
+  stream_test::compareOnSimulatedDrive(ScanStamp::kLastPacket);
+}
+
+TEST(StreamingScanDecoder, FirstPacketStampConvention) {
+  stream_test::compareOnSimulatedDrive(ScanStamp::kFirstPacket);
+}
+
 }  // namespace urban_detection

@@ -33,12 +33,12 @@ def make_scan(index):
     scan = VelodyneScan()
     scan.header.frame_id = 'velodyne'
     start = rospy.Time(1000, 100000000 * index)
-    scan.header.stamp = start
     for p in range(PACKETS_PER_SCAN):
         packet = VelodynePacket()
         packet.stamp = start + rospy.Duration.from_sec(p * 0.000288)
         packet.data = make_packet(0.5 + 6 * p, p * 288)
         scan.packets.append(packet)
+    scan.header.stamp = scan.packets[-1].stamp  # velodyne_driver: the last packet's stamp
     return scan
 
 
@@ -95,8 +95,8 @@ class BagWithVelodyneMsgsType(unittest.TestCase):
         self.assertEqual(len(clouds), SCANS)
         for scan, cloud in zip(scans, clouds):
             self.assertEqual(cloud.header.frame_id, 'velodyne')
-            # PCL keeps microseconds.
-            self.assertAlmostEqual((cloud.header.stamp - scan.packets[0].stamp).to_sec(), 0.0,
+            # The cloud keeps the driver's scan stamp (PCL keeps microseconds).
+            self.assertAlmostEqual((cloud.header.stamp - scan.packets[-1].stamp).to_sec(), 0.0,
                                    delta=1e-6)
             self.assertEqual(cloud.width * cloud.height, PACKETS_PER_SCAN * POINTS_PER_PACKET)
             names = [f.name for f in cloud.fields]

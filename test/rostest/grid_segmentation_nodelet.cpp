@@ -1,5 +1,5 @@
-// rostest: the GridSegmentation nodelet segments a KITTI-style PointCloud2 (x y z intensity,
-// no ring/time) of a synthetic street, publishes labelled and foreground clouds whose indices
+// rostest: CloudInput + the GridSegmentation nodelet segment a KITTI-style PointCloud2 (x y z
+// intensity, no ring/time, published on points_in) of a synthetic street, publishes labelled and foreground clouds whose indices
 // match the input, and survives a malformed message.
 #include "urban_detection/core/point_types.h"
 
@@ -66,16 +66,17 @@ TEST(GridSegmentationNodelet, SegmentsKittiStylePointCloud2) {
   ros::Subscriber s1 = nh.subscribe("segmentation/labeled_points", 2, &Listener::labeled, &listener);
   ros::Subscriber s2 =
       nh.subscribe("segmentation/foreground", 2, &Listener::foreground, &listener);
-  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("velodyne_points", 2);
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("points_in", 2);
   ros::AsyncSpinner spinner(1);
   spinner.start();
 
-  // Lazy nodelet: it subscribes to velodyne_points once our subscribers are connected.
+  // Lazy nodelets: CloudInput subscribes to points_in once GridSegmentation subscribes to its
+  // velodyne_points, which it does once our subscribers are connected.
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(20.0);
   while (pub.getNumSubscribers() == 0 && ros::WallTime::now() < deadline) {
     ros::WallDuration(0.05).sleep();
   }
-  ASSERT_GT(pub.getNumSubscribers(), 0u) << "GridSegmentation never subscribed";
+  ASSERT_GT(pub.getNumSubscribers(), 0u) << "CloudInput never subscribed";
 
   // A malformed message first (no z field): it must be dropped, not crash the manager.
   sensor_msgs::PointCloud2 bad;

@@ -288,7 +288,7 @@ TEST(PacketSource, UdpRevolutionsCutAtTheCutAngle) {
   const auto scan = scans.at(0);
   ASSERT_EQ(scan->packets.size(), static_cast<std::size_t>(kPacketsPerRevolution));
   EXPECT_EQ(scan->header.frame_id, "velodyne");
-  EXPECT_EQ(scan->header.stamp, scan->packets.front().stamp);
+  EXPECT_EQ(scan->header.stamp, scan->packets.back().stamp);  // velodyne_driver's convention
   EXPECT_GE(scan->header.stamp, before);
   for (int i = 0; i < kPacketsPerRevolution; ++i) {
     EXPECT_TRUE(std::equal(whole[i].begin(), whole[i].end(), scan->packets[i].data.begin()))
@@ -302,6 +302,192 @@ TEST(PacketSource, UdpRevolutionsCutAtTheCutAngle) {
   EXPECT_EQ(cloud.size(), kPacketsPerRevolution * kReturnsPerPacket);
   ros::Duration(0.3).sleep();
   EXPECT_EQ(scans.size(), 1u);  // the leading partial revolution was dropped, the next is open
+}
+
+// Streaming decoding (~decode): the same UDP stream gives, on velodyne_points, the cloud of the
+// whole revolution, equal to the batch decode of the scan PacketSource publishes beside it,
+// stamped with the revolution's first packet when timestamp_first_packet is true; a
+// subscriber of the publisher's type gets the published object itself (two subscribers: one
+// address).
+TEST(PacketSource, StreamingDecodePublishesTheRevolutionsCloud) {
+  const int port = freeUdpPort();
+  ros::NodeHandle nh("/stream");
+  ros::param::set("/stream/packet_source/port", port);
+  ros::param::set("/stream/packet_source/device_ip", "127.0.0.1");
+  ros::param::set("/stream/packet_source/decode", true);
+  ros::param::set("/stream/packet_source/timestamp_first_packet", true);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/stream/packet_source", "urban_detection/PacketSource", {}, {}));
+  Collector<VelodyneScan> scans;
+  Collector<CloudXYZIRT> clouds, clouds2;
+  ros::Subscriber sub =
+      nh.subscribe("velodyne_packets", 10, &Collector<VelodyneScan>::callback, &scans);
+  ros::Subscriber sub_points =
+      nh.subscribe("velodyne_points", 10, &Collector<CloudXYZIRT>::callback, &clouds);
+  ros::Subscriber sub_points2 =
+      nh.subscribe("velodyne_points", 10, &Collector<CloudXYZIRT>::callback, &clouds2);
+  ASSERT_TRUE(waitFor([&] {
+    return sub.getNumPublishers() == 1 && sub_points.getNumPublishers() == 1;
+  }, 10.0));
+
+  std::vector<core::RawPacket> packets = makePackets(30, 180.5);
+  const std::vector<core::RawPacket> whole = makePackets(kPacketsPerRevolution, 0.5);
+  packets.insert(packets.end(), whole.begin(), whole.end());
+  const std::vector<core::RawPacket> next = makePackets(1, 0.5);  // closes the revolution
+  packets.insert(packets.end(), next.begin(), next.end());
+  UdpSender sender(port);
+  for (const auto& p : packets) sender.send(p.data(), p.size());
+
+  ASSERT_TRUE(waitFor([&] {
+    return scans.size() >= 1 && clouds.size() >= 1 && clouds2.size() >= 1;
+  }, 10.0));
+  const auto scan = scans.at(0);
+  const auto cloud = clouds.at(0);
+  EXPECT_EQ(cloud.get(), clouds2.at(0).get()) << "the cloud was copied on the way";
+  EXPECT_EQ(scan->header.stamp, scan->packets.front().stamp);
+  EXPECT_EQ(pcl_conversions::fromPCL(cloud->header.stamp).toNSec() / 1000,
+            scan->header.stamp.toNSec() / 1000);  // PCL stamps are whole microseconds
+  EXPECT_EQ(cloud->header.frame_id, "velodyne");
+  CloudXYZIRT reference;
+  decodeReference(*scan, &reference);
+  ASSERT_EQ(cloud->size(), reference.size());
+  ASSERT_EQ(reference.size(), kPacketsPerRevolution * kReturnsPerPacket);
+  for (std::size_t i = 0; i < cloud->size(); ++i) {
+    ASSERT_EQ(cloud->points[i].x, reference.points[i].x) << i;
+    ASSERT_EQ(cloud->points[i].y, reference.points[i].y) << i;
+    ASSERT_EQ(cloud->points[i].z, reference.points[i].z) << i;
+    ASSERT_EQ(cloud->points[i].ring, reference.points[i].ring) << i;
+    ASSERT_NEAR(cloud->points[i].time, reference.points[i].time, 2e-6f) << i;
+  }
+}
+
+// Zero copy on the real consumer: GridSegmentation, loaded in this manager, receives the cloud
+// published here as the object itself. The proof is the cloud's sensor pose (sensor_origin_),
+// which GridSegmentation copies into its outputs and which the PointCloud2 wire format does not
+// carry: a serialised hop anywhere (velodyne_points -> GridSegmentation -> foreground) would
+// reset it to zero. The same cloud sent as PointCloud2 through CloudInput (the bag path) arrives
+// without it, which shows the check can fail.
+TEST(GridSegmentation, ReceivesTheCloudItselfInsideTheManager) {
+  ros::NodeHandle nh("/zcseg");
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/zcseg/grid_segmentation", "urban_detection/GridSegmentation", {}, {}));
+  ros::Publisher pub = nh.advertise<CloudXYZIRT>("velodyne_points", 2);
+  Collector<LabeledCloud> foreground;
+  ros::Subscriber sub = nh.subscribe("segmentation/foreground", 5,
+                                     &Collector<LabeledCloud>::callback, &foreground);
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
+
+  // A flat street with one box (a car) 10 m ahead: foreground is the box.
+  auto cloud = boost::make_shared<CloudXYZIRT>();
+  cloud->header.frame_id = "velodyne";
+  for (float x = -30.f; x <= 30.f; x += 0.25f) {
+    for (float y = -30.f; y <= 30.f; y += 0.25f) {
+      PointXYZIRT p;
+      p.x = x;
+      p.y = y;
+      p.z = -1.73f;
+      p.intensity = 10.f;
+      p.ring = 0;
+      p.time = 0.f;
+      cloud->push_back(p);
+    }
+  }
+  for (float x = 9.f; x <= 13.f; x += 0.1f) {
+    for (float z = -1.5f; z <= -0.3f; z += 0.1f) {
+      for (float y : {-1.f, 1.f}) {
+        PointXYZIRT p;
+        p.x = x;
+        p.y = y;
+        p.z = z;
+        p.intensity = 50.f;
+        p.ring = 10;
+        p.time = 0.f;
+        cloud->push_back(p);
+      }
+    }
+  }
+  cloud->sensor_origin_ = Eigen::Vector4f(7.f, 8.f, 9.f, 0.f);
+  ASSERT_TRUE(waitFor([&] {
+    pub.publish(boost::shared_ptr<const CloudXYZIRT>(cloud));
+    return foreground.size() > 0;
+  }, 10.0));
+  const auto fg = foreground.at(0);
+  ASSERT_GT(fg->size(), 50u);
+  EXPECT_FLOAT_EQ(fg->sensor_origin_.x(), 7.f);
+  EXPECT_FLOAT_EQ(fg->sensor_origin_.y(), 8.f);
+  EXPECT_FLOAT_EQ(fg->sensor_origin_.z(), 9.f);
+
+  // The bag path: PointCloud2 -> CloudInput -> GridSegmentation: the pose is lost on the wire.
+  ASSERT_TRUE(manager.load("/zcseg/cloud_input", "urban_detection/CloudInput", {}, {}));
+  pub.shutdown();
+  ros::Publisher pub2 = nh.advertise<sensor_msgs::PointCloud2>("points_in", 2);
+  ASSERT_TRUE(waitFor([&] { return pub2.getNumSubscribers() == 1; }, 10.0));
+  sensor_msgs::PointCloud2 msg;
+  pcl::toROSMsg(*cloud, msg);
+  const std::size_t before = foreground.size();
+  ASSERT_TRUE(waitFor([&] {
+    pub2.publish(msg);
+    return foreground.size() > before;
+  }, 10.0));
+  const auto copied = foreground.at(foreground.size() - 1);
+  EXPECT_EQ(copied->size(), fg->size());
+  EXPECT_FLOAT_EQ(copied->sensor_origin_.x(), 0.f);
+}
+
+// A lazy stage that had no subscriber for a while does not count the revolutions that passed
+// meanwhile as skipped (they were never wanted); a real gap while it listens still counts.
+TEST(GridSegmentation, RevolutionsPassedWhileUnsubscribedAreNotSkipped) {
+  ros::NodeHandle nh("/lazyseq");
+  DiagnosticsWatcher diagnostics;
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(
+      manager.load("/lazyseq/grid_segmentation", "urban_detection/GridSegmentation", {}, {}));
+  ros::Publisher pub = nh.advertise<CloudXYZIRT>("velodyne_points", 20);
+  auto make = [](std::uint32_t seq) {
+    auto c = boost::make_shared<CloudXYZIRT>();
+    c->header.frame_id = "velodyne";
+    c->header.seq = seq;
+    for (int i = 0; i < 100; ++i) {
+      PointXYZIRT p;
+      p.x = 5.f + 0.1f * static_cast<float>(i);
+      p.y = 1.f;
+      p.z = -1.7f;
+      p.intensity = 1.f;
+      p.ring = 0;
+      p.time = 0.f;
+      c->push_back(p);
+    }
+    return boost::shared_ptr<const CloudXYZIRT>(c);
+  };
+  std::uint32_t seq = 0;
+  auto feed = [&](Collector<LabeledCloud>* out, int n) {
+    for (int i = 0; i < n; ++i) {
+      const std::size_t before = out ? out->size() : 0;
+      pub.publish(make(++seq));
+      if (out) ASSERT_TRUE(waitFor([&] { return out->size() > before; }, 5.0)) << seq;
+      else ros::WallDuration(0.01).sleep();
+    }
+  };
+  {
+    Collector<LabeledCloud> labeled;
+    ros::Subscriber sub = nh.subscribe("segmentation/labeled_points", 20,
+                                       &Collector<LabeledCloud>::callback, &labeled);
+    ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
+    feed(&labeled, 5);
+  }
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 0; }, 10.0));
+  feed(nullptr, 40);  // nobody listens: the stage is unsubscribed
+  Collector<LabeledCloud> labeled;
+  ros::Subscriber sub = nh.subscribe("segmentation/labeled_points", 20,
+                                     &Collector<LabeledCloud>::callback, &labeled);
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
+  feed(&labeled, 5);
+  seq += 3;  // three revolutions lost while it listens
+  feed(&labeled, 2);
+  EXPECT_TRUE(waitFor([&] {
+    return diagnostics.value("lazyseq/grid_segmentation", "revolutions") == 12 &&
+           diagnostics.value("lazyseq/grid_segmentation", "skipped_revolutions") == 3;
+  }, 10.0)) << "skipped " << diagnostics.value("lazyseq/grid_segmentation", "skipped_revolutions");
 }
 
 // Datagrams of the wrong size or from another sender never crash the source, never enter a

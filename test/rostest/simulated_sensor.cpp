@@ -29,7 +29,7 @@ TEST(SimulatedSensorNodelet, PublishesScansGroundTruthAndTf) {
       "velodyne_packets", 10, [&](const ud::VelodyneScanConstPtr& scan) {
         ud::CloudXYZIRT cloud;
         for (const auto& p : scan->packets) {
-          decoder.decode(p.data.data(), p.data.size(), (p.stamp - scan->header.stamp).toSec(),
+          decoder.decode(p.data.data(), p.data.size(), (p.stamp - scan->packets.front().stamp).toSec(),
                          &cloud, nullptr);
         }
         std::lock_guard<std::mutex> lock(m);

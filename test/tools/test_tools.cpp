@@ -29,7 +29,11 @@ int run(const std::string& command, const std::string& log) {
 }
 
 std::string configs() {
-  return " --config " + kConfig + "segmentation.yaml --config " + kConfig + "detection.yaml";
+  std::string args;
+  for (const char* stage : {"segmentation", "hierarchical_grid", "kdtree", "classification"}) {
+    args += " --config " + kConfig + stage + ".yaml";
+  }
+  return args;
 }
 
 class ToolsTest : public ::testing::Test {

@@ -40,7 +40,7 @@ namespace core {
 
 /// Parameters of the distance weight; defaults are the fit on ../shared/data/kitti_raw (both
 /// drives, 62 sweeps: `urban_detection_fit_density ../shared/data/kitti_raw/drive_0005
-/// ../shared/data/kitti_raw/drive_0048`, fit rms 0.094), mirrored in config/detection.yaml.
+/// ../shared/data/kitti_raw/drive_0048`, fit rms 0.094), mirrored in config/hierarchical_grid.yaml.
 struct DistanceWeightParams {
   bool enabled = true;  // false: w(d) = 1 everywhere (no density compensation)
   bool log_fit = true;   // true: the polynomial is of ln(normalised density), see above

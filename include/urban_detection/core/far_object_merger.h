@@ -38,7 +38,7 @@
 namespace urban_detection {
 namespace core {
 
-/// Parameters of FarObjectMerger, mirrored in config/detection.yaml
+/// Parameters of FarObjectMerger, mirrored in config/hierarchical_grid.yaml
 /// (`hierarchical_grid: far_merge:`).
 struct FarObjectMergerParams {
   double max_gap_m = 1.2;           // [m] 0 = off; largest gap between the boxes of two pieces

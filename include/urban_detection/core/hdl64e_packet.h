@@ -193,5 +193,46 @@ class RevolutionCutter {
   int last_;  // previous azimuth or -1
 };
 
+/// Where each packet of a stream goes when the stream is cut into whole revolutions: the one
+/// boundary logic of every revolution builder (PacketSource's scans, its streaming decoder).
+/// Only revolutions bounded by two observed cuts are whole: the partial one at the start of a
+/// stream (and whatever is open at reset()) is dropped; a run of packets that never crosses
+/// the cut angle is dropped at kMaxPacketsPerRevolution.
+class RevolutionBoundary {
+ public:
+  /// Three revolutions at 300 rpm, the slowest HDL-64E setting.
+  static constexpr std::size_t kMaxPacketsPerRevolution = 3 * 695;
+
+  /// What to do with the open revolution before the packet is added to it.
+  enum class Action {
+    kAppend,     // the packet continues the open revolution
+    kClose,      // the open revolution is whole and complete: emit it; the packet opens the next
+    kDrop,       // the open revolution was partial: drop it; the packet opens the next (whole)
+    kForcedCut,  // no cut within kMaxPacketsPerRevolution: drop it; the packet opens a partial one
+    kOpen,       // nothing was open: the packet opens a revolution (partial)
+  };
+
+  explicit RevolutionBoundary(double cut_angle_deg = 0.0) : cutter_(cut_angle_deg) {}
+
+  /// Classifies the next packet by the azimuth of its first block; afterwards the packet
+  /// belongs to the open revolution.
+  Action add(std::uint16_t first_block_azimuth);
+  /// Drops the open revolution (counted as partial) and restarts cut detection.
+  void reset();
+
+  bool open() const { return packets_ > 0; }
+  std::size_t openPackets() const { return packets_; }
+  std::size_t partialDropped() const { return partial_dropped_; }
+  std::size_t forcedCuts() const { return forced_cuts_; }
+  double cutAngleDeg() const { return cutter_.cutAngleDeg(); }
+
+ private:
+  RevolutionCutter cutter_;
+  std::size_t packets_ = 0;  // of the open revolution
+  bool whole_ = false;       // the open revolution was opened by an observed cut
+  std::size_t partial_dropped_ = 0;
+  std::size_t forced_cuts_ = 0;
+};
+
 }  // namespace core
 }  // namespace urban_detection

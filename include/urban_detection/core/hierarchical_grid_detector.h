@@ -87,7 +87,7 @@
 namespace urban_detection {
 namespace core {
 
-/// Parameters of HierarchicalGridDetector, mirrored in config/detection.yaml
+/// Parameters of HierarchicalGridDetector, mirrored in config/hierarchical_grid.yaml
 /// (`hierarchical_grid:`).
 struct HierarchicalGridDetectorParams {
   double coarse_cell_m = 0.60;             // [m] W_S, side of a coarse super-cell (paper: 0.60)

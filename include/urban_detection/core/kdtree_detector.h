@@ -15,7 +15,7 @@
 namespace urban_detection {
 namespace core {
 
-/// Parameters of KdTreeDetector, mirrored in config/detection.yaml (`kdtree:`).
+/// Parameters of KdTreeDetector, mirrored in config/kdtree.yaml.
 struct KdTreeDetectorParams {
   double cluster_tolerance_m = 0.4;   // [m] points closer than this (3-D) are connected
   int min_cluster_size = 5;           // [-] smaller clusters are dropped

@@ -125,7 +125,7 @@ class ObjectClassifierModel {
 /// Parameters of the classification stage.
 struct ObjectClassifierParams {
   bool enabled = false;                 // [-] false: objects pass unclassified ("unknown"); the
-                                        //     shipped config/detection.yaml turns it on
+                                        //     shipped config/classification.yaml turns it on
   std::string model_path;               // model file (urban_detection_train_classifier)
   double min_object_probability = -1.0;  // [0..1] keep an object when P(object) >= this;
                                           //   negative: the threshold stored in the model

@@ -1,6 +1,6 @@
 /// \file detection_params.h
 /// Loading of the detector parameter structs from the ROS parameter server, mirroring
-/// config/detection.yaml (`hierarchical_grid:` and `kdtree:` sections), with range checks.
+/// config/hierarchical_grid.yaml and config/kdtree.yaml, with range checks.
 #pragma once
 
 #include <ros/node_handle.h>
@@ -37,7 +37,7 @@ void loadObjectFilterParams(const ros::NodeHandle& nh, core::ObjectFilterParams*
 
 /// Same for the object classifier run after either detector (`classifier:` section). A
 /// relative `model` path is taken relative to this package's config/ folder, as in
-/// config/detection.yaml.
+/// config/classification.yaml.
 void loadObjectClassifierParams(const ros::NodeHandle& nh, core::ObjectClassifierParams* params);
 
 }  // namespace ros_conv

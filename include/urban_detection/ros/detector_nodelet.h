@@ -3,7 +3,9 @@
 /// segmentation/foreground -> objects (DetectedObjectArray) and objects/points (LabeledCloud,
 /// label = object id). Lazy (subscribes upstream only while an output has subscribers) and
 /// zero copy (fresh boost::shared_ptr per frame, never touched after publishing), input queue
-/// of ~queue_size revolutions (the newest win), StageDiagnostics on /diagnostics. A derived
+/// of ~queue_size revolutions (the newest win), StageDiagnostics on /diagnostics with the
+/// latency from header.stamp to `objects`. Detection runs on the stage's own thread
+/// (StageThread, niceness ~thread_nice), so a slow detector never holds up another stage. A derived
 /// nodelet builds its core::ObjectDetector from its parameters and may serve
 /// dynamic_reconfigure, swapping in a new detector between two revolutions. After the detector,
 /// core::ObjectFilter (params ~object_filter/*, `enabled: false` switches it off) removes
@@ -35,11 +37,15 @@
 #include "urban_detection/core/object_detector.h"
 #include "urban_detection/core/object_filter.h"
 #include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/stage_thread.h"
 #include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
 
 class DetectorNodelet : public nodelet::Nodelet {
+ public:
+  ~DetectorNodelet() override;
+
  protected:
   /// Loads the parameters from `pnh` and builds the detector; throws (ParamError,
   /// std::invalid_argument) with a message naming the bad parameter.
@@ -63,6 +69,8 @@ class DetectorNodelet : public nodelet::Nodelet {
   std::unique_ptr<ros_conv::ValidatedReconfigure<ObjectClassifierConfig>> classifier_reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   int queue_size_ = 2;
+  int thread_nice_ = 0;
+  std::unique_ptr<ros_conv::StageThread> thread_;  // runs foregroundCb
   std::vector<core::DetectedObject> objects_;   // reused between frames
   std::vector<core::DetectedObject> rejected_;  // non-objects of the classifier
   std::unordered_map<std::uint32_t, std::uint32_t> id_of_index_;

@@ -15,7 +15,7 @@
 namespace urban_detection {
 namespace ros_conv {
 
-/// Marker options, mirrored in config/detection.yaml (`markers:`).
+/// Marker options, mirrored in config/markers.yaml.
 struct ObjectMarkerParams {
   bool show_ids = true;     // [-] add a text marker with the object id (and class if known)
   double box_alpha = 0.45;  // [0..1] box opacity

@@ -28,6 +28,13 @@ struct PacketSourceParams {
                                          //     and size (revolutions are still cut by azimuth)
   std::string frame_id = "velodyne";     // header.frame_id of the scans
   int queue_size = 10;                   // [messages] publisher queue
+  bool timestamp_first_packet = false;   // header.stamp = first packet's stamp (velodyne_driver's
+                                         //     parameter); false: the last packet's
+  // Streaming decoding (`velodyne_points` published by this nodelet, lazily): each packet is
+  // decoded as it arrives, so a revolution's cloud is out one packet after its last packet.
+  bool decode = false;                   // advertise velodyne_points and decode while listened
+  std::string calibration;               // YAML or db.xml calibration; empty = nominal HDL-64E S2
+  core::DecoderParams decoder;           // params `min_range`, `max_range` [m]
 
   /// Revolutions per second the sensor (or the replay at `rate`) should deliver [Hz].
   double expectedRevolutionRateHz() const;
@@ -44,6 +51,11 @@ struct PacketToCloudParams {
   double tf_timeout_s = 0.1;    // [s] how long to wait for the transforms of a revolution
   int queue_size = 2;           // [messages] input queue; small so the newest revolution wins
 };
+
+/// The decoder's parameters shared by PacketSource (decode: true) and PacketToCloud:
+/// `calibration`, `min_range`, `max_range`; throws ParamError.
+void loadDecoderParams(const ros::NodeHandle& private_nh, std::string* calibration,
+                       core::DecoderParams* decoder);
 
 /// Read the private parameters; throw ParamError naming the parameter and its accepted range.
 PacketSourceParams loadPacketSourceParams(const ros::NodeHandle& private_nh);

@@ -1,7 +1,9 @@
 /// \file packet_source_worker.h
 /// The reading thread of the PacketSource nodelet: HDL-64E packets from a live UDP socket or a
 /// paced pcap replay, grouped into one VelodyneScan per whole revolution (ScanAssembler) and
-/// handed to a publish function. Counts everything that goes wrong on StageDiagnostics and logs
+/// handed to a publish function; with `decode`, also decoded packet by packet as they arrive
+/// (StreamingScanDecoder) into one cloud per revolution, handed over one packet after the
+/// revolution's last. Counts everything that goes wrong on StageDiagnostics and logs
 /// it throttled; never throws once started.
 #pragma once
 
@@ -24,12 +26,18 @@ namespace urban_detection {
 class PacketSourceWorker {
  public:
   using PublishFn = std::function<void(const VelodyneScan::Ptr& scan)>;
-  using ListenedFn = std::function<bool()>;  // whether the scans have a subscriber
+  using PublishCloudFn = std::function<void(const boost::shared_ptr<CloudXYZIRT>& cloud)>;
+  using ListenedFn = std::function<bool()>;  // whether an output has a subscriber
 
   /// Opens the socket or the capture; throws std::runtime_error / std::invalid_argument with
   /// the system's reason (port in use, missing file). `diagnostics` must outlive the worker.
+  /// `scans_listened`: whether the scans have a subscriber; `publish_cloud` and
+  /// `clouds_listened` are used with params.decode (the calibration is loaded then: throws
+  /// core::CalibrationError naming the file).
   PacketSourceWorker(const PacketSourceParams& params, ros_conv::StageDiagnostics* diagnostics,
-                     PublishFn publish, ListenedFn listened);
+                     PublishFn publish, ListenedFn scans_listened,
+                     PublishCloudFn publish_cloud = PublishCloudFn(),
+                     ListenedFn clouds_listened = ListenedFn());
   ~PacketSourceWorker();  // stops and joins the thread
 
   /// Starts the reading thread. Live: the socket is read all the time, subscribers or not (an
@@ -38,6 +46,8 @@ class PacketSourceWorker {
   void start();
   /// Whether the thread still runs (a replay stops at the end of the file or on a truncation).
   bool running() const { return running_; }
+  /// The streaming decoder's calibration (params.decode), else null.
+  const core::PacketDecoder* decoder() const { return decoder_.get(); }
   /// Human-readable description of the input ("UDP port 2368 ..." or "pcap file").
   std::string describe() const;
   /// A configuration problem worth a warning at start ("" if none): a receive buffer smaller
@@ -51,8 +61,15 @@ class PacketSourceWorker {
 
   PacketSourceParams params_;
   ros_conv::StageDiagnostics* diagnostics_;
+  bool listened() const;
+
   PublishFn publish_;
-  ListenedFn listened_;
+  ListenedFn scans_listened_;
+  PublishCloudFn publish_cloud_;
+  ListenedFn clouds_listened_;
+  std::unique_ptr<core::PacketDecoder> decoder_;
+  std::unique_ptr<StreamingScanDecoder> streamer_;  // reading thread only
+  bool streaming_ = false;  // streamer_ fed since its last reset (clouds listened)
   std::unique_ptr<core::UdpReceiver> receiver_;
   std::unique_ptr<core::PcapReader> pcap_;
   ScanAssembler assembler_;  // reading thread only

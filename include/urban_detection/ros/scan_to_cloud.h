@@ -1,7 +1,8 @@
 /// \file scan_to_cloud.h
 /// The conversion of the PacketToCloud nodelet: one VelodyneScan -> one calibrated CloudXYZIRT,
 /// optionally transformed packet by packet at each packet's own stamp through tf2 (motion
-/// compensation), with the sensor pose at the revolution start in the cloud's sensor_origin_.
+/// compensation) into the target frame at the scan's stamp, with the sensor pose at the
+/// revolution start in the cloud's sensor_origin_.
 #pragma once
 
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
@@ -26,7 +27,9 @@ class ScanToCloud {
   /// listens to tf on `nh` only when a fixed or target frame is set.
   ScanToCloud(const PacketToCloudParams& params, const ros::NodeHandle& nh);
 
-  /// Decodes `scan` (not empty) into `cloud` with header stamp = first packet's stamp and
+  /// Decodes `scan` (not empty) into `cloud` with header stamp = the scan's header.stamp (its
+  /// driver's convention: velodyne_driver and PacketSource stamp the last packet unless
+  /// timestamp_first_packet is true) and
   /// header.seq = the scan's seq (so later stages can count revolutions they never received).
   /// Returns false when no packet had a transform (nothing to publish); `tf_error` then holds
   /// the last tf2 error.

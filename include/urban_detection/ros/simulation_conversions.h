@@ -6,6 +6,8 @@
 #include <memory>
 #include <string>
 
+#include "urban_detection/ros/velodyne_scan.h"
+
 #include <geometry_msgs/TransformStamped.h>
 #include <urban_detection/GroundTruth.h>
 #include <urban_detection/VelodyneScan.h>
@@ -26,12 +28,15 @@ struct SimulationFrames {
   std::string sensor = "velodyne";      // sensor frame (frame_id of scans and ground truth)
 };
 
-/// Scan of one revolution: header stamp = first packet stamp, one packet per RawPacket.
+/// The header stamp of a simulated revolution under the ScanStamp convention: its last
+/// packet's stamp (velodyne_driver's default) or its first packet's.
+double revolutionStamp(const core::SimRevolution& rev, ScanStamp stamp);
+/// Scan of one revolution: header stamp by `stamp` (revolutionStamp), one packet per RawPacket.
 void toScanMsg(const core::SimRevolution& rev, const std::string& frame_id,
-               urban_detection::VelodyneScan* msg);
-/// Ground truth of one revolution (same header stamp as toScanMsg).
+               urban_detection::VelodyneScan* msg, ScanStamp stamp = ScanStamp::kLastPacket);
+/// Ground truth of one revolution (the same header stamp as toScanMsg with the same `stamp`).
 void toGroundTruthMsg(const core::SimRevolution& rev, const std::string& frame_id,
-                      urban_detection::GroundTruth* msg);
+                      urban_detection::GroundTruth* msg, ScanStamp stamp = ScanStamp::kLastPacket);
 /// odom -> base_link at drive time `t_s` (stamped `stamp_s`), and base_link -> sensor.
 void toTransforms(const core::LidarSimulator& sim, double t_s, double stamp_s,
                   const SimulationFrames& frames, geometry_msgs::TransformStamped* odom_base,

@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/node_handle.h>
@@ -30,6 +31,8 @@ class SeqGapCounter {
     if (seq != 0) last_ = seq;
     return gap;
   }
+  /// Forgets the last seq: what passes while a lazy stage is unsubscribed is not lost.
+  void reset() { last_ = 0; }
 
  private:
   std::uint32_t last_ = 0;
@@ -60,6 +63,11 @@ class StageDiagnostics {
   void frame(double processing_s);
   /// One revolution published.
   void output();
+  /// One revolution published `latency_s` after its header.stamp (with the sensor's stamp
+  /// convention: after its last packet). Shown as p50 / p95 / max of the window in ms
+  /// ("latency p50 [ms]" ...); a zero stamp (a ROS clock that does not run: use_sim_time
+  /// without /clock) is counted as "zero_stamps" and turns the status to WARN.
+  void latency(const ros::Time& stamp, const ros::Time& now);
   /// One input rejected (malformed); same as count("rejected inputs", 1, true).
   void rejected();
   /// Adds `n` to the named counter; a `warn` counter that grows turns the status to WARN.
@@ -94,6 +102,7 @@ class StageDiagnostics {
   Counter inputs_, frames_, outputs_, skipped_;
   std::map<std::string, Counter> counters_;
   double window_sum_s_ = 0.0, window_max_s_ = 0.0;
+  std::vector<double> window_latency_s_;
 };
 
 }  // namespace ros_conv

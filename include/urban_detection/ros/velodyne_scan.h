@@ -9,6 +9,8 @@
 #include <ros/time.h>
 #include <urban_detection/VelodyneScan.h>
 
+#include <boost/shared_ptr.hpp>
+
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <functional>
@@ -22,26 +24,31 @@ namespace urban_detection {
 /// Copies one raw packet and its stamp into a message packet.
 void toMessage(const core::RawPacket& packet, const ros::Time& stamp, VelodynePacket* msg);
 
+/// Which packet's stamp a revolution's header.stamp is, as velodyne_driver does: the last
+/// packet's by default (parameter `timestamp_first_packet: false`), the first packet's when
+/// `timestamp_first_packet` is true. The points' `time` field is always relative to the first
+/// packet of the revolution.
+enum class ScanStamp { kLastPacket, kFirstPacket };
+
 /// Groups a stream of packets into whole revolutions cut at a fixed azimuth
-/// (core::RevolutionCutter). Only revolutions bounded by two observed cuts are returned: the
+/// (core::RevolutionBoundary). Only revolutions bounded by two observed cuts are returned: the
 /// partial one at the start of a stream (and whatever is open when the stream ends) is dropped
 /// and counted. Each returned revolution is a fresh message, so it can be published without copy.
 class ScanAssembler {
  public:
   /// Safety limit when the azimuth never crosses the cut angle (sensor not spinning, garbage
-  /// azimuths): three revolutions at 300 rpm, the slowest HDL-64E setting. The packets
-  /// gathered so far are dropped and counted in forcedCuts().
-  static constexpr std::size_t kMaxPacketsPerScan = 3 * 695;
+  /// azimuths): the packets gathered so far are dropped and counted in forcedCuts().
+  static constexpr std::size_t kMaxPacketsPerScan = core::RevolutionBoundary::kMaxPacketsPerRevolution;
 
   /// `cut_angle_deg` [deg, 0..360]; `frame_id` goes into every scan's header;
   /// `expected_packets` sizes the first revolution's buffer (later ones take the size of the
   /// previous revolution); the cut stays by azimuth whatever the expectation.
   ScanAssembler(double cut_angle_deg, const std::string& frame_id,
-                std::size_t expected_packets = 700);
+                std::size_t expected_packets = 700, ScanStamp stamp = ScanStamp::kLastPacket);
 
   /// Adds a packet received at `stamp`. Returns the finished revolution when this packet
   /// starts a new one (the packet then opens the next scan), otherwise null. The scan's
-  /// header.stamp is the stamp of its first packet; header.seq counts the returned revolutions
+  /// header.stamp follows the ScanStamp convention; header.seq counts the returned revolutions
   /// from 1, so a consumer can count revolutions it never received.
   VelodyneScan::Ptr add(const core::RawPacket& packet, const ros::Time& stamp);
 
@@ -49,19 +56,17 @@ class ScanAssembler {
   void reset();
 
   /// Partial revolutions dropped (stream start, reset()).
-  std::size_t partialDropped() const { return partial_dropped_; }
+  std::size_t partialDropped() const { return boundary_.partialDropped(); }
   /// Packet runs dropped at kMaxPacketsPerScan without any cut.
-  std::size_t forcedCuts() const { return forced_cuts_; }
+  std::size_t forcedCuts() const { return boundary_.forcedCuts(); }
 
  private:
-  core::RevolutionCutter cutter_;
+  core::RevolutionBoundary boundary_;
   std::string frame_id_;
+  ScanStamp stamp_;
   VelodyneScan::Ptr current_;
-  bool current_is_whole_ = false;       // current_ was opened by an observed cut
   std::size_t expected_packets_ = 700;  // capacity hint: size of the previous revolution
   std::uint32_t revolutions_ = 0;       // returned so far (header.seq)
-  std::size_t partial_dropped_ = 0;
-  std::size_t forced_cuts_ = 0;
 };
 
 /// Counters of decodeScan().
@@ -82,5 +87,54 @@ using PacketTransformFn =
 /// nothing. `transform` may be empty (points stay in the sensor frame).
 void decodeScan(const core::PacketDecoder& decoder, const VelodyneScan& scan,
                 const PacketTransformFn& transform, CloudXYZIRT* cloud, ScanDecodeStats* stats);
+
+/// Decodes one packet stamped `stamp` of a revolution whose first packet is stamped `start`
+/// and appends its points to `cloud` (transformed by `transform` unless it is null): the step
+/// decodeScan() repeats over a scan and StreamingScanDecoder runs as each packet arrives.
+void decodePacket(const core::PacketDecoder& decoder, const std::uint8_t* data, std::size_t size,
+                  const ros::Time& stamp, const ros::Time& start,
+                  const Eigen::Affine3f* transform, CloudXYZIRT* cloud, ScanDecodeStats* stats);
+
+/// PacketSource's streaming path: decodes each packet as it arrives into the cloud of the open
+/// revolution, cut exactly as ScanAssembler cuts (the same core::RevolutionBoundary), so that
+/// when a revolution closes only its last packet is left to decode. The revolutions equal
+/// ScanAssembler + decodeScan() point for point (a test checks it bit for bit); header.stamp
+/// follows the ScanStamp convention, header.seq counts the returned revolutions from 1.
+/// Points stay in the sensor frame (motion compensation is PacketToCloud's).
+class StreamingScanDecoder {
+ public:
+  /// `decoder` must outlive this object.
+  StreamingScanDecoder(const core::PacketDecoder* decoder, double cut_angle_deg,
+                       const std::string& frame_id, std::size_t expected_packets = 700,
+                       ScanStamp stamp = ScanStamp::kLastPacket);
+
+  /// Decodes a packet received at `stamp`. Returns the finished revolution's cloud (fresh, for
+  /// a zero-copy publish) when this packet starts a new revolution, otherwise null. `stats`
+  /// of the returned revolution are in lastStats().
+  boost::shared_ptr<CloudXYZIRT> add(const core::RawPacket& packet, const ros::Time& stamp);
+  /// Drops the revolution in progress and restarts cut detection (a gap in the stream).
+  void reset();
+
+  /// Decode counters of the revolution returned last.
+  const ScanDecodeStats& lastStats() const { return last_stats_; }
+  /// Packets of the revolution returned last.
+  std::size_t lastPackets() const { return last_packets_; }
+  std::size_t partialDropped() const { return boundary_.partialDropped(); }
+  std::size_t forcedCuts() const { return boundary_.forcedCuts(); }
+
+ private:
+  void open(const ros::Time& stamp);
+
+  const core::PacketDecoder* decoder_;
+  core::RevolutionBoundary boundary_;
+  std::string frame_id_;
+  ScanStamp stamp_;
+  boost::shared_ptr<CloudXYZIRT> current_;
+  ros::Time first_stamp_, last_stamp_;  // of the open revolution
+  ScanDecodeStats stats_, last_stats_;
+  std::size_t expected_packets_ = 700;
+  std::size_t last_packets_ = 0;
+  std::uint32_t revolutions_ = 0;
+};
 
 }  // namespace urban_detection

@@ -1,0 +1,93 @@
+// urban_detection/CloudInput: points_in (sensor_msgs/PointCloud2 from a bag or another driver)
+// -> velodyne_points (CloudXYZIRT), the pipeline's cloud type. Fields by name (x y z required;
+// intensity, ring, time optional, any numeric type: KITTI clouds carry x y z intensity only);
+// non-finite points kept and counted (the segmenter labels them unknown); a malformed message
+// is dropped with one error per kind of fault and counted on /diagnostics. The only copy in the
+// chain: a PointCloud2 subscriber gets a serialised message whatever the publisher.
+// Lazy: subscribed to points_in only while someone listens to velodyne_points.
+#include "urban_detection/core/point_types.h"
+
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <boost/make_shared.hpp>
+#include <nodelet/nodelet.h>
+#include <pcl_ros/point_cloud.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include "urban_detection/ros/param_loading.h"
+#include "urban_detection/ros/pointcloud2_input.h"
+#include "urban_detection/ros/stage_diagnostics.h"
+
+namespace urban_detection {
+
+class CloudInput : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    try {
+      loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
+    } catch (const ParamError& e) {
+      NODELET_FATAL("CloudInput: %s; the nodelet stays idle", e.what());
+      return;
+    }
+    diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
+        getNodeHandle(), getPrivateNodeHandle(), getName(), "cloud input");
+    diagnostics_->setActive(false);
+    ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
+      connectCb();
+    };
+    std::lock_guard<std::mutex> lock(connect_mutex_);
+    pub_ = getNodeHandle().advertise<CloudXYZIRT>("velodyne_points", 2, connect, connect);
+  }
+
+  void connectCb() {
+    std::lock_guard<std::mutex> lock(connect_mutex_);
+    const bool wanted = pub_.getNumSubscribers() > 0;
+    diagnostics_->setActive(wanted);
+    if (wanted && !sub_) {
+      sub_ = getNodeHandle().subscribe("points_in", queue_size_, &CloudInput::cloudCb, this,
+                                       ros::TransportHints().tcpNoDelay());
+    } else if (!wanted && sub_) {
+      sub_.shutdown();
+    }
+  }
+
+  void cloudCb(const sensor_msgs::PointCloud2ConstPtr& msg) {
+    const ros::WallTime start = ros::WallTime::now();
+    diagnostics_->input(msg->header.seq);
+    auto cloud = boost::make_shared<CloudXYZIRT>();
+    ros_conv::PointCloud2InputInfo info;
+    std::string error;
+    if (!ros_conv::fromPointCloud2(*msg, cloud.get(), &info, &error)) {
+      if (error != last_error_) {  // once per kind of malformed input; counted on /diagnostics
+        NODELET_ERROR("CloudInput: dropping a PointCloud2: %s", error.c_str());
+        last_error_ = error;
+      }
+      diagnostics_->rejected();
+      return;
+    }
+    if (!info.has_ring || !info.has_time) {
+      NODELET_INFO_ONCE("CloudInput: input has no ring/time fields (e.g. KITTI); they are set "
+                        "to 0");
+    }
+    diagnostics_->count("non_finite_points", info.non_finite, false);
+    cloud->header.seq = msg->header.seq;
+    pub_.publish(boost::shared_ptr<const CloudXYZIRT>(cloud));
+    diagnostics_->frame((ros::WallTime::now() - start).toSec());
+    diagnostics_->output();
+  }
+
+  int queue_size_ = 2;
+  std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::string last_error_;  // last malformed-input reason logged (callbacks are serialised)
+  std::mutex connect_mutex_;
+  ros::Publisher pub_;
+  ros::Subscriber sub_;
+};
+
+}  // namespace urban_detection
+
+PLUGINLIB_EXPORT_CLASS(urban_detection::CloudInput, nodelet::Nodelet)

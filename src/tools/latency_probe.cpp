@@ -1,0 +1,173 @@
+// urban_detection_latency_probe: a ROS node measuring how long after its header.stamp each
+// message of the given topics arrives (for the pipeline's outputs: the time from the last
+// packet of a revolution, which stamps it, to the subscriber). Writes p50/p95/p99/max, the
+// message count and rate per topic as JSON after a warm-up and a measuring window. Used by
+// `scripts/run latency`; works on any ROS graph whose stamps are on this machine's clock.
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <ros/ros.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include "urban_detection/DetectedObjectArray.h"
+
+#include "tool_common.h"
+
+namespace ud = urban_detection;
+
+namespace {
+
+void usage() {
+  std::printf(
+      "usage: urban_detection_latency_probe [options]\n"
+      "  --objects TOPIC   a DetectedObjectArray topic (repeatable; default: objects)\n"
+      "  --markers TOPIC   a MarkerArray topic, stamp of its first marker (repeatable;\n"
+      "                    default: objects/markers)\n"
+      "  --warmup S        seconds ignored after the first message of every topic (default 5)\n"
+      "  --duration S      measuring window [s] (default 60)\n"
+      "  --out FILE        JSON output (default: stdout)\n"
+      "Exit status 1 when a topic delivered nothing in the window.\n");
+}
+
+struct TopicRecord {
+  std::vector<double> latency_ms;
+  std::size_t zero_stamps = 0;
+  ros::WallTime first, last;
+};
+
+class Probe {
+ public:
+  Probe(double warmup_s) : warmup_s_(warmup_s) {}
+
+  void record(const std::string& topic, const ros::Time& stamp) {
+    const ros::Time now = ros::Time::now();
+    const ros::WallTime wall = ros::WallTime::now();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (start_.isZero()) start_ = wall;
+    if ((wall - start_).toSec() < warmup_s_) return;
+    TopicRecord& r = records_[topic];
+    if (stamp.isZero()) {
+      ++r.zero_stamps;
+      return;
+    }
+    if (r.latency_ms.empty()) r.first = wall;
+    r.last = wall;
+    r.latency_ms.push_back(1e-6 * (static_cast<double>(now.toNSec()) -
+                                   static_cast<double>(stamp.toNSec())));
+  }
+
+  bool started() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return !start_.isZero() && (ros::WallTime::now() - start_).toSec() >= warmup_s_;
+  }
+
+  // Returns false when a topic has no measurement.
+  bool write(const std::vector<std::string>& topics, double duration_s, std::FILE* out) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    bool all = true;
+    std::fprintf(out, "{\"warmup_s\": %.1f, \"duration_s\": %.1f, \"topics\": {", warmup_s_,
+                 duration_s);
+    for (std::size_t t = 0; t < topics.size(); ++t) {
+      TopicRecord& r = records_[topics[t]];
+      std::vector<double>& l = r.latency_ms;
+      std::sort(l.begin(), l.end());
+      auto q = [&l](double p) {
+        return l[static_cast<std::size_t>(p * static_cast<double>(l.size() - 1) + 0.5)];
+      };
+      const double span_s = l.size() > 1 ? (r.last - r.first).toSec() : 0.0;
+      std::fprintf(out, "%s\"%s\": {\"messages\": %zu, \"zero_stamps\": %zu", t ? ", " : "",
+                   topics[t].c_str(), l.size(), r.zero_stamps);
+      if (l.empty()) {
+        all = false;
+      } else {
+        std::fprintf(out,
+                     ", \"rate_hz\": %.3f, \"p50_ms\": %.3f, \"p95_ms\": %.3f, \"p99_ms\": %.3f, "
+                     "\"max_ms\": %.3f, \"min_ms\": %.3f",
+                     span_s > 0 ? static_cast<double>(l.size() - 1) / span_s : 0.0, q(0.5),
+                     q(0.95), q(0.99), l.back(), l.front());
+      }
+      std::fprintf(out, "}");
+    }
+    std::fprintf(out, "}}\n");
+    return all;
+  }
+
+ private:
+  double warmup_s_;
+  std::mutex mutex_;
+  ros::WallTime start_;
+  std::map<std::string, TopicRecord> records_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "latency_probe", ros::init_options::AnonymousName);
+  std::vector<std::string> objects, markers;
+  double warmup_s = 5.0, duration_s = 60.0;
+  std::string out_path;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--objects") objects.push_back(ud::tools::optionValue(argc, argv, &i, "--objects"));
+    else if (a == "--markers") markers.push_back(ud::tools::optionValue(argc, argv, &i, "--markers"));
+    else if (a == "--warmup") warmup_s = ud::tools::optionNumber(argc, argv, &i, "--warmup");
+    else if (a == "--duration") duration_s = ud::tools::optionNumber(argc, argv, &i, "--duration");
+    else if (a == "--out") out_path = ud::tools::optionValue(argc, argv, &i, "--out");
+    else if (a == "-h" || a == "--help") { usage(); return 0; }
+    else { std::fprintf(stderr, "error: unknown option %s\n", a.c_str()); usage(); return 2; }
+  }
+  if (warmup_s < 0 || duration_s <= 0) {
+    std::fprintf(stderr, "error: --warmup >= 0 and --duration > 0 needed\n");
+    return 2;
+  }
+  if (objects.empty() && markers.empty()) {
+    objects.push_back("objects");
+    markers.push_back("objects/markers");
+  }
+  ros::NodeHandle nh;
+  Probe probe(warmup_s);
+  std::vector<ros::Subscriber> subs;
+  std::vector<std::string> topics;
+  for (const std::string& t : objects) {
+    const std::string name = nh.resolveName(t);
+    topics.push_back(name);
+    subs.push_back(nh.subscribe<ud::DetectedObjectArray>(
+        t, 10, [&probe, name](const ud::DetectedObjectArray::ConstPtr& m) {
+          probe.record(name, m->header.stamp);
+        }, ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+  }
+  for (const std::string& t : markers) {
+    const std::string name = nh.resolveName(t);
+    topics.push_back(name);
+    subs.push_back(nh.subscribe<visualization_msgs::MarkerArray>(
+        t, 10, [&probe, name](const visualization_msgs::MarkerArray::ConstPtr& m) {
+          for (const visualization_msgs::Marker& marker : m->markers) {
+            if (!marker.header.stamp.isZero()) {
+              probe.record(name, marker.header.stamp);
+              return;
+            }
+          }
+        }, ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+  }
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  while (ros::ok() && !probe.started()) ros::WallDuration(0.05).sleep();
+  const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(duration_s);
+  while (ros::ok() && ros::WallTime::now() < until) ros::WallDuration(0.05).sleep();
+  spinner.stop();
+  std::FILE* out = out_path.empty() ? stdout : std::fopen(out_path.c_str(), "w");
+  if (!out) {
+    std::fprintf(stderr, "error: cannot write %s\n", out_path.c_str());
+    return 1;
+  }
+  const bool ok = probe.write(topics, duration_s, out);
+  if (out != stdout) std::fclose(out);
+  if (!ok) std::fprintf(stderr, "latency_probe: a topic delivered nothing in the window\n");
+  return ok ? 0 : 1;
+}

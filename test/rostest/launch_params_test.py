@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""The launch files' contract, read with `roslaunch --dump-params` and `roslaunch --nodes`."""
+import os
+import subprocess
+import sys
+import unittest
+
+import rostest
+import yaml
+
+PKG = 'urban_detection'
+
+
+def roslaunch(*args):
+    env = dict(os.environ)
+    env['PATH'] = '/usr/bin:' + env.get('PATH', '')
+    p = subprocess.run(['roslaunch'] + list(args), stdout=subprocess.PIPE,
+                       stderr=subprocess.STDOUT, env=env, timeout=60, check=False)
+    return p.returncode, p.stdout.decode('utf-8', 'replace')
+
+
+def params(launch, *args):
+    code, out = roslaunch('--dump-params', PKG, launch, *args)
+    if code != 0:
+        raise AssertionError('roslaunch --dump-params %s failed:\n%s' % (launch, out))
+    return yaml.safe_load(out)
+
+
+def nodes(launch, *args):
+    code, out = roslaunch('--nodes', PKG, launch, *args)
+    if code != 0:
+        raise AssertionError('roslaunch --nodes %s failed:\n%s' % (launch, out))
+    return set(line.strip() for line in out.splitlines() if line.startswith('/'))
+
+
+def sections(p, node):
+    """The first path element of every parameter of `node` (/node/section/key -> section)."""
+    prefix = '/%s/' % node
+    return set(k[len(prefix):].split('/')[0] for k in p if k.startswith(prefix))
+
+
+class LaunchParams(unittest.TestCase):
+    def test_each_stage_gets_only_its_own_sections(self):
+        p = params('live.launch', 'detector:=both')
+        self.assertEqual(sections(p, 'hierarchical_grid_detector') - {'thread_nice'},
+                         {'hierarchical_grid', 'classifier', 'object_filter'})
+        self.assertEqual(sections(p, 'kdtree_detector') - {'thread_nice'},
+                         {'kdtree', 'classifier', 'object_filter'})
+        self.assertEqual(sections(p, 'object_markers'), {'markers'})
+        self.assertEqual(sections(p, 'object_markers_kdtree'), {'markers'})
+        self.assertLess(sum(1 for k in p if k.startswith('/hierarchical_grid_detector/')), 80)
+
+    def test_live_stamps_never_follow_a_bags_sim_time(self):
+        self.assertIs(params('live.launch')['/use_sim_time'], False)
+        self.assertIs(params('pcap.launch', 'pcap:=/tmp/x.pcap')['/use_sim_time'], False)
+        self.assertIs(params('bag.launch', 'bag:=/tmp/x.bag')['/use_sim_time'], True)
+
+    def test_live_arguments_reach_their_nodes(self):
+        p = params('live.launch', 'num_worker_threads:=2', 'queue_size:=3',
+                   'rcvbuf_bytes:=1048576', 'timestamp_first_packet:=true')
+        self.assertEqual(p['/urban_detection_manager/num_worker_threads'], 2)
+        self.assertEqual(p['/packet_source/queue_size'], 3)
+        self.assertEqual(p['/packet_source/rcvbuf_bytes'], 1048576)
+        self.assertIs(p['/packet_source/timestamp_first_packet'], True)
+        self.assertEqual(params('live.launch', 'detector:=both')['/kdtree_detector/thread_nice'],
+                         10)
+
+    def test_live_streams_unless_motion_compensated(self):
+        streaming = nodes('live.launch')
+        self.assertIn('/packet_source', streaming)
+        self.assertNotIn('/packet_to_cloud', streaming)
+        self.assertIs(params('live.launch')['/packet_source/decode'], True)
+        compensated = nodes('live.launch', 'fixed_frame:=odom')
+        self.assertIn('/packet_to_cloud', compensated)
+        self.assertIs(params('live.launch', 'fixed_frame:=odom')['/packet_source/decode'], False)
+        external = nodes('live.launch', 'driver:=false')
+        self.assertIn('/packet_to_cloud', external)
+        self.assertNotIn('/packet_source', external)
+
+    def test_a_mistyped_detector_is_one_clear_error(self):
+        code, out = roslaunch('--nodes', PKG, 'live.launch', 'detector:=hierarchcal')
+        self.assertNotEqual(code, 0)
+        self.assertIn('detector:=hierarchcal is not one of hierarchical, kdtree, both', out)
+        self.assertNotIn('Traceback', out)
+
+    def test_a_bag_of_clouds_never_starts_packet_to_cloud(self):
+        points = nodes('bag.launch', 'bag:=/tmp/x.bag', 'input:=points')
+        self.assertIn('/cloud_input', points)
+        self.assertNotIn('/packet_to_cloud', points)
+        packets = nodes('bag.launch', 'bag:=/tmp/x.bag', 'input:=packets')
+        self.assertIn('/packet_to_cloud', packets)
+        self.assertNotIn('/cloud_input', packets)
+        # auto: bag_play.py loads the one adapter the bag needs once it has read the bag
+        # (exercised end to end by launch_bag_points / launch_bag_packets).
+        auto = nodes('bag.launch', 'bag:=/tmp/x.bag')
+        self.assertNotIn('/packet_to_cloud', auto)
+        self.assertNotIn('/cloud_input', auto)
+
+
+if __name__ == '__main__':
+    rostest.rosrun(PKG, 'launch_params', LaunchParams, sys.argv)
