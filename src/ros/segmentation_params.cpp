@@ -73,6 +73,7 @@ bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParam
   nh.param("ground_max_range_m", p->ground_max_range_m, p->ground_max_range_m);
   nh.param("ground_tolerance_m", p->ground_tolerance_m, p->ground_tolerance_m);
   nh.param("ground_max_step_m", p->ground_max_step_m, p->ground_max_step_m);
+  nh.param("curb_cells_ground", p->curb_cells_ground, p->curb_cells_ground);
   nh.param("ground_max_gap_m", p->ground_max_gap_m, p->ground_max_gap_m);
   nh.param("seed_radius_m", p->seed_radius_m, p->seed_radius_m);
   nh.param("seed_max_abs_height_m", p->seed_max_abs_height_m, p->seed_max_abs_height_m);
