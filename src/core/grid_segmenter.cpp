@@ -458,6 +458,21 @@ void GridSegmenter::classifyCells() {
   const float tall_h = static_cast<float>(params_.tall_min_height_m);
   const float tall_range = static_cast<float>(params_.tall_min_range_m);
   const float terrain_offset = static_cast<float>(params_.terrain_max_offset_m);
+  const float step = static_cast<float>(params_.ground_max_step_m);
+  const bool curb_cells = params_.curb_cells_ground;
+  // A neighbour reached by the terrain growing has its ground at `z_top` (within the tolerance).
+  // Reached cells keep their ground in this pass, so the visiting order does not matter.
+  const int rows = grid_.rows(), cols = grid_.cols();
+  auto upperLevelIsGround = [&](std::int32_t c, float z_top) {
+    const int r = grid_.rowOf(c), k = c - r * cols;
+    for (int d = 0; d < 8; ++d) {
+      const int nr = r + kDr[d], nk = k + kDc[d];
+      if (nr < 0 || nr >= rows || nk < 0 || nk >= cols) continue;
+      const std::int32_t n = nr * cols + nk;
+      if (ground_state_[n] == kReached && std::fabs(ground_z_[n] - z_top) < tol) return true;
+    }
+    return false;
+  };
   const float sensor_h = static_cast<float>(params_.sensor_height_m);
   const float tan_top = static_cast<float>(std::tan(params_.fov_top_elevation_deg * M_PI / 180.0));
   const float half_diag = static_cast<float>(params_.cell_size_m * M_SQRT1_2);
@@ -507,6 +522,16 @@ void GridSegmenter::classifyCells() {
       if (state == kNoGround) touched_[touched_count_++] = c;
       ground_state_[c] = kFilled;
       ground_z_[c] = cell.zMean();
+    } else if (curb_cells && state == kReached && cell.zRange() < step &&
+               std::fabs(cell.z_min - g) < step && cell.z_max - g < step &&
+               upperLevelIsGround(c, cell.z_max)) {
+      // A step in the ground inside one cell (a kerb between road and sidewalk): the terrain
+      // of a flat cell is its mean, between the two levels, so the upper level would lie above
+      // the tolerance and become a thin short strip along every kerb. It is ground when both
+      // levels are: the span is a step the terrain growing accepts and the top is the ground
+      // of a neighbouring cell (the sidewalk). The low edge of a car or a bench has no ground
+      // at its top next to it and stays short.
+      cls = SegmentClass::kGround;
     } else {
       cls = SegmentClass::kShort;
       // Seen up to the upper edge of the field of view: the structure may be much taller than

@@ -90,6 +90,7 @@ bool applySegmentation(const YAML::Node& root, const std::string& where,
   t.bind("ground_max_range_m", &p->ground_max_range_m);
   t.bind("ground_tolerance_m", &p->ground_tolerance_m);
   t.bind("ground_max_step_m", &p->ground_max_step_m);
+  t.bind("curb_cells_ground", &p->curb_cells_ground);
   t.bind("ground_max_gap_m", &p->ground_max_gap_m);
   t.bind("seed_radius_m", &p->seed_radius_m);
   t.bind("seed_max_abs_height_m", &p->seed_max_abs_height_m);

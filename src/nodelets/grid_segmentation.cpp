@@ -52,12 +52,12 @@ class GridSegmentation : public nodelet::Nodelet {
     segmenter_.reset(new core::GridSegmenter(params));
     reconfigure_ = std::make_unique<Reconfigure>(
         pnh, ros_conv::toConfig<GridSegmentationConfig>(params, ros_conv::GridSegmenterTunables()),
-        [this](const GridSegmentationConfig& c) {
+        [this, pnh](const GridSegmentationConfig& c) {
           std::lock_guard<std::mutex> lock(segment_mutex_);  // between two revolutions
           const core::GridSegmenterParams p = ros_conv::fromConfig(
               c, segmenter_->params(), ros_conv::GridSegmenterTunables());
-          std::string why;
-          if (!ros_conv::validateGridSegmenterParams(p, &why)) return why;
+          const std::string why = ros_conv::checkGridSegmenterParams(pnh, p);
+          if (!why.empty()) return why;
           segmenter_->setParams(p);
           return std::string();
         });

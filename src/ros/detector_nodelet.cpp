@@ -43,10 +43,8 @@ void DetectorNodelet::onInit() {
     auto apply = [this, ns](const ObjectClassifierConfig& c) -> std::string {
       const double p = c.min_object_probability;
       if (!std::isfinite(p) || p < -1.0 || p > 1.0) {
-        std::ostringstream why;
-        why << "'" << ns << "/min_object_probability' = " << p
-            << " is out of range: accepted [-1, 1] (negative: the model's threshold)";
-        return why.str();
+        return outOfRangeMessage(ns + "/min_object_probability", p, -1.0, 1.0) +
+               " (negative: the model's threshold)";
       }
       std::lock_guard<std::mutex> lock(detector_mutex_);  // between two revolutions
       classifier_->setDecision(p, c.reject_non_objects);

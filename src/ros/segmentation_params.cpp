@@ -1,64 +1,65 @@
 #include "urban_detection/ros/segmentation_params.h"
 
-#include <sstream>
+#include <functional>
+
+#include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {
 namespace ros_conv {
 
 namespace {
 
-class RangeChecker {
- public:
-  explicit RangeChecker(std::string* error) : error_(error) {}
-  template <typename T>
-  void check(const char* name, T value, T lo, T hi) {
-    if (!ok_) return;
-    if (!(value >= lo && value <= hi)) {
-      std::ostringstream s;
-      s << "parameter '" << name << "' = " << value << " is outside [" << lo << ", " << hi << "]";
-      *error_ = s.str();
-      ok_ = false;
+// The accepted ranges, in one list: the start-up loader, dynamic_reconfigure and the offline
+// tools check the same ones. `shown` turns a parameter name into the name shown to the user.
+std::string checkRanges(const core::GridSegmenterParams& p,
+                        const std::function<std::string(const std::string&)>& shown) {
+  std::string error;
+  auto c = [&](const char* name, auto value, auto lo, auto hi, const char* unit = "") {
+    if (error.empty() && !(value >= lo && value <= hi)) {  // NaN is out of range
+      error = outOfRangeMessage(shown(name), value, decltype(value)(lo), decltype(value)(hi),
+                                unit);
     }
-  }
-  bool ok() const { return ok_; }
-
- private:
-  std::string* error_;
-  bool ok_ = true;
-};
+  };
+  c("sensor_height_m", p.sensor_height_m, -10.0, 10.0, "m");
+  c("cell_size_m", p.cell_size_m, 0.05, 5.0, "m");
+  c("max_range_m", p.max_range_m, 1.0, 250.0, "m");
+  c("max_abs_height_m", p.max_abs_height_m, 1.0, 1000.0, "m");
+  c("min_points_per_cell", p.min_points_per_cell, 1, 1000, "points");
+  c("ground_max_range_m", p.ground_max_range_m, 0.01, 2.0, "m");
+  c("ground_tolerance_m", p.ground_tolerance_m, 0.0, 2.0, "m");
+  c("ground_max_step_m", p.ground_max_step_m, 0.0, 2.0, "m");
+  c("ground_max_gap_m", p.ground_max_gap_m, 0.0, 20.0, "m");
+  c("seed_radius_m", p.seed_radius_m, 0.0, 250.0, "m");
+  c("seed_max_abs_height_m", p.seed_max_abs_height_m, 0.0, 5.0, "m");
+  c("terrain_fill_iterations", p.terrain_fill_iterations, 0, 100, "cells");
+  c("terrain_max_offset_m", p.terrain_max_offset_m, 0.0, 5.0, "m");
+  c("tall_min_height_m", p.tall_min_height_m, 0.1, 20.0, "m");
+  c("tall_min_range_m", p.tall_min_range_m, 0.1, 50.0, "m");
+  c("vehicle_max_height_m", p.vehicle_max_height_m, 0.0, 20.0, "m");
+  c("vehicle_max_length_m", p.vehicle_max_length_m, 0.5, 100.0, "m");
+  c("vehicle_max_width_m", p.vehicle_max_width_m, 0.5, 100.0, "m");
+  c("fov_top_elevation_deg", p.fov_top_elevation_deg, -30.0, 30.0, "deg");
+  c("hough/max_range_m", p.hough.max_range_m, 1.0, 250.0, "m");
+  c("hough/votes", p.hough.votes, 1, 10000);
+  c("hough/min_line_length_m", p.hough.min_line_length_m, 0.0, 500.0, "m");
+  c("hough/max_line_gap_m", p.hough.max_line_gap_m, 0.0, 100.0, "m");
+  c("hough/theta_resolution_deg", p.hough.theta_resolution_deg, 0.1, 45.0, "deg");
+  c("hough/min_tall_fraction", p.hough.min_tall_fraction, 0.0, 1.0);
+  c("hough/min_mixed_wall_length_m", p.hough.min_mixed_wall_length_m, 0.0, 500.0, "m");
+  c("hough/line_half_width_cells", p.hough.line_half_width_cells, 0, 5, "cells");
+  return error;
+}
 
 }  // namespace
 
 bool validateGridSegmenterParams(const core::GridSegmenterParams& p, std::string* error) {
-  RangeChecker c(error);
-  c.check("sensor_height_m", p.sensor_height_m, -10.0, 10.0);
-  c.check("cell_size_m", p.cell_size_m, 0.05, 5.0);
-  c.check("max_range_m", p.max_range_m, 1.0, 250.0);
-  c.check("max_abs_height_m", p.max_abs_height_m, 1.0, 1000.0);
-  c.check("min_points_per_cell", p.min_points_per_cell, 1, 1000);
-  c.check("ground_max_range_m", p.ground_max_range_m, 0.01, 2.0);
-  c.check("ground_tolerance_m", p.ground_tolerance_m, 0.0, 2.0);
-  c.check("ground_max_step_m", p.ground_max_step_m, 0.0, 2.0);
-  c.check("ground_max_gap_m", p.ground_max_gap_m, 0.0, 20.0);
-  c.check("seed_radius_m", p.seed_radius_m, 0.0, 250.0);
-  c.check("seed_max_abs_height_m", p.seed_max_abs_height_m, 0.0, 5.0);
-  c.check("terrain_fill_iterations", p.terrain_fill_iterations, 0, 100);
-  c.check("terrain_max_offset_m", p.terrain_max_offset_m, 0.0, 5.0);
-  c.check("tall_min_height_m", p.tall_min_height_m, 0.1, 20.0);
-  c.check("tall_min_range_m", p.tall_min_range_m, 0.1, 50.0);
-  c.check("vehicle_max_height_m", p.vehicle_max_height_m, 0.0, 20.0);
-  c.check("vehicle_max_length_m", p.vehicle_max_length_m, 0.5, 100.0);
-  c.check("vehicle_max_width_m", p.vehicle_max_width_m, 0.5, 100.0);
-  c.check("fov_top_elevation_deg", p.fov_top_elevation_deg, -30.0, 30.0);
-  c.check("hough/max_range_m", p.hough.max_range_m, 1.0, 250.0);
-  c.check("hough/votes", p.hough.votes, 1, 10000);
-  c.check("hough/min_line_length_m", p.hough.min_line_length_m, 0.0, 500.0);
-  c.check("hough/max_line_gap_m", p.hough.max_line_gap_m, 0.0, 100.0);
-  c.check("hough/theta_resolution_deg", p.hough.theta_resolution_deg, 0.1, 45.0);
-  c.check("hough/min_tall_fraction", p.hough.min_tall_fraction, 0.0, 1.0);
-  c.check("hough/min_mixed_wall_length_m", p.hough.min_mixed_wall_length_m, 0.0, 500.0);
-  c.check("hough/line_half_width_cells", p.hough.line_half_width_cells, 0, 5);
-  return c.ok();
+  *error = checkRanges(p, [](const std::string& name) { return name; });
+  return error->empty();
+}
+
+std::string checkGridSegmenterParams(const ros::NodeHandle& nh,
+                                     const core::GridSegmenterParams& p) {
+  return checkRanges(p, [&nh](const std::string& name) { return nh.resolveName(name); });
 }
 
 bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParams* p,
@@ -72,6 +73,7 @@ bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParam
   nh.param("ground_max_range_m", p->ground_max_range_m, p->ground_max_range_m);
   nh.param("ground_tolerance_m", p->ground_tolerance_m, p->ground_tolerance_m);
   nh.param("ground_max_step_m", p->ground_max_step_m, p->ground_max_step_m);
+  nh.param("curb_cells_ground", p->curb_cells_ground, p->curb_cells_ground);
   nh.param("ground_max_gap_m", p->ground_max_gap_m, p->ground_max_gap_m);
   nh.param("seed_radius_m", p->seed_radius_m, p->seed_radius_m);
   nh.param("seed_max_abs_height_m", p->seed_max_abs_height_m, p->seed_max_abs_height_m);
@@ -95,7 +97,8 @@ bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParam
            h.min_mixed_wall_length_m);
   nh.param("hough/extend_lines", h.extend_lines, h.extend_lines);
   nh.param("hough/line_half_width_cells", h.line_half_width_cells, h.line_half_width_cells);
-  return validateGridSegmenterParams(*p, error);
+  *error = checkGridSegmenterParams(nh, *p);
+  return error->empty();
 }
 
 }  // namespace ros_conv

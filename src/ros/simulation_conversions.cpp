@@ -5,6 +5,7 @@
 #include <rosbag/bag.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_msgs/TFMessage.h>
+#include <topic_tools/shape_shifter.h>
 
 #include "urban_detection/core/object_class.h"
 
@@ -61,6 +62,35 @@ void toTransforms(const core::LidarSimulator& sim, double t_s, double stamp_s,
   base_sensor->child_frame_id = frames.sensor;
 }
 
+namespace {
+
+// The message definition a velodyne driver's bag carries: ours with the package of the scan
+// and packet types renamed (the MD5 sum does not depend on the package name).
+std::string velodyneMsgsDefinition() {
+  std::string def = ros::message_traits::Definition<urban_detection::VelodyneScan>::value();
+  const std::string from = "urban_detection/VelodynePacket", to = "velodyne_msgs/VelodynePacket";
+  for (std::size_t at = def.find(from); at != std::string::npos; at = def.find(from, at)) {
+    def.replace(at, from.size(), to);
+    at += to.size();
+  }
+  return def;
+}
+
+}  // namespace
+
+topic_tools::ShapeShifter asVelodyneMsgsScan(const urban_detection::VelodyneScan& scan) {
+  static const std::string definition = velodyneMsgsDefinition();
+  std::vector<std::uint8_t> buffer(ros::serialization::serializationLength(scan));
+  ros::serialization::OStream out(buffer.data(), static_cast<std::uint32_t>(buffer.size()));
+  ros::serialization::serialize(out, scan);
+  topic_tools::ShapeShifter shifter;
+  shifter.morph(ros::message_traits::MD5Sum<urban_detection::VelodyneScan>::value(),
+                kVelodyneMsgsScanType, definition, "false");
+  ros::serialization::IStream in(buffer.data(), static_cast<std::uint32_t>(buffer.size()));
+  shifter.read(in);
+  return shifter;
+}
+
 SimulationBagWriter::SimulationBagWriter(const std::string& path, const SimulationFrames& frames)
     : bag_(std::make_unique<rosbag::Bag>(path, rosbag::bagmode::Write)), frames_(frames) {}
 
@@ -87,9 +117,9 @@ void SimulationBagWriter::write(const core::LidarSimulator& sim, const core::Sim
                &base_sensor);
   urban_detection::VelodyneScan scan;
   toScanMsg(rev, frames_.sensor, &scan);
-  // Recorded like a driver: the scan arrives with its last packet.
+  // Recorded like a driver: the scan arrives with its last packet, as velodyne_msgs/VelodyneScan.
   const ros::Time arrival = ros::Time().fromSec(rev.packet_stamps_s.back());
-  bag_->write("/velodyne_packets", arrival, scan);
+  bag_->write("/velodyne_packets", arrival, asVelodyneMsgsScan(scan));
   urban_detection::GroundTruth gt;
   toGroundTruthMsg(rev, frames_.sensor, &gt);
   bag_->write("/ground_truth", arrival, gt);

@@ -255,6 +255,7 @@ bool setParam(core::GridSegmenterParams* p, const std::string& kv) {
                                     {"hough.line_half_width_cells", &p->hough.line_half_width_cells}};
   if (k == "hough.extend_lines") { p->hough.extend_lines = v != 0.0; return true; }
   if (k == "ground_in_sparse_cells") { p->ground_in_sparse_cells = v != 0.0; return true; }
+  if (k == "curb_cells_ground") { p->curb_cells_ground = v != 0.0; return true; }
   if (d.count(k)) { *d[k] = v; return true; }
   if (di.count(k)) { *di[k] = static_cast<int>(v); return true; }
   return false;

@@ -1,5 +1,5 @@
 // urban_detection_simulate: runs a simulated HDL-64E drive offline and writes a pcap, a bag
-// (VelodyneScan + GroundTruth + tf) and/or a ground-truth file, for N revolutions.
+// (velodyne_msgs/VelodyneScan + GroundTruth + tf) and/or a ground-truth file, for N revolutions.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>

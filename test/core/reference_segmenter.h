@@ -208,6 +208,23 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
       cls[c] = SegmentClass::kGround;
       state[c] = kFilled;
       ground[c] = g.mean();
+    } else if (p.curb_cells_ground && state[c] == kReached && g.range() < step && std::fabs(g.z_min - gz) < step &&
+               g.z_max - gz < step && [&] {
+                 // A kerb inside the cell: its top is the ground of a reached neighbour.
+                 const int r = c / side, k = c % side;
+                 for (int dr = -1; dr <= 1; ++dr) {
+                   for (int dk = -1; dk <= 1; ++dk) {
+                     const int nr = r + dr, nk = k + dk;
+                     if ((dr == 0 && dk == 0) || nr < 0 || nr >= side || nk < 0 || nk >= side) {
+                       continue;
+                     }
+                     const int n = nr * side + nk;
+                     if (state[n] == kReached && std::fabs(ground[n] - g.z_max) < tol) return true;
+                   }
+                 }
+                 return false;
+               }()) {
+      cls[c] = SegmentClass::kGround;
     } else {
       cls[c] = SegmentClass::kShort;
       float x, y;

@@ -101,7 +101,8 @@ void expectSameAsReference(core::GridSegmenter* seg, const CloudXYZIRT& cloud,
 }
 
 std::vector<core::GridSegmenterParams> variants() {
-  std::vector<core::GridSegmenterParams> v(9);
+  std::vector<core::GridSegmenterParams> v(10);
+  v[9].curb_cells_ground = true;
   v[1].hough.enabled = false;
   v[2].ground_in_sparse_cells = false;
   v[2].min_points_per_cell = 6;

@@ -2,8 +2,10 @@
 // points as the ground truth has labels, stamps pair up, tf covers every packet.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
+#include <vector>
 
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -80,6 +82,57 @@ TEST(SimulationBag, WrittenBagReplaysThroughTheDecoder) {
   ASSERT_EQ(tf_stamps.size(), 4u);
   EXPECT_NEAR(tf_stamps.front(), decoded.begin()->first - 0.1, 0.001);
   EXPECT_GE(tf_stamps.back(), decoded.rbegin()->first);
+  bag.close();
+  std::remove(path.c_str());
+}
+
+// Bag tools and bag.launch see the scans as a velodyne driver records them: connection type
+// velodyne_msgs/VelodyneScan with velodyne_msgs type names in its definition, our MD5 sum, and
+// the messages still read back as urban_detection::VelodyneScan, every packet in place.
+TEST(SimulationBag, ScansAreRecordedAsVelodyneMsgsVelodyneScan) {
+  ros::Time::init();
+  const ud::core::SimulationConfig c =
+      ud::core::loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
+  ud::core::LidarSimulator sim(ud::core::generateScene(c.scene, c.drive), c.scene, c.drive,
+                               ud::core::Calibration::nominalHdl64eS2(), c.sensor);
+  const std::string path = ud_test::tempPath("sim_velodyne_msgs.bag");
+  std::vector<ud::core::SimRevolution> revs(2);
+  {
+    ud::ros_conv::SimulationBagWriter writer(path);
+    for (auto& rev : revs) {
+      sim.simulateNext(&rev);
+      writer.write(sim, rev);
+    }
+  }
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  rosbag::View view(bag, rosbag::TopicQuery("/velodyne_packets"));
+  const std::vector<const rosbag::ConnectionInfo*> connections = view.getConnections();
+  ASSERT_EQ(connections.size(), 1u);
+  EXPECT_EQ(connections[0]->datatype, "velodyne_msgs/VelodyneScan");
+  EXPECT_EQ(connections[0]->md5sum, ros::message_traits::MD5Sum<ud::VelodyneScan>::value());
+  EXPECT_EQ(connections[0]->md5sum, "50804fc9533a0e579e6322c04ae70566");  // velodyne_msgs'
+  EXPECT_NE(connections[0]->msg_def.find("MSG: velodyne_msgs/VelodynePacket"), std::string::npos)
+      << connections[0]->msg_def;
+  EXPECT_EQ(connections[0]->msg_def.find("urban_detection"), std::string::npos)
+      << connections[0]->msg_def;
+  std::size_t r = 0;
+  for (const rosbag::MessageInstance& m : view) {
+    EXPECT_EQ(m.getDataType(), "velodyne_msgs/VelodyneScan");
+    ASSERT_LT(r, revs.size());
+    const ud::VelodyneScan::ConstPtr scan = m.instantiate<ud::VelodyneScan>();
+    ASSERT_TRUE(scan);
+    EXPECT_EQ(scan->header.frame_id, "velodyne");
+    ASSERT_EQ(scan->packets.size(), revs[r].packets.size());
+    ASSERT_GT(scan->packets.size(), 0u);
+    for (std::size_t i = 0; i < scan->packets.size(); ++i) {
+      ASSERT_TRUE(std::equal(revs[r].packets[i].begin(), revs[r].packets[i].end(),
+                             scan->packets[i].data.begin()))
+          << "revolution " << r << " packet " << i;
+    }
+    EXPECT_NEAR(scan->packets.back().stamp.toSec(), revs[r].packet_stamps_s.back(), 1e-6);
+    ++r;
+  }
+  EXPECT_EQ(r, revs.size());
   bag.close();
   std::remove(path.c_str());
 }

@@ -1,12 +1,13 @@
 // dynamic_reconfigure of the detector and marker nodelets (loaded into this process):
 //  * a valid update takes effect from the next revolution (min_points changes the object count
 //    of a scene whose clusters are known by construction);
-//  * an invalid combination is rejected naming the parameters, the previous values stay in
-//    force and are what the service answers;
-//  * a value outside the accepted range (the start-up loader's) is not clamped but rejected,
-//    for every reconfigurable nodelet: the whole set is refused, the error names the parameter
-//    and the range (an identical error is not repeated within 5 s), the previous values stay in
-//    force and are what the service answers and ~parameter_updates publishes;
+//  * an invalid combination is refused: the service call fails with the reason naming the
+//    parameters, the previous values stay in force;
+//  * a value outside the accepted range (the start-up loader's) is not clamped but refused,
+//    for every reconfigurable nodelet: the whole set is refused, the call fails with one wording
+//    naming the parameter and the range (also logged), the previous values stay in force and
+//    are what the service answers next and ~parameter_updates publishes;
+//  * `dynparam set` of a refused value exits non-zero and prints the reason;
 //  * out-of-range parameters at start fail onInit naming the parameter and its range.
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
@@ -20,7 +21,10 @@
 #include <urban_detection/DetectedObjectArray.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <sys/wait.h>
+
 #include <chrono>
+#include <cstdio>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -36,10 +40,11 @@ namespace {
 using rostest_util::RosoutWatcher;
 using rostest_util::waitFor;
 
-// Calls <ns>/set_parameters with the given values; returns the configuration it answers with.
-dynamic_reconfigure::Config setParameters(const std::string& ns,
-                                          const std::vector<std::pair<std::string, int>>& ints,
-                                          const std::vector<std::pair<std::string, double>>& dbls) {
+// Calls <ns>/set_parameters with the given values: true when the update was accepted, with the
+// configuration the server answers in `answer`.
+bool trySetParameters(const std::string& ns, const std::vector<std::pair<std::string, int>>& ints,
+                      const std::vector<std::pair<std::string, double>>& dbls,
+                      dynamic_reconfigure::Config* answer = nullptr) {
   dynamic_reconfigure::Reconfigure srv;
   for (const auto& [name, value] : ints) {
     dynamic_reconfigure::IntParameter p;
@@ -54,8 +59,18 @@ dynamic_reconfigure::Config setParameters(const std::string& ns,
     srv.request.config.doubles.push_back(p);
   }
   EXPECT_TRUE(ros::service::waitForService(ns + "/set_parameters", 10000)) << ns;
-  EXPECT_TRUE(ros::service::call(ns + "/set_parameters", srv)) << ns;
-  return srv.response.config;
+  const bool ok = ros::service::call(ns + "/set_parameters", srv);
+  if (answer) *answer = srv.response.config;
+  return ok;
+}
+
+// An update that must be accepted; returns the configuration the server answers with.
+dynamic_reconfigure::Config setParameters(const std::string& ns,
+                                          const std::vector<std::pair<std::string, int>>& ints,
+                                          const std::vector<std::pair<std::string, double>>& dbls) {
+  dynamic_reconfigure::Config answer;
+  EXPECT_TRUE(trySetParameters(ns, ints, dbls, &answer)) << ns << ": update refused";
+  return answer;
 }
 
 int intOf(const dynamic_reconfigure::Config& c, const std::string& name) {
@@ -122,7 +137,8 @@ TEST(Reconfigure, HierarchicalGridMinPointsAppliesFromTheNextRevolution) {
   ASSERT_TRUE(waitFor([&] { return received() == 1; }, 5.0));
   const std::string ns = "/rc_hg/detector/hierarchical_grid";
   // A set with a valid min_points and an out-of-range xi is refused as a whole.
-  dynamic_reconfigure::Config c = setParameters(ns, {{"min_points", 3}, {"xi", 20}}, {});
+  EXPECT_FALSE(trySetParameters(ns, {{"min_points", 3}, {"xi", 20}}, {}));
+  dynamic_reconfigure::Config c = current(ns);
   EXPECT_EQ(intOf(c, "min_points"), 10);
   EXPECT_EQ(intOf(c, "xi"), 3);
   pub.publish(twoClusters(2));
@@ -152,9 +168,10 @@ TEST(Reconfigure, KdTreeRejectsInvalidSetsAndOutOfRangeValues) {
   const dynamic_reconfigure::Config before = current(ns);
   const double tolerance = doubleOf(before, "cluster_tolerance_m");
   const int min_size = intOf(before, "min_cluster_size");
-  // min_cluster_size > max_cluster_size: rejected, previous values answered and kept.
-  dynamic_reconfigure::Config c =
-      setParameters(ns, {{"min_cluster_size", 2000}, {"max_cluster_size", 1000}}, {});
+  // min_cluster_size > max_cluster_size: refused, previous values kept.
+  EXPECT_FALSE(
+      trySetParameters(ns, {{"min_cluster_size", 2000}, {"max_cluster_size", 1000}}, {}));
+  dynamic_reconfigure::Config c = current(ns);
   EXPECT_EQ(intOf(c, "min_cluster_size"), min_size);
   EXPECT_EQ(intOf(c, "max_cluster_size"), intOf(before, "max_cluster_size"));
   EXPECT_TRUE(waitFor([&] {
@@ -162,9 +179,11 @@ TEST(Reconfigure, KdTreeRejectsInvalidSetsAndOutOfRangeValues) {
                                                       "min_cluster_size");
   }, 5.0));
   // 50 m is outside [0.01, 10] m: not clamped to 10 but refused with the valid value sent with
-  // it, twice; the error names parameter and range once (identical errors are throttled).
+  // it, each time it is sent; the error names parameter and range.
   for (int i = 0; i < 2; ++i) {
-    c = setParameters(ns, {{"min_cluster_size", 20}}, {{"cluster_tolerance_m", 50.0}});
+    EXPECT_FALSE(
+        trySetParameters(ns, {{"min_cluster_size", 20}}, {{"cluster_tolerance_m", 50.0}}));
+    c = current(ns);
     EXPECT_DOUBLE_EQ(doubleOf(c, "cluster_tolerance_m"), tolerance);
     EXPECT_EQ(intOf(c, "min_cluster_size"), min_size);
   }
@@ -183,11 +202,10 @@ TEST(Reconfigure, KdTreeRejectsInvalidSetsAndOutOfRangeValues) {
   c = setParameters(ns, {{"min_cluster_size", 20}}, {{"cluster_tolerance_m", 0.3}});
   EXPECT_EQ(intOf(c, "min_cluster_size"), 20);
   EXPECT_DOUBLE_EQ(doubleOf(c, "cluster_tolerance_m"), 0.3);
-  EXPECT_EQ(rosout.count(rosgraph_msgs::Log::ERROR, error), 1);
 }
 
 // Every reconfigurable nodelet: an out-of-range value is refused (not clamped), the error names
-// the parameter and the accepted range, and the previous value is what the service answers.
+// the parameter and the accepted range in one wording, and the previous value stays.
 TEST(Reconfigure, OutOfRangeValuesAreRejectedByEveryNodelet) {
   RosoutWatcher rosout;
   nodelet::Loader manager(false);
@@ -201,11 +219,14 @@ TEST(Reconfigure, OutOfRangeValuesAreRejectedByEveryNodelet) {
   };
   const std::vector<Case> cases = {
       {"/rr_seg/segmentation", "sensor_height_m", 50.0,
-       "'sensor_height_m' = 50 is outside [-10, 10]"},
+       "parameter '/rr_seg/segmentation/sensor_height_m' = 50 is out of range: accepted "
+       "[-10, 10] m"},
       {"/rr_seg/segmentation", "hough_min_tall_fraction", -0.5,
-       "'hough/min_tall_fraction' = -0.5 is outside [0, 1]"},
+       "parameter '/rr_seg/segmentation/hough/min_tall_fraction' = -0.5 is out of range: "
+       "accepted [0, 1]"},
       {"/rr_seg/segmentation", "hough_min_mixed_wall_length_m", 600.0,
-       "'hough/min_mixed_wall_length_m' = 600 is outside [0, 500]"},
+       "parameter '/rr_seg/segmentation/hough/min_mixed_wall_length_m' = 600 is out of range: "
+       "accepted [0, 500] m"},
       {"/rr_hg/detector/hierarchical_grid", "psi_max_m", 500.0,
        "'/rr_hg/detector/hierarchical_grid/psi_max_m' = 500 is out of range: accepted [0, 100] m"},
       {"/rr_hg/detector/hierarchical_grid", "bridge_range_m", 5000.0,
@@ -216,8 +237,7 @@ TEST(Reconfigure, OutOfRangeValuesAreRejectedByEveryNodelet) {
   };
   for (const Case& k : cases) {
     const double before = doubleOf(current(k.ns), k.name);
-    const dynamic_reconfigure::Config c = setParameters(k.ns, {}, {{k.name, k.value}});
-    EXPECT_DOUBLE_EQ(doubleOf(c, k.name), before) << k.ns << " " << k.name;
+    EXPECT_FALSE(trySetParameters(k.ns, {}, {{k.name, k.value}})) << k.ns << " " << k.name;
     EXPECT_DOUBLE_EQ(doubleOf(current(k.ns), k.name), before) << k.ns << " " << k.name;
     EXPECT_TRUE(waitFor(
         [&] {
@@ -229,9 +249,8 @@ TEST(Reconfigure, OutOfRangeValuesAreRejectedByEveryNodelet) {
   }
   // Integers too (no clamping to an int range either).
   const int xi = intOf(current("/rr_hg/detector/hierarchical_grid"), "xi");
-  const dynamic_reconfigure::Config c =
-      setParameters("/rr_hg/detector/hierarchical_grid", {{"xi", 0}}, {});
-  EXPECT_EQ(intOf(c, "xi"), xi);
+  EXPECT_FALSE(trySetParameters("/rr_hg/detector/hierarchical_grid", {{"xi", 0}}, {}));
+  EXPECT_EQ(intOf(current("/rr_hg/detector/hierarchical_grid"), "xi"), xi);
   EXPECT_TRUE(waitFor(
       [&] {
         return rosout.contains(rosgraph_msgs::Log::ERROR,
@@ -252,8 +271,7 @@ TEST(Reconfigure, ClassifierThresholdIsTunableAndOutOfRangeIsRefused) {
   EXPECT_DOUBLE_EQ(doubleOf(current(ns), "min_object_probability"), -1.0);
   dynamic_reconfigure::Config c = setParameters(ns, {}, {{"min_object_probability", 0.8}});
   EXPECT_DOUBLE_EQ(doubleOf(c, "min_object_probability"), 0.8);
-  c = setParameters(ns, {}, {{"min_object_probability", 1.5}});
-  EXPECT_DOUBLE_EQ(doubleOf(c, "min_object_probability"), 0.8);
+  EXPECT_FALSE(trySetParameters(ns, {}, {{"min_object_probability", 1.5}}));
   EXPECT_DOUBLE_EQ(doubleOf(current(ns), "min_object_probability"), 0.8);
   EXPECT_TRUE(waitFor(
       [&] {
@@ -262,6 +280,72 @@ TEST(Reconfigure, ClassifierThresholdIsTunableAndOutOfRangeIsRefused) {
                                "accepted [-1, 1]");
       },
       5.0));
+}
+
+// Runs a shell command (stderr joined to stdout): its exit status (-1 when it did not exit) and
+// its output.
+std::pair<int, std::string> runCommand(const std::string& command) {
+  std::string output;
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return {-1, ""};
+  char buffer[512];
+  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+// What a user types. A refused value fails the command (non-zero exit) for both stages that
+// validate updates, segmentation and detector (detector parameters and classifier), and the
+// service error carries the reason in the one wording, which `rosservice call` prints.
+// dynparam itself (dynamic_reconfigure 1.7) turns any failed call into a traceback ending in
+// "service call failed" without the server's text: only its exit status is checked.
+TEST(Reconfigure, CommandLineToolsFailOnARefusedValueAndShowTheReason) {
+  ros::param::set("/dp_hg/detector/classifier/enabled", true);
+  ros::param::set("/dp_hg/detector/classifier/model",
+                  std::string(UD_SOURCE_DIR) + "/config/object_classifier.yml.gz");
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/dp_seg/segmentation", "urban_detection/GridSegmentation", {}, {}));
+  ASSERT_TRUE(manager.load("/dp_hg/detector", "urban_detection/HierarchicalGridDetector", {}, {}));
+  struct Case {
+    std::string ns, name, value, error;
+  };
+  const std::vector<Case> cases = {
+      {"/dp_seg/segmentation", "sensor_height_m", "50",
+       "/dp_seg/segmentation: dynamic_reconfigure update refused, previous values kept: "
+       "parameter '/dp_seg/segmentation/sensor_height_m' = 50 is out of range: accepted "
+       "[-10, 10] m"},
+      {"/dp_hg/detector/hierarchical_grid", "psi_max_m", "500",
+       "/dp_hg/detector/hierarchical_grid: dynamic_reconfigure update refused, previous values "
+       "kept: parameter '/dp_hg/detector/hierarchical_grid/psi_max_m' = 500 is out of range: "
+       "accepted [0, 100] m"},
+      {"/dp_hg/detector/classifier", "min_object_probability", "1.5",
+       "/dp_hg/detector/classifier: dynamic_reconfigure update refused, previous values kept: "
+       "parameter '/dp_hg/detector/classifier/min_object_probability' = 1.5 is out of range: "
+       "accepted [-1, 1]"},
+  };
+  for (const Case& k : cases) {
+    ASSERT_TRUE(ros::service::waitForService(k.ns + "/set_parameters", 10000)) << k.ns;
+    const double before = doubleOf(current(k.ns), k.name);
+    const auto [dynparam_status, dynparam_output] = runCommand(
+        "timeout 60 rosrun dynamic_reconfigure dynparam set " + k.ns + " " + k.name + " " +
+        k.value);
+    EXPECT_NE(dynparam_status, 0) << "dynparam set " << k.ns << " " << k.name << " " << k.value
+                                  << ":\n" << dynparam_output;
+    EXPECT_NE(dynparam_output.find("service call failed"), std::string::npos) << dynparam_output;
+    const auto [service_status, service_output] = runCommand(
+        "timeout 60 rosservice call " + k.ns + "/set_parameters \"{config: {doubles: [{name: " +
+        k.name + ", value: " + k.value + "}]}}\"");
+    EXPECT_NE(service_status, 0) << service_output;
+    EXPECT_NE(service_output.find(k.error), std::string::npos)
+        << "rosservice call output:\n" << service_output << "\nexpected:\n" << k.error;
+    EXPECT_DOUBLE_EQ(doubleOf(current(k.ns), k.name), before) << k.ns << " " << k.name;
+  }
+  // An accepted value: exit 0, in force.
+  const auto [status, output] =
+      runCommand("timeout 60 rosrun dynamic_reconfigure dynparam set /dp_seg/segmentation "
+                 "sensor_height_m 1.8");
+  EXPECT_EQ(status, 0) << output;
+  EXPECT_DOUBLE_EQ(doubleOf(current("/dp_seg/segmentation"), "sensor_height_m"), 1.8);
 }
 
 TEST(Reconfigure, MarkersApplyFromTheNextMessage) {

@@ -17,7 +17,9 @@
 ///     (terrain_fill_iterations cells at most).
 ///  4. Cell classes against the local ground g: tall when z_max - g > tall_min_height_m or
 ///     z_max - z_min > tall_min_range_m; ground when all points lie within ground_tolerance_m
-///     of g; short otherwise.
+///     of g, or (curb_cells_ground) when it holds a curb: its z range and all its points within
+///     ground_max_step_m of g and its top the ground of a reached neighbour (a flat cell's g
+///     is its mean, between road and sidewalk); short otherwise.
 ///  4b. Long vehicles (ours): tall cells whose top is at most vehicle_max_height_m above the
 ///     ground (and z range at most that) and short cells form 8-connected groups; the tall
 ///     cells of a group that touches no other tall cell, fits an oriented box of
@@ -60,6 +62,12 @@ struct GridSegmenterParams {
   double ground_tolerance_m = 0.08;   // [m] a point this close above the local ground is ground
   double ground_max_step_m = 0.20;    // [m] elevation step allowed between neighbouring ground
                                       //     cells (curbs, slopes)
+  bool curb_cells_ground = false;     // a reached cell whose points span less than
+                                      //     ground_max_step_m, lie within it of the local
+                                      //     ground and whose top is the ground of a reached
+                                      //     neighbour is ground (a curb inside the cell). Off:
+                                      //     it lowers SemanticKITTI's held-out F (see
+                                      //     docs/measurements.md, 2026-12-05)
   double ground_max_gap_m = 2.0;      // [m] the terrain growing crosses empty or sparse cells
                                       //     over at most this distance (gaps between far rings)
   double seed_radius_m = 12.0;        // [m] ground growing starts from candidates this close

@@ -23,16 +23,25 @@ class ParamError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Throws ParamError unless min <= value <= max (NaN is rejected). `name` is the name shown to
-/// the user, `unit` is appended to the range ("m", "s", "deg"; may be empty).
+/// The one wording of an out-of-range value, at start-up and in a refused dynamic_reconfigure
+/// update of every stage: "parameter '<name>' = <value> is out of range: accepted [<min>,
+/// <max>] <unit>". `name` is the name shown to the user (resolved where a node handle is at
+/// hand), `unit` is appended to the range ("m", "s", "deg"; may be empty).
+template <typename T>
+std::string outOfRangeMessage(const std::string& name, T value, T min, T max,
+                              const std::string& unit = "") {
+  std::ostringstream msg;
+  msg << "parameter '" << name << "' = " << value << " is out of range: accepted [" << min
+      << ", " << max << "]" << (unit.empty() ? "" : " ") << unit;
+  return msg.str();
+}
+
+/// Throws ParamError with outOfRangeMessage() unless min <= value <= max (NaN is rejected).
 template <typename T>
 void checkRange(const std::string& name, T value, T min, T max, const std::string& unit = "") {
   bool ok = value >= min && value <= max;  // false for NaN
   if (ok) return;
-  std::ostringstream msg;
-  msg << "parameter '" << name << "' = " << value << " is out of range: accepted [" << min
-      << ", " << max << "]" << (unit.empty() ? "" : " ") << unit;
-  throw ParamError(msg.str());
+  throw ParamError(outOfRangeMessage(name, value, min, max, unit));
 }
 
 /// Reads `name` (relative to `nh`, usually the private node handle) into `*value` when set, then

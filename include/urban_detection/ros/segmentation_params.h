@@ -14,12 +14,18 @@ namespace ros_conv {
 
 /// Reads every field of `params` present under `nh` (missing ones keep their current value,
 /// the Hough fields under `hough/`). Returns false with `error` naming the first parameter out
-/// of its accepted range (and the range).
+/// of its accepted range (resolved in `nh`) and the range, in outOfRangeMessage()'s wording.
 bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParams* params,
                              std::string* error);
 
-/// Checks the ranges only (shared with loadGridSegmenterParams, usable without ROS params).
+/// Checks the ranges only (shared with loadGridSegmenterParams, usable without ROS params);
+/// the error names the parameter as in config/segmentation.yaml ("hough/votes").
 bool validateGridSegmenterParams(const core::GridSegmenterParams& params, std::string* error);
+
+/// The same check on a complete set for dynamic_reconfigure: "" when accepted, else the error
+/// naming the parameter resolved in `nh` (the nodelet's private namespace) and the range.
+std::string checkGridSegmenterParams(const ros::NodeHandle& nh,
+                                     const core::GridSegmenterParams& params);
 
 }  // namespace ros_conv
 }  // namespace urban_detection

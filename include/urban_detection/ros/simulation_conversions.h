@@ -17,6 +17,9 @@
 namespace rosbag {
 class Bag;
 }
+namespace topic_tools {
+class ShapeShifter;
+}
 
 namespace urban_detection {
 namespace ros_conv {
@@ -42,7 +45,16 @@ void toTransforms(const core::LidarSimulator& sim, double t_s, double stamp_s,
                   const SimulationFrames& frames, geometry_msgs::TransformStamped* odom_base,
                   geometry_msgs::TransformStamped* base_sensor);
 
-/// Writes a simulated drive into a bag: `/velodyne_packets` (VelodyneScan),
+/// The connection type of scans in a velodyne driver's bag; urban_detection/VelodyneScan has the
+/// same MD5 sum and layout, so either type name reads the other's messages.
+constexpr const char* kVelodyneMsgsScanType = "velodyne_msgs/VelodyneScan";
+
+/// `scan` serialised under the type name kVelodyneMsgsScanType (same MD5 sum, the message
+/// definition with velodyne_msgs/ type names), for writing into a bag as a driver would.
+topic_tools::ShapeShifter asVelodyneMsgsScan(const urban_detection::VelodyneScan& scan);
+
+/// Writes a simulated drive into a bag: `/velodyne_packets` (velodyne_msgs/VelodyneScan, as
+/// velodyne drivers record it; instantiates as urban_detection::VelodyneScan too),
 /// `/ground_truth` (GroundTruth), `/tf` (odom -> base_link at every revolution start and at
 /// the end of the last one; tf interpolates in between) and `/tf_static` (base_link -> velodyne).
 class SimulationBagWriter {
