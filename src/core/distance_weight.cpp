@@ -85,7 +85,7 @@ void RingDensity::addDistance(double d_m) {
 std::size_t RingDensity::add(const CloudXYZIRT& cloud) {
   std::size_t used = 0;
   for (const PointXYZIRT& p : cloud.points) {
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    if (!isFinitePoint(p)) continue;
     const double d = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y));
     if (d >= min_m_ && d < max_m_) {
       addDistance(d);

@@ -206,7 +206,7 @@ void buildKittiGroundTruth(const CloudXYZIRT& cloud, const std::vector<KittiLabe
   const double m = params.box_margin_m;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const auto& p = cloud[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+    if (!isFinitePoint(p)) {
       gt->role[i] = PointRole::kExcluded;
       continue;
     }

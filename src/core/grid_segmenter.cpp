@@ -22,10 +22,6 @@ SimpleGridParams gridParamsOf(const GridSegmenterParams& p) {
   return g;
 }
 
-bool isFinitePoint(const PointXYZIRT& p) {
-  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-}
-
 constexpr int kDr[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
 constexpr int kDc[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
 

@@ -445,7 +445,7 @@ std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground)
     const std::int32_t cell = point_cell[i];
     const LabeledPoint& p = points[i];
     if (cell < 0) {
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      if (!isFinitePoint(p)) {
         ++stats_.invalid_points;
       } else {
         ++stats_.outside_points;

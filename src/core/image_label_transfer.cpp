@@ -76,7 +76,7 @@ void ImageLabelTransfer::transfer(const LabeledCloud& object_points,
   const Eigen::Matrix3d r = camera_from_lidar.linear();
   const Eigen::Vector3d t = camera_from_lidar.translation();
   for (const LabeledPoint& p : object_points) {
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+    if (!isFinitePoint(p)) {
       ++stats_.non_finite;
       continue;
     }

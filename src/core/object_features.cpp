@@ -85,7 +85,7 @@ ObjectFeatureVector ObjectFeatureExtractor::compute(const LabeledCloud& foregrou
     const LabeledPoint* found = index_.find(foreground, idx);
     if (!found) continue;
     const LabeledPoint& p = *found;
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    if (!isFinitePoint(p)) continue;
     const double rho = std::sqrt(static_cast<double>(p.x) * p.x + static_cast<double>(p.y) * p.y);
     if (!(rho > 1e-3)) continue;
     const Eigen::Vector3d q(p.x, p.y, p.z);

@@ -69,7 +69,7 @@ ObjectFeatures ObjectFilter::features(const LabeledCloud& foreground,
     const LabeledPoint* found = index_.find(foreground, idx);
     if (!found) continue;
     const LabeledPoint& p = *found;
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    if (!isFinitePoint(p)) continue;
     const double rho = std::hypot(p.x, p.y);
     const double r = std::sqrt(rho * rho + static_cast<double>(p.z) * p.z);
     if (!(r > 0.0)) continue;

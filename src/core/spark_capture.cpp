@@ -272,7 +272,7 @@ std::size_t OrthoRenderer::render(const CloudXYZIRT& cloud, const std::vector<cv
   std::size_t drawn = 0;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const PointXYZIRT& p = cloud[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    if (!isFinitePoint(p)) continue;
     const Eigen::Vector3f local = rot * (Eigen::Vector3f(p.x, p.y, p.z) - pos);
     const float d = local.z();
     if (!(d > 0.0f && d <= max_depth)) continue;

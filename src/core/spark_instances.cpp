@@ -83,7 +83,7 @@ int dbscan(const CloudXYZIRT& cloud, const std::vector<std::uint32_t>& members, 
   sub->reserve(members.size());
   for (std::size_t m = 0; m < members.size(); ++m) {
     const PointXYZIRT& p = cloud[members[m]];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    if (!isFinitePoint(p)) continue;
     sub->push_back(pcl::PointXYZ(p.x, p.y, p.z));
     member_of.push_back(static_cast<std::uint32_t>(m));
   }

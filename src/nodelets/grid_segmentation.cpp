@@ -89,6 +89,8 @@ class GridSegmentation : public nodelet::Nodelet {
   void cloudCb(const boost::shared_ptr<const CloudXYZIRT>& cloud) {  // zero copy
     const ros::WallTime start = ros::WallTime::now();
     diagnostics_->input(cloud->header.seq);
+    // Kept at their index and labelled unknown by the segmenter; counted here.
+    diagnostics_->count("non_finite_points", countNonFinite(*cloud), false);
     std::lock_guard<std::mutex> segment_lock(segment_mutex_);  // vs. reconfigure
     segmenter_->segment(*cloud, &labels_);
     if (labeled_pub_.getNumSubscribers() > 0) {

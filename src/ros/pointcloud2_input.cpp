@@ -109,7 +109,7 @@ bool fromPointCloud2(const sensor_msgs::PointCloud2& msg, CloudXYZIRT* cloud,
       p.intensity = fi.type ? static_cast<float>(read(pt, fi)) : 0.0f;
       p.ring = fr.type ? static_cast<std::uint16_t>(read(pt, fr)) : 0;
       p.time = ft.type ? static_cast<float>(read(pt, ft)) : 0.0f;
-      info->non_finite += !(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
+      info->non_finite += !isFinitePoint(p);
     }
   }
   cloud->width = static_cast<std::uint32_t>(w);

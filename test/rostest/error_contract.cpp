@@ -1,6 +1,7 @@
 // Error contract (issue 8), nodelets loaded into this process:
-//  * a cloud without x, y, z: one clear ERROR naming the fields it has (not one per message),
-//    every such cloud counted (rejected_inputs), the next good cloud processed;
+//  * a PointCloud2 without x, y, z (CloudInput, the adapter of PointCloud2 sources): one clear
+//    ERROR naming the fields it has (not one per message), every such cloud counted
+//    (rejected_inputs), the next good cloud processed by the segmentation behind it;
 //  * non-finite points: kept at their index but labelled unknown, never in the foreground,
 //    counted (non_finite_points);
 //  * a truncated pcap: the whole revolutions before the cut are published, one ERROR saying
@@ -57,13 +58,14 @@ TEST(ErrorContract, CloudWithoutXyzIsReportedOnceAndCounted) {
   RosoutWatcher rosout;
   DiagnosticsWatcher diagnostics;
   nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/ec_fields/input", "urban_detection/CloudInput", {}, {}));
   ASSERT_TRUE(manager.load("/ec_fields/seg", "urban_detection/GridSegmentation", {}, {}));
   ros::NodeHandle nh("/ec_fields");
   std::mutex mutex;
   int outputs = 0;
   // Advertised before the subscriptions that make the lazy nodelet subscribe to it: a
   // subscription racing an advertise of the same process may never be connected (roscpp).
-  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("velodyne_points", 10);
+  ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("points_in", 10);
   ros::Subscriber sub = nh.subscribe<LabeledCloud>(
       "segmentation/foreground", 10, [&](const boost::shared_ptr<const LabeledCloud>&) {
         std::lock_guard<std::mutex> lock(mutex);
@@ -87,13 +89,15 @@ TEST(ErrorContract, CloudWithoutXyzIsReportedOnceAndCounted) {
     pub.publish(bad);
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  pub.publish(street());
+  sensor_msgs::PointCloud2 good;
+  pcl::toROSMsg(*street(), good);
+  pub.publish(good);
   ASSERT_TRUE(waitFor([&] {
     std::lock_guard<std::mutex> lock(mutex);
     return outputs == 1;
   }, 10.0)) << "the good cloud after the bad ones was not processed";
   EXPECT_TRUE(waitFor([&] {
-    return diagnostics.value("ec_fields/seg", "rejected_inputs") == rejected;
+    return diagnostics.value("ec_fields/input", "rejected_inputs") == rejected;
   }, 5.0));
   EXPECT_EQ(rosout.count(rosgraph_msgs::Log::ERROR,
                          "without x, y and z fields (fields: intensity)"), 1);

@@ -2,6 +2,8 @@
 /// Point types shared by every stage of the pipeline (ROS-free).
 #pragma once
 
+#include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #define PCL_NO_PRECOMPILE
@@ -67,6 +69,20 @@ inline LabeledPoint makeLabeledPoint(float x, float y, float z, std::uint32_t la
 
 using CloudXYZIRT = pcl::PointCloud<PointXYZIRT>;
 using LabeledCloud = pcl::PointCloud<LabeledPoint>;
+
+/// True when x, y and z are all finite (no NaN, no infinity).
+template <typename PointT>
+inline bool isFinitePoint(const PointT& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
+
+/// The number of points of `cloud` with a NaN or infinite coordinate.
+template <typename PointT>
+inline std::size_t countNonFinite(const pcl::PointCloud<PointT>& cloud) {
+  std::size_t n = 0;
+  for (const PointT& p : cloud.points) n += !isFinitePoint(p);
+  return n;
+}
 
 }  // namespace urban_detection
 
