@@ -25,7 +25,38 @@ const char* const kFeatureNames[kNumObjectFeatures] = {
     "intensity_q50",   "intensity_q90",      "intensity_max"};
 
 
+// Intensity buckets of the quantile selection, monotone in the value: below 0, one per unit of
+// [0, 256) (an HDL-64E reports integer intensities, so a bucket usually holds one value), 256
+// and above.
+constexpr int kIntensityBuckets = 258;
+inline int intensityBucket(float v) {
+  return v < 0.0f ? 0 : v >= 256.0f ? kIntensityBuckets - 1 : 1 + static_cast<int>(v);
+}
+
 }  // namespace
+
+void selectRanks(const std::vector<float>& values, const std::size_t* ranks, int count,
+                 float* out, std::vector<float>* scratch) {
+  std::uint32_t start[kIntensityBuckets + 1] = {};
+  for (const float v : values) ++start[intensityBucket(v) + 1];
+  for (int b = 1; b <= kIntensityBuckets; ++b) start[b] += start[b - 1];
+  int b = 0;
+  for (int r = 0; r < count; ++r) {
+    const std::size_t k = ranks[r];
+    if (r > 0 && k == ranks[r - 1]) {
+      out[r] = out[r - 1];
+      continue;
+    }
+    while (start[b + 1] <= k) ++b;  // the bucket holding rank k (ranks ascending)
+    scratch->clear();
+    for (const float v : values) {
+      if (intensityBucket(v) == b) scratch->push_back(v);
+    }
+    const auto kth = scratch->begin() + static_cast<std::ptrdiff_t>(k - start[b]);
+    std::nth_element(scratch->begin(), kth, scratch->end());
+    out[r] = *kth;
+  }
+}
 
 std::string validate(const ObjectFeatureParams& p) {
   std::string error;
@@ -253,21 +284,15 @@ ObjectFeatureVector ObjectFeatureExtractor::compute(const LabeledCloud& foregrou
   f[kFeatIntensityMean] = static_cast<float>(imean);
   f[kFeatIntensityStd] = static_cast<float>(std::sqrt(std::max(0.0, isq / nd - imean * imean)));
   f[kFeatIntensityMax] = imax;
-  // The median first; the 10 % and 90 % quantiles then lie in its lower and upper parts.
-  const std::size_t k50 = std::min(n - 1, static_cast<std::size_t>(0.5 * nd));
-  const std::size_t k10 = std::min(n - 1, static_cast<std::size_t>(0.1 * nd));
-  const std::size_t k90 = std::min(n - 1, static_cast<std::size_t>(0.9 * nd));
-  const auto mid = intensities_.begin() + static_cast<std::ptrdiff_t>(k50);
-  std::nth_element(intensities_.begin(), mid, intensities_.end());
-  f[kFeatIntensityQ50] = *mid;
-  std::nth_element(intensities_.begin(), intensities_.begin() + static_cast<std::ptrdiff_t>(k10),
-                   mid);
-  f[kFeatIntensityQ10] = intensities_[k10];
-  if (k90 > k50) {
-    std::nth_element(mid + 1, intensities_.begin() + static_cast<std::ptrdiff_t>(k90),
-                     intensities_.end());
-  }
-  f[kFeatIntensityQ90] = intensities_[k90];
+  // The k-th smallest values, exactly as a sort would place them.
+  const std::size_t ranks[3] = {std::min(n - 1, static_cast<std::size_t>(0.1 * nd)),
+                                std::min(n - 1, static_cast<std::size_t>(0.5 * nd)),
+                                std::min(n - 1, static_cast<std::size_t>(0.9 * nd))};
+  float quantiles[3];
+  selectRanks(intensities_, ranks, 3, quantiles, &bucket_values_);
+  f[kFeatIntensityQ10] = quantiles[0];
+  f[kFeatIntensityQ50] = quantiles[1];
+  f[kFeatIntensityQ90] = quantiles[2];
   return f;
 }
 

@@ -3,15 +3,20 @@
 // packet of a revolution, which stamps it, to the subscriber). Writes p50/p95/p99/max, the
 // message count and rate per topic as JSON after a warm-up and a measuring window. Used by
 // `scripts/run latency`; works on any ROS graph whose stamps are on this machine's clock.
+// Also keeps the last /diagnostics status of every stage reporting a processing time, and writes
+// its timing, rate and skip figures under "stages" (where a latency figure comes from).
 #include <algorithm>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -62,6 +67,22 @@ class Probe {
                                    static_cast<double>(stamp.toNSec())));
   }
 
+  void diagnostics(const diagnostic_msgs::DiagnosticArray& array) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const diagnostic_msgs::DiagnosticStatus& status : array.status) {
+      std::vector<std::pair<std::string, std::string>> kept;
+      bool is_stage = false;
+      for (const diagnostic_msgs::KeyValue& kv : status.values) {
+        is_stage = is_stage || kv.key == "mean processing time [ms]";
+        if (kv.key.find("[ms]") != std::string::npos ||
+            kv.key.find("[Hz]") != std::string::npos || kv.key == "skipped_revolutions") {
+          kept.emplace_back(kv.key, kv.value);
+        }
+      }
+      if (is_stage) stages_[status.name] = kept;
+    }
+  }
+
   bool started() {
     std::lock_guard<std::mutex> lock(mutex_);
     return !start_.isZero() && (ros::WallTime::now() - start_).toSec() >= warmup_s_;
@@ -94,6 +115,20 @@ class Probe {
       }
       std::fprintf(out, "}");
     }
+    std::fprintf(out, "}, \"stages\": {");
+    bool first_stage = true;
+    for (const auto& stage : stages_) {
+      std::fprintf(out, "%s\"%s\": {", first_stage ? "" : ", ", stage.first.c_str());
+      first_stage = false;
+      for (std::size_t k = 0; k < stage.second.size(); ++k) {
+        char* end = nullptr;
+        const double v = std::strtod(stage.second[k].second.c_str(), &end);
+        const bool numeric = end && *end == '\0' && !stage.second[k].second.empty();
+        std::fprintf(out, numeric ? "%s\"%s\": %.3f" : "%s\"%s\": null", k ? ", " : "",
+                     stage.second[k].first.c_str(), numeric ? v : 0.0);
+      }
+      std::fprintf(out, "}");
+    }
     std::fprintf(out, "}}\n");
     return all;
   }
@@ -103,6 +138,7 @@ class Probe {
   std::mutex mutex_;
   ros::WallTime start_;
   std::map<std::string, TopicRecord> records_;
+  std::map<std::string, std::vector<std::pair<std::string, std::string>>> stages_;
 };
 
 }  // namespace
@@ -155,6 +191,9 @@ int main(int argc, char** argv) {
           }
         }, ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
   }
+  subs.push_back(nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 50,
+      [&probe](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { probe.diagnostics(*m); }));
   ros::AsyncSpinner spinner(1);
   spinner.start();
   while (ros::ok() && !probe.started()) ros::WallDuration(0.05).sleep();

@@ -3,6 +3,7 @@
 // Pacing is by absolute deadlines on the monotonic clock, so a late packet does not shift the
 // ones after it; with --loop the capture restarts one nominal packet gap after its last packet.
 #include <arpa/inet.h>
+#include <csignal>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <time.h>
@@ -30,9 +31,13 @@ void usage() {
       "  --duration S    stop after S seconds (default: one pass, or for ever with --loop)\n"
       "  --loop          restart the capture at its end\n"
       "  --start-delay S wait S seconds before the first packet (default 0)\n"
-      "Prints one JSON line on stderr at the end: packets sent, send errors, packets more than\n"
-      "1 ms behind their deadline, and the worst lateness.\n");
+      "Prints one JSON line on stderr at the end (also when stopped by SIGINT or SIGTERM):\n"
+      "packets sent, send errors, packets more than 1 ms behind their deadline, and the worst\n"
+      "lateness.\n");
 }
+
+volatile std::sig_atomic_t g_stop = 0;
+void onStopSignal(int) { g_stop = 1; }
 
 std::int64_t nowNs() {
   timespec ts{};
@@ -44,7 +49,7 @@ void sleepUntilNs(std::int64_t deadline) {
   timespec ts{};
   ts.tv_sec = static_cast<time_t>(deadline / 1000000000LL);
   ts.tv_nsec = static_cast<long>(deadline % 1000000000LL);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR && !g_stop) {
   }
 }
 
@@ -78,6 +83,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: --host '%s' is not an IPv4 address\n", host.c_str());
     return 2;
   }
+  struct sigaction stop_action {};
+  stop_action.sa_handler = onStopSignal;  // no SA_RESTART: the pacing sleep returns at once
+  sigaction(SIGINT, &stop_action, nullptr);
+  sigaction(SIGTERM, &stop_action, nullptr);
   const int fd = socket(AF_INET, SOCK_DGRAM, 0);
   if (fd < 0) {
     std::fprintf(stderr, "error: socket: %s\n", std::strerror(errno));
@@ -94,7 +103,7 @@ int main(int argc, char** argv) {
     bool have_first = false;
     std::size_t sent = 0, errors = 0, late = 0, in_pass = 0;
     std::int64_t worst_late_ns = 0;
-    while (true) {
+    while (!g_stop) {
       const ud::core::PcapReader::Result r = reader.next(&packet);
       if (r != ud::core::PcapReader::Result::kPacket) {
         if (r == ud::core::PcapReader::Result::kTruncated) {
@@ -117,6 +126,7 @@ int main(int argc, char** argv) {
       const std::int64_t deadline = start + static_cast<std::int64_t>(offset_s * 1e9);
       if (deadline >= stop) break;
       sleepUntilNs(deadline);
+      if (g_stop) break;
       const std::int64_t lateness = nowNs() - deadline;
       if (lateness > 1000000) ++late;
       if (lateness > worst_late_ns) worst_late_ns = lateness;

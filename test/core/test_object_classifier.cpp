@@ -1,6 +1,7 @@
 // Object features (object_features.h) on synthetic objects with known values, and the object
 // classifier (object_classifier.h): training determinism, save/load, refusal of bad model
 // files, the classification stage's decisions and its YAML parameters.
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -111,6 +112,37 @@ TEST(ObjectFeatures, PorousBushHasJumpsSmoothBoxHasNone) {
   // Rows every 0.4 deg: the car spans 14 deg of elevation at most.
   EXPECT_GE(fc[core::kFeatRows], 20);
   EXPECT_LE(fc[core::kFeatRows], 36);
+}
+
+// The intensity quantiles' selection against a full sort: integer intensities (as decoded),
+// fractional ones, values below 0 and above 255, many duplicates, one value, repeated ranks.
+TEST(ObjectFeatures, SelectRanksEqualsTheSortedValues) {
+  std::mt19937 rng(11);
+  std::vector<float> scratch;
+  for (int trial = 0; trial < 300; ++trial) {
+    const std::size_t n = 1 + rng() % (trial < 100 ? 20 : 3000);
+    std::vector<float> values(n);
+    for (float& v : values) {
+      switch (trial % 4) {
+        case 0: v = static_cast<float>(rng() % 256); break;
+        case 1: v = std::uniform_real_distribution<float>(0.0f, 255.0f)(rng); break;
+        case 2: v = std::uniform_real_distribution<float>(-50.0f, 400.0f)(rng); break;
+        default: v = static_cast<float>(rng() % 3) * 0.25f + 7.0f; break;
+      }
+    }
+    std::vector<std::size_t> ranks = {static_cast<std::size_t>(0.1 * n),
+                                      static_cast<std::size_t>(0.5 * n),
+                                      static_cast<std::size_t>(0.9 * n), n - 1};
+    for (std::size_t& r : ranks) r = std::min(r, n - 1);
+    std::sort(ranks.begin(), ranks.end());
+    std::vector<float> sorted = values;
+    std::sort(sorted.begin(), sorted.end());
+    float out[4];
+    core::selectRanks(values, ranks.data(), 4, out, &scratch);
+    for (int r = 0; r < 4; ++r) {
+      ASSERT_EQ(out[r], sorted[ranks[r]]) << "trial " << trial << " rank " << ranks[r];
+    }
+  }
 }
 
 TEST(ObjectFeatures, MissingIndicesAndEmptyObjects) {

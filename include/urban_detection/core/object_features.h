@@ -49,6 +49,13 @@ struct ObjectFeatureParams {
 /// Empty when valid, else a message naming the first out-of-range field and its range.
 std::string validate(const ObjectFeatureParams& p);
 
+/// out[r] = the value of rank ranks[r] (0-based, ranks ascending and < values.size()) of the
+/// finite `values`, exactly the element a full sort puts there. Counts the values into unit
+/// buckets first and selects only inside the bucket holding a rank: near-linear for
+/// intensities, whatever their distribution. `scratch` is reused between calls.
+void selectRanks(const std::vector<float>& values, const std::size_t* ranks, int count,
+                 float* out, std::vector<float>* scratch);
+
 /// The feature vector's entries, in order. Names (featureName) go into the training CSV and
 /// the model file, so a model refuses a feature list it was not trained with.
 enum ObjectFeature : int {
@@ -131,6 +138,7 @@ class ObjectFeatureExtractor {
   std::vector<RowPoint> rows_, sorted_;    // scratch: points, ordered by elevation bin
   std::vector<std::uint32_t> bin_start_, fill_;  // scratch of the counting sort
   std::vector<float> intensities_;         // scratch
+  std::vector<float> bucket_values_;       // scratch of the quantile selection
 };
 
 }  // namespace core
