@@ -2,9 +2,11 @@
 """Soak monitor (issue 8), run by scripts/soak.sh against a running demo.launch.
 
 Measures, for `--minutes` after `--warmup` seconds:
-  * latency of every /objects message: receive wall time - header.stamp (the stamp is the time
-    of the revolution's FIRST packet, so the figure includes the ~100 ms the sensor takes to
-    sweep the revolution at 600 rpm), p50 / p99 / max;
+  * latency of every /objects message: receive wall time - header.stamp, p50 / p95 / p99 / max.
+    The stamp is the revolution's last packet (velodyne_driver's convention, the default), so
+    this is the figure of `scripts/run latency`: last packet -> /objects in another process
+    (with ~timestamp_first_packet it would include the ~100 ms sweep). The detector's own
+    figure (last packet -> its publish, on /diagnostics) is reported beside it;
   * revolutions skipped end to end: gaps in header.seq (numbered by the sensor and passed on
     by every stage), plus the per-stage totals of skipped_revolutions on /diagnostics;
   * resident memory (VmRSS) of the nodelet manager process, sampled every 10 s: at the end of
@@ -133,6 +135,7 @@ class Monitor:
         self.last_stamp = None
         self.stage_skipped = {}
         self.stage_outputs = {}
+        self.stage_latency = {}  # last /diagnostics latency window of each stage
         self.warnings = {}
 
     def on_objects(self, msg):
@@ -160,6 +163,11 @@ class Monitor:
                     self.stage_skipped[status.name] = int(values['skipped_revolutions'])
                 if 'outputs' in values:
                     self.stage_outputs[status.name] = int(values['outputs'])
+                if 'latency p50 [ms]' in values:
+                    self.stage_latency[status.name] = {
+                        q: float(values['latency %s [ms]' % q])
+                        for q in ('p50', 'p95', 'p99', 'max')
+                        if 'latency %s [ms]' % q in values}
                 if self.measuring and status.level >= 1:
                     # One entry per kind of warning: the figures in the message vary.
                     key = '%s: %s' % (status.name, re.sub(r'[0-9.]+', '#', status.message))
@@ -228,6 +236,7 @@ def main():
                     for k, v in mon.stage_outputs.items() if k in outputs_start}
         stamp_span = (mon.last_stamp - mon.first_stamp) if mon.first_stamp is not None else 0.0
         warnings = dict(mon.warnings)
+        stage_latency = dict(mon.stage_latency)
         objects = mon.objects
     expected = seq.distinct + seq.gaps
     summary = {
@@ -249,13 +258,16 @@ def main():
         'sequence_restarts': seq.restarts,
         'skipped_revolutions_per_stage': stage,
         'objects_per_revolution': round(objects / seq.distinct, 2) if seq.distinct else None,
-        'latency_ms': {'p50': round(1e3 * percentile(lat, 0.5), 2),
+        'latency_ms': {'what': 'last packet of a revolution -> /objects received here',
+                       'p50': round(1e3 * percentile(lat, 0.5), 2),
+                       'p95': round(1e3 * percentile(lat, 0.95), 2),
                        'p99': round(1e3 * percentile(lat, 0.99), 2),
                        'max': round(1e3 * lat[-1], 2) if lat else None},
         'rss_mb': {'start': round(samples[0][1], 1), 'end': round(samples[-1][1], 1),
                    'max': round(max(r for _, r in samples), 1),
                    'slope_mb_per_hour': round(slope_per_hour(samples), 2)},
         'diagnostics_warning_seconds': warnings,
+        'diagnostics_latency_ms': stage_latency,
     }
     summary['bounds'] = {'max_rss_growth_mb': args.max_rss_growth_mb,
                          'max_skipped_fraction': args.max_skipped_fraction,
@@ -267,6 +279,12 @@ def main():
     with open(args.out, 'w') as f:
         json.dump(summary, f, indent=2, sort_keys=True)
     print(json.dumps(summary, indent=2, sort_keys=True), flush=True)
+    l = summary['latency_ms']
+    print('soak: %.2f Hz, latency last packet -> /objects p50 %s p95 %s p99 %s max %s ms, '
+          '%d revolutions skipped, RSS %s -> %s MB' % (
+              summary['rate_hz'], l['p50'], l['p95'], l['p99'], l['max'],
+              summary['revolutions_skipped_end_to_end'], summary['rss_mb']['start'],
+              summary['rss_mb']['end']), file=sys.stderr, flush=True)
     return 1 if summary['failures'] else 0
 
 

@@ -1,6 +1,6 @@
 # Sourced by the measuring scripts (bench.sh, eval.sh): where things are and how they run.
 #   REPO     the checkout
-#   BIN      the built tools (<UD_WS or REPO/.ws>/devel/lib/urban_detection)
+#   BIN      the built tools (<workspace>/devel/lib/urban_detection, scripts/workspace.sh)
 #   DATA     the shared datasets (UD_SHARED_DATA, default ../shared/data)
 #   OUT      results/, created
 #   PIN      the command prefix pinning a tool to core 0 (empty without taskset)
