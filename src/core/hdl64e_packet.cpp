@@ -26,7 +26,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <cstring>
+#include <string>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -83,6 +85,9 @@ const char* toString(PacketStatus status) {
       return "unknown block id (expected 0xEEFF or 0xDDFF)";
     case PacketStatus::kBadAzimuth:
       return "azimuth out of range (>= 36000)";
+    case PacketStatus::kOtherModel:
+      return "not an HDL-64E packet (no lower-bank block: the layout of VLP-16, VLP-32C, "
+             "HDL-32E)";
     case PacketStatus::kDualReturn:
       return "dual-return packet (not supported, set the sensor to single return)";
   }
@@ -135,13 +140,39 @@ PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderParams
   }
 }
 
+std::string velodyneModelName(const std::uint8_t* data, std::size_t size) {
+  if (data == nullptr || size != kPacketSize) return "an unknown model (not a 1206-byte packet)";
+  const std::uint8_t mode = data[1204], product = data[1205];
+  const char* model = nullptr;
+  switch (product) {  // factory byte: Velodyne's interface manuals (VLP-16, VLP-32C, HDL-32E)
+    case 0x21: model = "HDL-32E"; break;
+    case 0x22: model = "VLP-16"; break;
+    case 0x24: model = "Puck Hi-Res"; break;
+    case 0x28: model = "VLP-32C"; break;
+    case 0x31: model = "Velarray"; break;
+    case 0xA1: model = "VLS-128"; break;
+    default: break;
+  }
+  const char* returns = mode == 0x37 ? "strongest return" : mode == 0x38 ? "last return"
+                        : mode == 0x39 ? "dual return" : nullptr;
+  char bytes[64];
+  std::snprintf(bytes, sizeof(bytes), "factory bytes 0x%02X 0x%02X", mode, product);
+  if (!model) return std::string("an unknown model (") + bytes + ")";
+  return std::string(model) + " (" + (returns ? returns : bytes) + ")";
+}
+
 PacketStatus PacketDecoder::validate(const std::uint8_t* data, std::size_t size) {
   if (data == nullptr || size != kPacketSize) return PacketStatus::kWrongSize;
   std::uint16_t id[kBlocksPerPacket], az[kBlocksPerPacket];
+  bool lower = false;
   for (int b = 0; b < kBlocksPerPacket; ++b) {
     id[b] = readU16(data + b * kBlockSize);
     az[b] = readU16(data + b * kBlockSize + 2);
     if (id[b] != kUpperBlockId && id[b] != kLowerBlockId) return PacketStatus::kUnknownBlockId;
+    lower = lower || id[b] == kLowerBlockId;
+  }
+  if (!lower) return PacketStatus::kOtherModel;
+  for (int b = 0; b < kBlocksPerPacket; ++b) {
     if (az[b] >= 36000) return PacketStatus::kBadAzimuth;
   }
   for (int b = 0; b < kBlocksPerPacket; ++b) {
@@ -425,28 +456,85 @@ bool PacketEncoder::rawDistance(int laser, double d_m, std::uint16_t* raw_distan
 }
 
 // ------------------------------------------------------------------------------------------------
-RevolutionCutter::RevolutionCutter(double cut_angle_deg) : last_(-1) {
+RevolutionCutter::RevolutionCutter(double cut_angle_deg) {
   double a = std::fmod(cut_angle_deg, 360.0);
   if (!std::isfinite(a)) a = 0.0;
   if (a < 0) a += 360.0;
   cut_ = static_cast<int>(std::lround(a * 100.0)) % 36000;
 }
 
-bool RevolutionCutter::startsNewRevolution(std::uint16_t first_block_azimuth) {
-  const int az = first_block_azimuth % 36000;
-  const int last = last_;
-  last_ = az;
-  if (last < 0) return false;
-  const int advance = (az - last + 36000) % 36000;        // rotation since the previous packet
-  const int to_cut = (cut_ - last + 36000) % 36000;       // rotation from previous to the cut
-  return advance > 0 && to_cut > 0 && to_cut <= advance;  // cut in (last, az]
+bool RevolutionCutter::crosses(int from, int to) const {
+  const int advance = (to - from + 36000) % 36000;       // rotation from `from` to `to`
+  const int to_cut = (cut_ - from + 36000) % 36000;      // rotation from `from` to the cut
+  return advance > 0 && to_cut > 0 && to_cut <= advance;  // cut in (from, to]
 }
 
-void RevolutionCutter::reset() { last_ = -1; }
+RevolutionCutter::Step RevolutionCutter::step(std::uint16_t first_block_azimuth) {
+  const int az = first_block_azimuth % 36000;
+  if (last_ < 0) {
+    last_ = az;
+    return Step::kStep;
+  }
+  const int advance = (az - last_ + 36000) % 36000;  // forward rotation from the head
+  if (advance <= kMaxStep) {                          // a step (0: the head stands still)
+    candidate_ = -1;
+    const bool cut = crosses(last_, az);
+    last_ = az;
+    return cut ? Step::kCut : Step::kStep;
+  }
+  if (36000 - advance <= kMaxStep) {  // a little behind the head: delivered late
+    candidate_ = -1;
+    return Step::kReordered;
+  }
+  // A jump: confirmed when this packet is a step from the previous jump's packet.
+  const int candidate = candidate_;
+  candidate_ = az;
+  if (candidate < 0 || (az - candidate + 36000) % 36000 > kMaxStep) return Step::kJump;
+  candidate_ = -1;
+  const int from = last_;
+  last_ = az;
+  if ((candidate - from + 36000) % 36000 < 18000) {  // forward: packets were lost
+    return crosses(from, az) ? Step::kCut : Step::kStep;
+  }
+  return Step::kRestart;
+}
+
+void RevolutionCutter::reset() {
+  last_ = -1;
+  candidate_ = -1;
+}
+
+const char* revolutionSizeProblem(std::size_t packets, std::size_t expected) {
+  if (expected == 0) return "";
+  if (10 * packets < 9 * expected) return "too few packets";
+  if (10 * packets > 11 * expected) return "too many packets";
+  return "";
+}
+
+RevolutionBoundary::Action RevolutionBoundary::add(const std::uint8_t* data, std::size_t size) {
+  last_status_ = PacketDecoder::validate(data, size);
+  if (last_status_ != PacketStatus::kOk) {
+    ++invalid_;
+    return Action::kSkip;
+  }
+  last_status_ = PacketStatus::kOk;
+  return add(blockAzimuth(data, 0));
+}
 
 RevolutionBoundary::Action RevolutionBoundary::add(std::uint16_t first_block_azimuth) {
   Action action = Action::kAppend;
-  if (cutter_.startsNewRevolution(first_block_azimuth)) {
+  const RevolutionCutter::Step step = cutter_.step(first_block_azimuth);
+  if (step == RevolutionCutter::Step::kJump) {
+    ++strays_;
+    return Action::kSkip;
+  }
+  if (step == RevolutionCutter::Step::kReordered) ++reordered_;
+  if (step == RevolutionCutter::Step::kRestart) {  // the open revolution cannot be whole
+    if (packets_ > 0) ++partial_dropped_;
+    action = packets_ > 0 ? Action::kDrop : Action::kOpen;
+    whole_ = false;
+    packets_ = 0;
+  } else if (step == RevolutionCutter::Step::kCut) {
     if (packets_ > 0) {
       action = whole_ ? Action::kClose : Action::kDrop;
       if (!whole_) ++partial_dropped_;

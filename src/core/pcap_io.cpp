@@ -7,6 +7,7 @@
 
 #include <pcap/pcap.h>
 
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -226,6 +227,45 @@ void PcapWriter::write(const RawPacket& packet, double stamp_s) {
   }
   header.caplen = header.len = sizeof(frame);
   pcap_dump(reinterpret_cast<u_char*>(impl_->dumper), &header, frame);
+}
+
+ReplayTimeline::ReplayTimeline(double nominal_gap_s, double max_gap_s)
+    : nominal_gap_s_(nominal_gap_s), max_gap_s_(max_gap_s) {}
+
+double ReplayTimeline::next(double capture_s, Anomaly* anomaly) {
+  Anomaly a = Anomaly::kNone;
+  if (!started_) {
+    started_ = true;
+    now_s_ = std::isfinite(capture_s) ? capture_s : 0.0;
+  } else {
+    const double gap = capture_s - last_capture_s_;
+    if (restarted_) {
+      now_s_ += nominal_gap_s_;  // a loop: not an anomaly
+    } else if (!(gap == gap) || gap < 0.0) {
+      a = Anomaly::kBackwards;
+    } else if (gap == 0.0) {
+      a = Anomaly::kStill;
+    } else if (gap > max_gap_s_) {
+      a = Anomaly::kJump;
+    } else {
+      now_s_ += gap;
+    }
+    if (a != Anomaly::kNone) now_s_ += nominal_gap_s_;
+  }
+  restarted_ = false;
+  last_capture_s_ = capture_s;
+  if (anomaly) *anomaly = a;
+  return now_s_;
+}
+
+const char* toString(ReplayTimeline::Anomaly anomaly) {
+  switch (anomaly) {
+    case ReplayTimeline::Anomaly::kNone: return "none";
+    case ReplayTimeline::Anomaly::kBackwards: return "goes back";
+    case ReplayTimeline::Anomaly::kStill: return "stands still";
+    case ReplayTimeline::Anomaly::kJump: return "jumps forward";
+  }
+  return "?";
 }
 
 }  // namespace core

@@ -4,7 +4,9 @@
 // non-finite points kept and counted (the segmenter labels them unknown); a malformed message
 // is dropped with one error per kind of fault and counted on /diagnostics. The only copy in the
 // chain: a PointCloud2 subscriber gets a serialised message whatever the publisher.
-// Lazy: subscribed to points_in only while someone listens to velodyne_points.
+// Lazy: subscribed to points_in only while someone listens to velodyne_points. A cloud of more
+// than ~max_points points (default: three HDL-64E revolutions at 300 rpm) is refused with an
+// ERROR before it is converted.
 #include "urban_detection/core/point_types.h"
 
 #include <memory>
@@ -29,6 +31,7 @@ class CloudInput : public nodelet::Nodelet {
   void onInit() override {
     try {
       loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
+      loadParam(getPrivateNodeHandle(), "max_points", &max_points_, 1, 100000000, "points");
     } catch (const ParamError& e) {
       NODELET_FATAL("CloudInput: %s; the nodelet stays idle", e.what());
       return;
@@ -58,6 +61,14 @@ class CloudInput : public nodelet::Nodelet {
   void cloudCb(const sensor_msgs::PointCloud2ConstPtr& msg) {
     const ros::WallTime start = ros::WallTime::now();
     diagnostics_->input(msg->header.seq);
+    const std::uint64_t points = static_cast<std::uint64_t>(msg->width) * msg->height;
+    if (points > static_cast<std::uint64_t>(max_points_)) {  // before any allocation of ours
+      NODELET_ERROR_THROTTLE(5, "CloudInput: refusing a PointCloud2 of %llu points (max_points "
+                                "%d); nothing of it is converted",
+                             static_cast<unsigned long long>(points), max_points_);
+      diagnostics_->rejected();
+      return;
+    }
     auto cloud = boost::make_shared<CloudXYZIRT>();
     ros_conv::PointCloud2InputInfo info;
     std::string error;
@@ -81,6 +92,7 @@ class CloudInput : public nodelet::Nodelet {
   }
 
   int queue_size_ = 2;
+  int max_points_ = 800640;  // three revolutions at 300 rpm: 2085 packets x 384 returns
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::string last_error_;  // last malformed-input reason logged (callbacks are serialised)
   std::mutex connect_mutex_;

@@ -59,6 +59,13 @@ class PacketToCloud : public nodelet::Nodelet {
       NODELET_WARN_THROTTLE(10, "dropping an empty VelodyneScan");
       return;
     }
+    if (scan->packets.size() > static_cast<std::size_t>(params_.max_packets_per_scan)) {
+      diagnostics_->rejected();  // refused before any allocation of ours
+      NODELET_ERROR_THROTTLE(5, "refusing a VelodyneScan of %zu packets (max_packets_per_scan "
+                                "%d); nothing of it is decoded",
+                             scan->packets.size(), params_.max_packets_per_scan);
+      return;
+    }
     auto cloud = boost::make_shared<CloudXYZIRT>();
     ScanDecodeStats stats;
     std::string tf_error;

@@ -14,6 +14,7 @@
 #include <tf2_ros/transform_broadcaster.h>
 
 #include "urban_detection/core/simulation_config.h"
+#include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/simulation_conversions.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 
@@ -50,20 +51,21 @@ class SimulatedSensor : public nodelet::Nodelet {
                     "config/demo_drive.yaml) is required; the nodelet stays idle");
       return false;
     }
-    pnh.param("realtime", realtime_, true);
-    pnh.param("rate_factor", rate_factor_, 1.0);
-    pnh.param("loop", loop_, true);
-    pnh.param("publish_tf", publish_tf_, true);
     bool first_packet = false;  // header.stamp convention of velodyne_driver (and PacketSource)
-    pnh.param("timestamp_first_packet", first_packet, false);
-    stamp_ = first_packet ? ScanStamp::kFirstPacket : ScanStamp::kLastPacket;
-    pnh.param("frame_id", frames_.sensor, frames_.sensor);
-    pnh.param("odom_frame", frames_.odom, frames_.odom);
-    pnh.param("base_frame", frames_.base_link, frames_.base_link);
-    if (!(rate_factor_ > 0.0 && rate_factor_ <= 100.0)) {
-      NODELET_FATAL("SimulatedSensor: ~rate_factor must be in (0, 100], got %f", rate_factor_);
+    try {  // type-checked: a wrong type is refused, never replaced by the default
+      loadParam(pnh, "realtime", &realtime_);
+      loadParam(pnh, "rate_factor", &rate_factor_, 1e-3, 100.0);
+      loadParam(pnh, "loop", &loop_);
+      loadParam(pnh, "publish_tf", &publish_tf_);
+      loadParam(pnh, "timestamp_first_packet", &first_packet);
+      loadParam(pnh, "frame_id", &frames_.sensor);
+      loadParam(pnh, "odom_frame", &frames_.odom);
+      loadParam(pnh, "base_frame", &frames_.base_link);
+    } catch (const ParamError& e) {
+      NODELET_FATAL("SimulatedSensor: %s; the nodelet stays idle", e.what());
       return false;
     }
+    stamp_ = first_packet ? ScanStamp::kFirstPacket : ScanStamp::kLastPacket;
     try {
       config_ = core::loadSimulationConfig(config_path);
       calibration_ = core::loadCalibration(config_.calibration_file);

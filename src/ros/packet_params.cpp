@@ -64,6 +64,7 @@ PacketToCloudParams loadPacketToCloudParams(const ros::NodeHandle& nh) {
   loadParam(nh, "target_frame", &p.target_frame);
   loadParam(nh, "tf_timeout", &p.tf_timeout_s, 0.0, 10.0, "s");
   loadParam(nh, "queue_size", &p.queue_size, 1, 100);
+  loadParam(nh, "max_packets_per_scan", &p.max_packets_per_scan, 1, 1000000, "packets");
   return p;
 }
 

@@ -98,17 +98,19 @@ void PacketSourceWorker::udpLoop() {
   }
 }
 
-// Replays at `rate` times the recorded speed (0: as fast as possible). Stamps are the capture
-// times shifted so that the first packet is stamped "now" (use_pcap_time: unshifted), and keep
-// increasing across loops; intra-revolution time differences stay those of the sensor.
+// Replays at `rate` times the recorded speed (0: as fast as possible) on the capture's replay
+// timeline (core::ReplayTimeline: capture times where they are sane, the nominal packet period
+// where they go back, stand still or jump). Stamps are that timeline shifted so that the first
+// packet is stamped "now" (use_pcap_time: unshifted), and keep increasing across loops;
+// intra-revolution time differences stay those of the sensor.
 void PacketSourceWorker::pcapLoop() {
   using Clock = std::chrono::steady_clock;
   core::PcapPacket packet;
+  core::ReplayTimeline timeline;
   bool anchored = false, first = true;
   Clock::time_point wall_anchor;
-  double replay_anchor_s = 0, stamp_offset_s = 0, loop_shift_s = 0;
-  double first_s = 0, last_s = 0;
-  std::size_t in_pass = 0;
+  double replay_anchor_s = 0, stamp_offset_s = 0;
+  std::size_t in_pass = 0, anomalies = 0;
   while (running_ && ros::ok()) {
     if (!listened()) {  // lazy: pause, and resume without a burst
       anchored = false;
@@ -129,17 +131,23 @@ void PacketSourceWorker::pcapLoop() {
         break;
       }
       if (!params_.loop) break;
-      const double span_s = last_s - first_s;
-      loop_shift_s += span_s + (in_pass > 1 ? span_s / static_cast<double>(in_pass - 1) : 0.1);
       pcap_->rewind();
+      timeline.restart();
       assembler_.reset();  // never splice the end of the file to its start in one scan
       if (streamer_) streamer_->reset();
       in_pass = 0;
       continue;
     }
-    if (in_pass++ == 0) first_s = packet.stamp_s;
-    last_s = packet.stamp_s;
-    const double replay_s = packet.stamp_s + loop_shift_s;
+    ++in_pass;
+    core::ReplayTimeline::Anomaly anomaly;
+    const double replay_s = timeline.next(packet.stamp_s, &anomaly);
+    if (anomaly != core::ReplayTimeline::Anomaly::kNone) {
+      diagnostics_->setTotal("pcap_time_anomalies", ++anomalies);
+      ROS_WARN_THROTTLE(5, "PacketSource: pcap '%s', packet %lu: capture time %s (%.6f s); "
+                           "pacing at the nominal packet rate until the times are sane again",
+                        params_.pcap.c_str(), static_cast<unsigned long>(in_pass),
+                        core::toString(anomaly), packet.stamp_s);
+    }
     if (first) {
       stamp_offset_s = params_.use_pcap_time ? 0.0 : ros::Time::now().toSec() - replay_s;
       first = false;
@@ -198,8 +206,30 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
     }
   }
   const std::size_t forced_before = assembler_.forcedCuts();
+  const core::RevolutionBoundary& boundary = assembler_.boundary();
+  const std::size_t invalid_before = boundary.invalidPackets();
+  const std::size_t strays_before = boundary.strayPackets();
   VelodyneScan::Ptr scan = assembler_.add(packet, stamp);
   diagnostics_->setTotal("partial_revolutions_dropped", assembler_.partialDropped(), false);
+  if (boundary.invalidPackets() != invalid_before) {  // in no revolution, never decoded
+    diagnostics_->setTotal("invalid_packets", boundary.invalidPackets());
+    if (boundary.lastStatus() == core::PacketStatus::kOtherModel) {
+      ROS_WARN_THROTTLE(10, "PacketSource: refusing packets of a %s: this package decodes "
+                            "HDL-64E packets only",
+                        core::velodyneModelName(packet.data(), packet.size()).c_str());
+    } else {
+      ROS_WARN_THROTTLE(5, "PacketSource: refusing invalid packets (last: %s)",
+                        core::toString(boundary.lastStatus()));
+    }
+  }
+  if (boundary.strayPackets() != strays_before) {
+    diagnostics_->setTotal("stray_packets", boundary.strayPackets());
+    ROS_WARN_THROTTLE(5, "PacketSource: ignoring packets whose azimuth does not follow the "
+                         "stream (another sender's, or corrupt)%s",
+                      params_.device_ip.empty() ? "; set device_ip to accept one sensor only"
+                                                : "");
+  }
+  diagnostics_->setTotal("reordered_packets", boundary.reorderedPackets(), false);
   if (assembler_.forcedCuts() != forced_before) {
     diagnostics_->setTotal("forced_cuts", assembler_.forcedCuts());
     ROS_WARN_THROTTLE(5, "PacketSource: no revolution boundary at cut_angle %.2f deg within %zu "
@@ -209,6 +239,13 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
   revolution_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!scan) return;
   ++scans_;
+  if (*assembler_.lastSizeProblem()) {
+    diagnostics_->count(std::string("revolutions with ") + assembler_.lastSizeProblem());
+    ROS_WARN_THROTTLE(5, "PacketSource: a revolution of %zu packets, %s for %.0f rpm "
+                         "(expected about %zu)",
+                      assembler_.lastPackets(), assembler_.lastSizeProblem(), params_.rpm,
+                      params_.expectedPacketsPerRevolution());
+  }
   diagnostics_->frame(revolution_s_);
   revolution_s_ = 0.0;
   if (scans_listened_()) publish_(scan);  // a fresh message, never touched again: zero copy

@@ -28,6 +28,14 @@ void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value, i
   checkRange(nh.resolveName(name), *value, min, max, unit);
 }
 
+void loadParam(const ros::NodeHandle& nh, const std::string& name, double* value) {
+  readOptional(nh, name, value, "a number");
+}
+
+void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value) {
+  readOptional(nh, name, value, "an integer");
+}
+
 void loadParam(const ros::NodeHandle& nh, const std::string& name, bool* value) {
   readOptional(nh, name, value, "a boolean");
 }

@@ -64,39 +64,45 @@ std::string checkGridSegmenterParams(const ros::NodeHandle& nh,
 
 bool loadGridSegmenterParams(const ros::NodeHandle& nh, core::GridSegmenterParams* p,
                              std::string* error) {
-  nh.param("sensor_height_m", p->sensor_height_m, p->sensor_height_m);
-  nh.param("cell_size_m", p->cell_size_m, p->cell_size_m);
-  nh.param("max_range_m", p->max_range_m, p->max_range_m);
-  nh.param("max_abs_height_m", p->max_abs_height_m, p->max_abs_height_m);
-  nh.param("min_points_per_cell", p->min_points_per_cell, p->min_points_per_cell);
-  nh.param("ground_in_sparse_cells", p->ground_in_sparse_cells, p->ground_in_sparse_cells);
-  nh.param("ground_max_range_m", p->ground_max_range_m, p->ground_max_range_m);
-  nh.param("ground_tolerance_m", p->ground_tolerance_m, p->ground_tolerance_m);
-  nh.param("ground_max_step_m", p->ground_max_step_m, p->ground_max_step_m);
-  nh.param("curb_cells_ground", p->curb_cells_ground, p->curb_cells_ground);
-  nh.param("ground_max_gap_m", p->ground_max_gap_m, p->ground_max_gap_m);
-  nh.param("seed_radius_m", p->seed_radius_m, p->seed_radius_m);
-  nh.param("seed_max_abs_height_m", p->seed_max_abs_height_m, p->seed_max_abs_height_m);
-  nh.param("terrain_fill_iterations", p->terrain_fill_iterations, p->terrain_fill_iterations);
-  nh.param("terrain_max_offset_m", p->terrain_max_offset_m, p->terrain_max_offset_m);
-  nh.param("tall_min_height_m", p->tall_min_height_m, p->tall_min_height_m);
-  nh.param("tall_min_range_m", p->tall_min_range_m, p->tall_min_range_m);
-  nh.param("vehicle_max_height_m", p->vehicle_max_height_m, p->vehicle_max_height_m);
-  nh.param("vehicle_max_length_m", p->vehicle_max_length_m, p->vehicle_max_length_m);
-  nh.param("vehicle_max_width_m", p->vehicle_max_width_m, p->vehicle_max_width_m);
-  nh.param("fov_top_elevation_deg", p->fov_top_elevation_deg, p->fov_top_elevation_deg);
-  core::HoughWallRefinerParams& h = p->hough;
-  nh.param("hough/enabled", h.enabled, h.enabled);
-  nh.param("hough/max_range_m", h.max_range_m, h.max_range_m);
-  nh.param("hough/votes", h.votes, h.votes);
-  nh.param("hough/min_line_length_m", h.min_line_length_m, h.min_line_length_m);
-  nh.param("hough/max_line_gap_m", h.max_line_gap_m, h.max_line_gap_m);
-  nh.param("hough/theta_resolution_deg", h.theta_resolution_deg, h.theta_resolution_deg);
-  nh.param("hough/min_tall_fraction", h.min_tall_fraction, h.min_tall_fraction);
-  nh.param("hough/min_mixed_wall_length_m", h.min_mixed_wall_length_m,
-           h.min_mixed_wall_length_m);
-  nh.param("hough/extend_lines", h.extend_lines, h.extend_lines);
-  nh.param("hough/line_half_width_cells", h.line_half_width_cells, h.line_half_width_cells);
+  // Every value type-checked (a string where a number belongs is an error, not the default),
+  // then the ranges of the whole struct.
+  try {
+    loadParam(nh, "sensor_height_m", &p->sensor_height_m);
+    loadParam(nh, "cell_size_m", &p->cell_size_m);
+    loadParam(nh, "max_range_m", &p->max_range_m);
+    loadParam(nh, "max_abs_height_m", &p->max_abs_height_m);
+    loadParam(nh, "min_points_per_cell", &p->min_points_per_cell);
+    loadParam(nh, "ground_in_sparse_cells", &p->ground_in_sparse_cells);
+    loadParam(nh, "ground_max_range_m", &p->ground_max_range_m);
+    loadParam(nh, "ground_tolerance_m", &p->ground_tolerance_m);
+    loadParam(nh, "ground_max_step_m", &p->ground_max_step_m);
+    loadParam(nh, "curb_cells_ground", &p->curb_cells_ground);
+    loadParam(nh, "ground_max_gap_m", &p->ground_max_gap_m);
+    loadParam(nh, "seed_radius_m", &p->seed_radius_m);
+    loadParam(nh, "seed_max_abs_height_m", &p->seed_max_abs_height_m);
+    loadParam(nh, "terrain_fill_iterations", &p->terrain_fill_iterations);
+    loadParam(nh, "terrain_max_offset_m", &p->terrain_max_offset_m);
+    loadParam(nh, "tall_min_height_m", &p->tall_min_height_m);
+    loadParam(nh, "tall_min_range_m", &p->tall_min_range_m);
+    loadParam(nh, "vehicle_max_height_m", &p->vehicle_max_height_m);
+    loadParam(nh, "vehicle_max_length_m", &p->vehicle_max_length_m);
+    loadParam(nh, "vehicle_max_width_m", &p->vehicle_max_width_m);
+    loadParam(nh, "fov_top_elevation_deg", &p->fov_top_elevation_deg);
+    core::HoughWallRefinerParams& h = p->hough;
+    loadParam(nh, "hough/enabled", &h.enabled);
+    loadParam(nh, "hough/max_range_m", &h.max_range_m);
+    loadParam(nh, "hough/votes", &h.votes);
+    loadParam(nh, "hough/min_line_length_m", &h.min_line_length_m);
+    loadParam(nh, "hough/max_line_gap_m", &h.max_line_gap_m);
+    loadParam(nh, "hough/theta_resolution_deg", &h.theta_resolution_deg);
+    loadParam(nh, "hough/min_tall_fraction", &h.min_tall_fraction);
+    loadParam(nh, "hough/min_mixed_wall_length_m", &h.min_mixed_wall_length_m);
+    loadParam(nh, "hough/extend_lines", &h.extend_lines);
+    loadParam(nh, "hough/line_half_width_cells", &h.line_half_width_cells);
+  } catch (const ParamError& e) {
+    *error = e.what();
+    return false;
+  }
   *error = checkGridSegmenterParams(nh, *p);
   return error->empty();
 }

@@ -111,6 +111,12 @@ void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
              output_hz < 0.8 * expected_hz_) {
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                   "output %.1f Hz below the sensor's %.1f Hz", output_hz, expected_hz_);
+  } else if (active_ && expected_hz_ > 0.0 && window_s >= 0.5 &&
+             output_hz > 1.25 * expected_hz_) {
+    // More revolutions than the sensor spins: revolutions cut in pieces (or rpm misconfigured).
+    stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                  "output %.1f Hz above the sensor's %.1f Hz (revolutions cut in pieces?)",
+                  output_hz, expected_hz_);
   } else if (!active_) {
     stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle (no subscriber)");
   } else if (inputs_.window == 0 && frames_.window == 0) {

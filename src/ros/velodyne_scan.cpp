@@ -18,15 +18,19 @@ void toMessage(const core::RawPacket& packet, const ros::Time& stamp, VelodynePa
 ScanAssembler::ScanAssembler(double cut_angle_deg, const std::string& frame_id,
                              std::size_t expected_packets, ScanStamp stamp)
     : boundary_(cut_angle_deg), frame_id_(frame_id), stamp_(stamp),
-      expected_packets_(expected_packets) {}
+      expected_packets_(expected_packets > 0 ? expected_packets : 700),
+      nominal_packets_(expected_packets) {}
 
 VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::Time& stamp) {
   VelodyneScan::Ptr finished;
-  switch (boundary_.add(core::blockAzimuth(packet.data(), 0))) {
+  switch (boundary_.add(packet.data(), packet.size())) {
+    case core::RevolutionBoundary::Action::kSkip:
+      return finished;  // invalid or stray: in no revolution
     case core::RevolutionBoundary::Action::kAppend:
       break;
     case core::RevolutionBoundary::Action::kClose:
       expected_packets_ = current_->packets.size();
+      last_packets_ = current_->packets.size();
       current_->header.seq = ++revolutions_;
       if (stamp_ == ScanStamp::kLastPacket) current_->header.stamp = current_->packets.back().stamp;
       finished.swap(current_);
@@ -118,7 +122,8 @@ StreamingScanDecoder::StreamingScanDecoder(const core::PacketDecoder* decoder,
                                            double cut_angle_deg, const std::string& frame_id,
                                            std::size_t expected_packets, ScanStamp stamp)
     : decoder_(decoder), boundary_(cut_angle_deg), frame_id_(frame_id), stamp_(stamp),
-      expected_packets_(expected_packets) {}
+      expected_packets_(expected_packets > 0 ? expected_packets : 700),
+      nominal_packets_(expected_packets) {}
 
 void StreamingScanDecoder::open(const ros::Time& stamp) {
   constexpr std::size_t kReturnsPerPacket = core::kBlocksPerPacket * core::kLasersPerBlock;
@@ -132,7 +137,9 @@ void StreamingScanDecoder::open(const ros::Time& stamp) {
 boost::shared_ptr<CloudXYZIRT> StreamingScanDecoder::add(const core::RawPacket& packet,
                                                          const ros::Time& stamp) {
   boost::shared_ptr<CloudXYZIRT> finished;
-  switch (boundary_.add(core::blockAzimuth(packet.data(), 0))) {
+  switch (boundary_.add(packet.data(), packet.size())) {
+    case core::RevolutionBoundary::Action::kSkip:
+      return finished;  // invalid or stray: in no revolution
     case core::RevolutionBoundary::Action::kAppend:
       break;
     case core::RevolutionBoundary::Action::kClose: {

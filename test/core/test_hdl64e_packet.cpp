@@ -2,6 +2,7 @@
 // packets, encoder/decoder round trips and revolution cutting.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -500,6 +501,115 @@ TEST(RevolutionCutter, FirstPacketAndResetDoNotStartRevolution) {
   EXPECT_DOUBLE_EQ(wrapped.cutAngleDeg(), 270.0);
   EXPECT_FALSE(wrapped.startsNewRevolution(26990));
   EXPECT_TRUE(wrapped.startsNewRevolution(27000));
+}
+
+// Hostile streams (issue 25): out-of-order and stray packets never cut a revolution; a real
+// jump of the stream is followed after one confirming packet.
+TEST(RevolutionCutter, ReorderedAndStrayPacketsDoNotCut) {
+  using Step = uc::RevolutionCutter::Step;
+  const auto az = packetAzimuths(600.0, 3 * 0.1, 37.0);  // three revolutions from 37 deg
+  auto cuts = [](const std::vector<std::uint16_t>& stream, std::vector<Step>* steps = nullptr) {
+    uc::RevolutionCutter cutter(0.0);
+    std::vector<std::size_t> at;
+    for (std::size_t i = 0; i < stream.size(); ++i) {
+      const Step s = cutter.step(stream[i]);
+      if (steps) steps->push_back(s);
+      if (s == Step::kCut) at.push_back(i);
+    }
+    return at;
+  };
+  const std::vector<std::size_t> clean = cuts(az);
+  ASSERT_EQ(clean.size(), 3u);
+  // One swapped pair per revolution, one of them across the cut angle.
+  std::vector<std::uint16_t> swapped = az;
+  for (std::size_t k = 0; k < clean.size(); ++k) {
+    const std::size_t i = k == 0 ? clean[k] - 1 : clean[k] - 100;  // k = 0: the pair around the cut
+    std::swap(swapped[i], swapped[i + 1]);
+  }
+  std::vector<Step> steps;
+  const std::vector<std::size_t> with_swaps = cuts(swapped, &steps);
+  ASSERT_EQ(with_swaps.size(), 3u);
+  EXPECT_EQ(with_swaps[0], clean[0] - 1);  // the late packet of the old revolution follows it
+  EXPECT_EQ(with_swaps[1], clean[1]);
+  EXPECT_EQ(std::count(steps.begin(), steps.end(), Step::kReordered), 3);
+  // A stray packet per revolution, anywhere on the circle (another sender, garbage azimuth),
+  // one of them just past the cut angle while the head is far from it.
+  std::vector<std::uint16_t> strays;
+  for (std::size_t i = 0; i < az.size(); ++i) {
+    strays.push_back(az[i]);
+    if (i % 347 == 200) strays.push_back(i < 347 ? 10 : static_cast<std::uint16_t>((az[i] + 18000) % 36000));
+  }
+  steps.clear();
+  EXPECT_EQ(cuts(strays, &steps).size(), 3u);
+  EXPECT_EQ(std::count(steps.begin(), steps.end(), Step::kJump), 3);
+  // Packets lost across the cut angle (30 deg gap): the stream is followed, the cut seen once,
+  // one packet late.
+  std::vector<std::uint16_t> lost;
+  for (std::size_t i = 0; i < az.size(); ++i) {
+    if (i + 15 < clean[1] || i >= clean[1] + 15) lost.push_back(az[i]);
+  }
+  EXPECT_EQ(cuts(lost).size(), 3u);
+  // A stream that restarts behind the head (a replay loop): kRestart, then whole revolutions.
+  std::vector<std::uint16_t> restart(az.begin(), az.begin() + 500);
+  restart.insert(restart.end(), az.begin(), az.end());
+  steps.clear();
+  cuts(restart, &steps);
+  EXPECT_EQ(std::count(steps.begin(), steps.end(), Step::kRestart), 1);
+}
+
+TEST(RevolutionBoundary, InvalidAndStrayPacketsAreSkipped) {
+  const uc::Calibration cal = uc::Calibration::nominalHdl64eS2();
+  uc::PacketEncoder encoder(cal);
+  uc::RevolutionBoundary boundary(0.0);
+  using Action = uc::RevolutionBoundary::Action;
+  auto packetAt = [&](std::uint16_t az) {
+    auto f = emptyFirings(az);
+    return encoder.encode(f.data(), 0);
+  };
+  EXPECT_EQ(boundary.add(packetAt(35000).data(), uc::kPacketSize), Action::kOpen);
+  uc::RawPacket bad = packetAt(35100);
+  bad[2] = 0xFF;  // first block azimuth 0xFFxx >= 36000
+  bad[3] = 0xFF;
+  EXPECT_EQ(boundary.add(bad.data(), bad.size()), Action::kSkip);
+  EXPECT_EQ(boundary.lastStatus(), uc::PacketStatus::kBadAzimuth);
+  EXPECT_EQ(boundary.add(packetAt(9000).data(), uc::kPacketSize), Action::kSkip);  // a stray
+  EXPECT_EQ(boundary.lastStatus(), uc::PacketStatus::kOk);
+  EXPECT_EQ(boundary.add(packetAt(35104).data(), uc::kPacketSize), Action::kAppend);
+  EXPECT_EQ(boundary.add(packetAt(35600).data(), uc::kPacketSize), Action::kAppend);
+  EXPECT_EQ(boundary.add(packetAt(5).data(), uc::kPacketSize), Action::kDrop);  // first cut
+  EXPECT_EQ(boundary.invalidPackets(), 1u);
+  EXPECT_EQ(boundary.strayPackets(), 1u);
+  EXPECT_EQ(boundary.openPackets(), 1u);
+  EXPECT_STREQ(uc::revolutionSizeProblem(347, 347), "");
+  EXPECT_STREQ(uc::revolutionSizeProblem(300, 347), "too few packets");
+  EXPECT_STREQ(uc::revolutionSizeProblem(694, 347), "too many packets");
+  EXPECT_STREQ(uc::revolutionSizeProblem(5, 0), "");
+}
+
+// Other Velodyne models: their blocks all carry the upper-block id; refused and named.
+TEST(PacketDecoder, OtherModelsAreRefusedAndNamed) {
+  const uc::Calibration cal = uc::Calibration::nominalHdl64eS2();
+  auto f = emptyFirings(1000);
+  uc::RawPacket p = uc::PacketEncoder(cal).encode(f.data(), 0);
+  ASSERT_EQ(uc::PacketDecoder::validate(p.data(), p.size()), uc::PacketStatus::kOk);
+  for (int b = 0; b < uc::kBlocksPerPacket; ++b) {  // VLP-16 layout: every block 0xFF 0xEE
+    p[static_cast<std::size_t>(b) * 100] = 0xFF;
+    p[static_cast<std::size_t>(b) * 100 + 1] = 0xEE;
+  }
+  p[1204] = 0x37;
+  p[1205] = 0x22;
+  EXPECT_EQ(uc::PacketDecoder::validate(p.data(), p.size()), uc::PacketStatus::kOtherModel);
+  EXPECT_EQ(uc::velodyneModelName(p.data(), p.size()), "VLP-16 (strongest return)");
+  p[1204] = 0x39;
+  p[1205] = 0x21;
+  EXPECT_EQ(uc::velodyneModelName(p.data(), p.size()), "HDL-32E (dual return)");
+  p[1205] = 0x99;
+  EXPECT_EQ(uc::velodyneModelName(p.data(), p.size()), "an unknown model (factory bytes 0x39 0x99)");
+  uc::PacketDecoder decoder(cal, uc::DecoderParams());
+  CloudXYZIRT cloud;
+  uc::DecodeStats stats;
+  EXPECT_EQ(decoder.decode(p.data(), p.size(), 0.0, &cloud, &stats), uc::PacketStatus::kOtherModel);
+  EXPECT_TRUE(cloud.empty());
 }
 
 // ---- The whole model against a double-precision reference -------------------------------------

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -267,4 +268,39 @@ TEST(PcapIo, CorruptedCapturesNeverCrash) {
   }
   EXPECT_GT(truncated, 50);  // every third file is cut at a random place
   std::remove(path.c_str());
+}
+
+// The replay timeline (issue 25 D): capture times that go back, stand still or jump are
+// replaced by the nominal packet period; sane stretches keep their recorded gaps.
+TEST(ReplayTimeline, AnomaliesAdvanceByTheNominalPeriod) {
+  using A = uc::ReplayTimeline::Anomaly;
+  const double gap = 1.0 / 3472.0;
+  uc::ReplayTimeline t(gap, 1.0);
+  A a;
+  EXPECT_DOUBLE_EQ(t.next(100.0, &a), 100.0);
+  EXPECT_EQ(a, A::kNone);
+  EXPECT_DOUBLE_EQ(t.next(100.0005, &a), 100.0005);
+  EXPECT_DOUBLE_EQ(t.next(99.0, &a), 100.0005 + gap);  // back by 1 s
+  EXPECT_EQ(a, A::kBackwards);
+  EXPECT_DOUBLE_EQ(t.next(99.0003, &a), 100.0005 + gap + 0.0003);  // sane again from there
+  EXPECT_EQ(a, A::kNone);
+  EXPECT_DOUBLE_EQ(t.next(99.0003, &a), 100.0005 + 2 * gap + 0.0003);
+  EXPECT_EQ(a, A::kStill);
+  const double before = t.next(99.0006, &a);
+  EXPECT_DOUBLE_EQ(t.next(99.0006 + 365 * 86400.0, &a), before + gap);  // a year ahead
+  EXPECT_EQ(a, A::kJump);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_DOUBLE_EQ(t.next(nan, &a), before + 2 * gap);
+  EXPECT_EQ(a, A::kBackwards);
+  // All-zero capture times: paced at the nominal rate.
+  uc::ReplayTimeline zeros(gap, 1.0);
+  for (int i = 0; i < 3472; ++i) zeros.next(0.0);
+  EXPECT_NEAR(zeros.next(0.0), 1.0, 1e-9);
+  // A loop restarts one nominal period later, without an anomaly.
+  uc::ReplayTimeline loop(gap, 1.0);
+  loop.next(5.0);
+  const double end = loop.next(6.0);
+  loop.restart();
+  EXPECT_DOUBLE_EQ(loop.next(5.0, &a), end + gap);
+  EXPECT_EQ(a, A::kNone);
 }

@@ -38,6 +38,9 @@ enum class PacketStatus {
   kWrongSize,       // not 1206 bytes
   kUnknownBlockId,  // a block id other than 0xEEFF / 0xDDFF
   kBadAzimuth,      // azimuth >= 36000
+  kOtherModel,      // no block carries the lower-bank id 0xDDFF: the single-bank layout of
+                    // other Velodyne models (VLP-16, VLP-32C, HDL-32E, ...), whose blocks all
+                    // read as upper blocks; velodyneModelName() names the model
   kDualReturn,      // S3 dual-return packet: rejected with a clear status, never misread.
                     // Rule: two blocks of one packet with the same block id and the same
                     // azimuth (a single-return packet never fires one bank twice at one angle;
@@ -45,6 +48,12 @@ enum class PacketStatus {
                     // two blocks at the same angle). Status bytes are not used for this.
 };
 const char* toString(PacketStatus status);
+
+/// The Velodyne model and return mode a 1206-byte packet's factory bytes (offsets 1204: return
+/// mode, 1205: product id) name, e.g. "VLP-16 (strongest return)", or "an unknown model
+/// (factory bytes 0x37 0x99)". For the message of a refused kOtherModel packet; HDL-64E
+/// packets carry status bytes there instead, so this is not a test for an HDL-64E.
+std::string velodyneModelName(const std::uint8_t* data, std::size_t size);
 
 /// Parameters of the decoder.
 struct DecoderParams {
@@ -174,23 +183,49 @@ class PacketEncoder {
 };
 
 /// Cuts a stream of packets into whole revolutions at a configurable azimuth, so 300-1200 rpm
-/// all give whole revolutions (no fixed packet count).
+/// all give whole revolutions (no fixed packet count). Robust to a hostile stream: a packet
+/// delivered out of order or a stray packet never cuts a revolution.
+///
+/// The head advances by about 1 deg per packet at 600 rpm (3472 packets/s, 2 deg at 1200 rpm).
+/// A packet is a step of the stream when it advances the azimuth of the last step by at most
+/// kMaxStep; the revolution ends where a step crosses the cut angle. A packet that goes back
+/// by at most kMaxStep was delivered out of order: it belongs to the open revolution and does
+/// not move the head. Any other packet (a jump) is held as a candidate: if the next packet is a
+/// step from it and not from the head, the stream really jumped (packets lost, a restart) and
+/// the head follows (a forward jump across the cut angle cuts there, one packet late);
+/// otherwise the jump was a stray packet and is ignored.
 class RevolutionCutter {
  public:
+  static constexpr int kMaxStep = 1000;  // [1/100 deg] 10 deg: four lost packets at 1200 rpm
+
+  enum class Step {
+    kStep,       // the head moved forward (or stood still) without crossing the cut angle
+    kCut,        // the head crossed the cut angle: this packet starts a new revolution
+    kReordered,  // at most kMaxStep behind the head: late, belongs to the open revolution
+    kJump,       // neither: a stray packet, or the first of a jump (not part of a revolution)
+    kRestart,    // the head jumped backwards (confirmed): the open revolution is broken
+  };
+
   explicit RevolutionCutter(double cut_angle_deg = 0.0);
 
-  /// Feeds the first block azimuth of the next packet; returns true if this packet starts a new
-  /// revolution: the cut angle lies in (previous azimuth, this azimuth], going in the sense of
-  /// rotation (increasing azimuth, modulo 360 deg). The first packet after construction or
-  /// reset() returns false (no crossing observed yet), so the revolution it belongs to is
-  /// partial and callers drop it.
-  bool startsNewRevolution(std::uint16_t first_block_azimuth);
+  /// Classifies the next packet by the azimuth of its first block. The first packet after
+  /// construction or reset() is a kStep (no crossing observed yet), so the revolution it
+  /// belongs to is partial and callers drop it.
+  Step step(std::uint16_t first_block_azimuth);
+  /// step() == kCut: the cut angle lies in (head, this azimuth], going in the sense of
+  /// rotation (increasing azimuth, modulo 360 deg).
+  bool startsNewRevolution(std::uint16_t first_block_azimuth) {
+    return step(first_block_azimuth) == Step::kCut;
+  }
   void reset();
   double cutAngleDeg() const { return cut_ / 100.0; }
 
  private:
-  int cut_;   // [1/100 deg]
-  int last_;  // previous azimuth or -1
+  bool crosses(int from, int to) const;  // the cut angle in (from, to], going forward
+
+  int cut_;             // [1/100 deg]
+  int last_ = -1;       // the head: azimuth of the last step, or -1
+  int candidate_ = -1;  // azimuth of the last kJump packet, or -1
 };
 
 /// Where each packet of a stream goes when the stream is cut into whole revolutions: the one
@@ -210,13 +245,20 @@ class RevolutionBoundary {
     kDrop,       // the open revolution was partial: drop it; the packet opens the next (whole)
     kForcedCut,  // no cut within kMaxPacketsPerRevolution: drop it; the packet opens a partial one
     kOpen,       // nothing was open: the packet opens a revolution (partial)
+    kSkip,       // the packet is not part of any revolution: invalid (lastStatus() says why) or
+                 // a stray (RevolutionCutter::kJump); nothing changes
   };
 
   explicit RevolutionBoundary(double cut_angle_deg = 0.0) : cutter_(cut_angle_deg) {}
 
-  /// Classifies the next packet by the azimuth of its first block; afterwards the packet
-  /// belongs to the open revolution.
+  /// Validates the packet (PacketDecoder::validate: size, block ids, azimuths, model, dual
+  /// return) and classifies it by the azimuth of its first block; unless kSkip, the packet
+  /// afterwards belongs to the open revolution.
+  Action add(const std::uint8_t* data, std::size_t size);
+  /// The same for a packet known to be valid, by its first block azimuth.
   Action add(std::uint16_t first_block_azimuth);
+  /// Why the last kSkip packet was invalid (kOk: it was a stray).
+  PacketStatus lastStatus() const { return last_status_; }
   /// Drops the open revolution (counted as partial) and restarts cut detection.
   void reset();
 
@@ -224,6 +266,9 @@ class RevolutionBoundary {
   std::size_t openPackets() const { return packets_; }
   std::size_t partialDropped() const { return partial_dropped_; }
   std::size_t forcedCuts() const { return forced_cuts_; }
+  std::size_t invalidPackets() const { return invalid_; }   // skipped: failed validation
+  std::size_t strayPackets() const { return strays_; }      // skipped: RevolutionCutter::kJump
+  std::size_t reorderedPackets() const { return reordered_; }  // appended although late
   double cutAngleDeg() const { return cutter_.cutAngleDeg(); }
 
  private:
@@ -232,7 +277,15 @@ class RevolutionBoundary {
   bool whole_ = false;       // the open revolution was opened by an observed cut
   std::size_t partial_dropped_ = 0;
   std::size_t forced_cuts_ = 0;
+  std::size_t invalid_ = 0, strays_ = 0, reordered_ = 0;
+  PacketStatus last_status_ = PacketStatus::kOk;
 };
+
+/// "" when a whole revolution of `packets` packets is plausible against the `expected` count
+/// (the sensor's packet rate over its spin period; 0 = unknown), else "too few packets" (less
+/// than 90 %: packets lost) or "too many packets" (more than 110 %: another sender's packets
+/// mixed in, or the sensor spins slower than configured).
+const char* revolutionSizeProblem(std::size_t packets, std::size_t expected);
 
 }  // namespace core
 }  // namespace urban_detection

@@ -41,6 +41,32 @@ class PcapReader {
   std::size_t skipped_ = 0;
 };
 
+/// The timeline of a capture's replay [s]: it follows the packets' capture times while they
+/// advance sanely, and advances by the nominal packet period where they go back, stand still
+/// or jump forward by more than `max_gap_s` (a clock stepped during the capture, a file with
+/// zero times, a splice), so a replay paced on it keeps the sensor's rate through any of them.
+/// Starts at the first packet's capture time.
+class ReplayTimeline {
+ public:
+  enum class Anomaly { kNone, kBackwards, kStill, kJump };
+
+  /// `nominal_gap_s`: one packet period (HDL-64E: 1/3472 s); `max_gap_s`: the largest gap
+  /// between two packets taken as it was recorded.
+  explicit ReplayTimeline(double nominal_gap_s = 1.0 / 3472.0, double max_gap_s = 1.0);
+
+  /// Timeline time of the next packet, captured at `capture_s`; `anomaly` (optional) says how
+  /// its capture time was off.
+  double next(double capture_s, Anomaly* anomaly = nullptr);
+  /// A new pass over the file (loop): the next packet comes one nominal period after the last.
+  void restart() { restarted_ = true; }
+
+ private:
+  double nominal_gap_s_, max_gap_s_;
+  bool started_ = false, restarted_ = false;
+  double last_capture_s_ = 0.0, now_s_ = 0.0;
+};
+const char* toString(ReplayTimeline::Anomaly anomaly);
+
 /// Writes packets as Ethernet/IPv4/UDP frames from 192.168.3.43:2368 (sensor default) to
 /// port 2368.
 class PcapWriter {

@@ -52,6 +52,9 @@ void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value, i
                int max, const std::string& unit = "");
 void loadParam(const ros::NodeHandle& nh, const std::string& name, bool* value);
 void loadParam(const ros::NodeHandle& nh, const std::string& name, std::string* value);
+/// Type-checked only (for structs whose ranges are checked as a whole afterwards).
+void loadParam(const ros::NodeHandle& nh, const std::string& name, double* value);
+void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value);
 
 /// The numeric fields of one params struct with their accepted ranges: the one list that both
 /// the start-up loader (load()) and dynamic_reconfigure (check()) use, so a value is accepted

@@ -41,10 +41,11 @@ class ScanAssembler {
   static constexpr std::size_t kMaxPacketsPerScan = core::RevolutionBoundary::kMaxPacketsPerRevolution;
 
   /// `cut_angle_deg` [deg, 0..360]; `frame_id` goes into every scan's header;
-  /// `expected_packets` sizes the first revolution's buffer (later ones take the size of the
-  /// previous revolution); the cut stays by azimuth whatever the expectation.
+  /// `expected_packets` (0: unknown) sizes the first revolution's buffer (later ones take the
+  /// size of the previous revolution) and is what lastSizeProblem() checks against; the cut
+  /// stays by azimuth whatever the expectation.
   ScanAssembler(double cut_angle_deg, const std::string& frame_id,
-                std::size_t expected_packets = 700, ScanStamp stamp = ScanStamp::kLastPacket);
+                std::size_t expected_packets = 0, ScanStamp stamp = ScanStamp::kLastPacket);
 
   /// Adds a packet received at `stamp`. Returns the finished revolution when this packet
   /// starts a new one (the packet then opens the next scan), otherwise null. The scan's
@@ -59,6 +60,15 @@ class ScanAssembler {
   std::size_t partialDropped() const { return boundary_.partialDropped(); }
   /// Packet runs dropped at kMaxPacketsPerScan without any cut.
   std::size_t forcedCuts() const { return boundary_.forcedCuts(); }
+  /// The revolution boundary: its counters of invalid, stray and reordered packets, and why
+  /// the last skipped packet was invalid.
+  const core::RevolutionBoundary& boundary() const { return boundary_; }
+  /// Packets of the revolution returned last, and core::revolutionSizeProblem() of it against
+  /// the expected count given at construction.
+  std::size_t lastPackets() const { return last_packets_; }
+  const char* lastSizeProblem() const {
+    return core::revolutionSizeProblem(last_packets_, nominal_packets_);
+  }
 
  private:
   core::RevolutionBoundary boundary_;
@@ -66,6 +76,8 @@ class ScanAssembler {
   ScanStamp stamp_;
   VelodyneScan::Ptr current_;
   std::size_t expected_packets_ = 700;  // capacity hint: size of the previous revolution
+  std::size_t nominal_packets_ = 700;   // the expected count (rate check)
+  std::size_t last_packets_ = 0;
   std::uint32_t revolutions_ = 0;       // returned so far (header.seq)
 };
 
@@ -105,7 +117,7 @@ class StreamingScanDecoder {
  public:
   /// `decoder` must outlive this object.
   StreamingScanDecoder(const core::PacketDecoder* decoder, double cut_angle_deg,
-                       const std::string& frame_id, std::size_t expected_packets = 700,
+                       const std::string& frame_id, std::size_t expected_packets = 0,
                        ScanStamp stamp = ScanStamp::kLastPacket);
 
   /// Decodes a packet received at `stamp`. Returns the finished revolution's cloud (fresh, for
@@ -121,6 +133,10 @@ class StreamingScanDecoder {
   std::size_t lastPackets() const { return last_packets_; }
   std::size_t partialDropped() const { return boundary_.partialDropped(); }
   std::size_t forcedCuts() const { return boundary_.forcedCuts(); }
+  const core::RevolutionBoundary& boundary() const { return boundary_; }
+  const char* lastSizeProblem() const {
+    return core::revolutionSizeProblem(last_packets_, nominal_packets_);
+  }
 
  private:
   void open(const ros::Time& stamp);
@@ -133,6 +149,7 @@ class StreamingScanDecoder {
   ros::Time first_stamp_, last_stamp_;  // of the open revolution
   ScanDecodeStats stats_, last_stats_;
   std::size_t expected_packets_ = 700;
+  std::size_t nominal_packets_ = 700;  // the expected count (rate check)
   std::size_t last_packets_ = 0;
   std::uint32_t revolutions_ = 0;
 };
