@@ -4,6 +4,7 @@
 // (radians, metres) while db.xml stores degrees and centimetres, so the XML reader converts.
 #include "urban_detection/core/calibration.h"
 
+#include <sys/stat.h>
 #include <tinyxml2.h>
 #include <yaml-cpp/yaml.h>
 
@@ -217,7 +218,19 @@ Calibration Calibration::nominalHdl64eS2() {
 }
 
 // ------------------------------------------------------------------------------------------------
+namespace {
+// Opening a FIFO would block until a writer comes and reading a directory fails deep inside a
+// stream: both are refused first, naming the file.
+void requireRegularFile(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) fail(path, "", "cannot open file");
+  if (S_ISDIR(st.st_mode)) fail(path, "", "is a directory, not a calibration file");
+  if (!S_ISREG(st.st_mode)) fail(path, "", "is not a regular file (a FIFO, device or socket)");
+}
+}  // namespace
+
 Calibration loadCalibrationYaml(const std::string& path) {
+  requireRegularFile(path);
   std::ifstream in(path);
   if (!in) fail(path, "", "cannot open file");
   YAML::Node root;
@@ -281,6 +294,7 @@ Calibration loadCalibrationYaml(const std::string& path) {
 }
 
 Calibration loadCalibrationDbXml(const std::string& path) {
+  requireRegularFile(path);
   tinyxml2::XMLDocument doc;
   const tinyxml2::XMLError err = doc.LoadFile(path.c_str());
   if (err == tinyxml2::XML_ERROR_FILE_NOT_FOUND ||

@@ -239,8 +239,8 @@ double ReplayTimeline::next(double capture_s, Anomaly* anomaly) {
     now_s_ = std::isfinite(capture_s) ? capture_s : 0.0;
   } else {
     const double gap = capture_s - last_capture_s_;
-    if (restarted_) {
-      now_s_ += nominal_gap_s_;  // a loop: not an anomaly
+    if (restarted_) {  // a loop, not an anomaly: the file's own mean packet gap
+      now_s_ += sane_gaps_ > 0 ? sane_sum_s_ / static_cast<double>(sane_gaps_) : nominal_gap_s_;
     } else if (!(gap == gap) || gap < 0.0) {
       a = Anomaly::kBackwards;
     } else if (gap == 0.0) {
@@ -249,6 +249,8 @@ double ReplayTimeline::next(double capture_s, Anomaly* anomaly) {
       a = Anomaly::kJump;
     } else {
       now_s_ += gap;
+      sane_sum_s_ += gap;
+      ++sane_gaps_;
     }
     if (a != Anomaly::kNone) now_s_ += nominal_gap_s_;
   }

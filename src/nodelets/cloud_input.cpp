@@ -33,7 +33,9 @@ class CloudInput : public nodelet::Nodelet {
       loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
       loadParam(getPrivateNodeHandle(), "max_points", &max_points_, 1, 100000000, "points");
     } catch (const ParamError& e) {
-      NODELET_FATAL("CloudInput: %s; the nodelet stays idle", e.what());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "CloudInput: " + std::string(e.what()) + "; the nodelet stays idle");
       return;
     }
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
@@ -94,6 +96,7 @@ class CloudInput : public nodelet::Nodelet {
   int queue_size_ = 2;
   int max_points_ = 800640;  // three revolutions at 300 rpm: 2085 packets x 384 returns
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   std::string last_error_;  // last malformed-input reason logged (callbacks are serialised)
   std::mutex connect_mutex_;
   ros::Publisher pub_;

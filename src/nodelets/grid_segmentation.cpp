@@ -46,7 +46,9 @@ class GridSegmentation : public nodelet::Nodelet {
       error = e.what();
     }
     if (!error.empty() || !ros_conv::loadGridSegmenterParams(pnh, &params, &error)) {
-      NODELET_FATAL("GridSegmentation: %s; the nodelet stays idle", error.c_str());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "GridSegmentation: " + error + "; the nodelet stays idle");
       return;
     }
     segmenter_.reset(new core::GridSegmenter(params));
@@ -113,6 +115,7 @@ class GridSegmentation : public nodelet::Nodelet {
   int queue_size_ = 2;
   std::unique_ptr<Reconfigure> reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   std::vector<core::SegmentClass> labels_;  // scratch: per-point classes
   std::unique_ptr<ros_conv::StageThread> thread_;  // runs cloudCb
   std::mutex connect_mutex_;

@@ -38,20 +38,24 @@ class ImageLabelTransfer : public nodelet::Nodelet {
     try {
       ros_conv::loadImageLabelTransferParams(getPrivateNodeHandle(), &p);
     } catch (const ParamError& e) {
-      NODELET_FATAL("ImageLabelTransfer: %s; the nodelet stays idle", e.what());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "ImageLabelTransfer: " + std::string(e.what()) + "; the nodelet stays idle");
       return;
     }
     if (!model_.load(p.model, &error)) {
-      NODELET_FATAL(
-          "ImageLabelTransfer refuses to start: %s (parameter '%s'). Export a semantic "
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "ImageLabelTransfer refuses to start: " + error + " (parameter '" +
+          getPrivateNodeHandle().resolveName("model/path") + "'). Export a semantic "
           "segmentation network (e.g. DeepLabv3 on Cityscapes) to ONNX (opset <= 13) "
-          "and set it; the nodelet stays idle",
-          error.c_str(), getPrivateNodeHandle().resolveName("model/path").c_str());
+          "and set it; the nodelet stays idle");
       return;
     }
     if (!p.class_names_file.empty() && !core::readClassNames(p.class_names_file, &names_, &error)) {
-      NODELET_FATAL("ImageLabelTransfer: %s (parameter model/class_names_file); idle",
-                    error.c_str());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "ImageLabelTransfer: " + error + " (parameter model/class_names_file); idle");
       return;
     }
     // Without a names file, ids up to 65535 may be kept (the network's class count is only
@@ -59,7 +63,9 @@ class ImageLabelTransfer : public nodelet::Nodelet {
     const int bound = names_.empty() ? 65536 : static_cast<int>(names_.size());
     if (!core::resolveKeptClasses(p.keep_classes, names_, bound, &p.transfer.kept_classes,
                                   &error)) {
-      NODELET_FATAL("ImageLabelTransfer: parameter model/keep_classes: %s; idle", error.c_str());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "ImageLabelTransfer: parameter model/keep_classes: " + error + "; idle");
       return;
     }
     if (p.keep_classes.empty()) p.transfer.kept_classes.clear();
@@ -147,6 +153,7 @@ class ImageLabelTransfer : public nodelet::Nodelet {
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   message_filters::Subscriber<sensor_msgs::Image> image_sub_;
   message_filters::Subscriber<sensor_msgs::CameraInfo> info_sub_;
   message_filters::Subscriber<DetectedObjectArray> objects_sub_;

@@ -27,7 +27,9 @@ class ObjectMarkers : public nodelet::Nodelet {
       ros_conv::loadObjectMarkerParams(pnh, &params_);
       loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     } catch (const ParamError& e) {
-      NODELET_FATAL("ObjectMarkers: %s; the nodelet stays idle", e.what());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "ObjectMarkers: " + std::string(e.what()) + "; the nodelet stays idle");
       return;
     }
     const ObjectMarkersConfig initial =
@@ -82,6 +84,7 @@ class ObjectMarkers : public nodelet::Nodelet {
   int queue_size_ = 2;
   std::unique_ptr<Reconfigure> reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   std::mutex mutex_;
   ros::Publisher pub_;
   ros::Subscriber sub_;

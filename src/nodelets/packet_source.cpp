@@ -29,7 +29,9 @@ class PacketSource : public nodelet::Nodelet {
     try {
       params = loadPacketSourceParams(getPrivateNodeHandle());
     } catch (const std::exception& e) {  // ParamError
-      NODELET_FATAL("PacketSource inactive: %s", e.what());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "PacketSource inactive: " + std::string(e.what()));
       return;
     }
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
@@ -48,7 +50,9 @@ class PacketSource : public nodelet::Nodelet {
           },
           [this] { return cloud_pub_ && cloud_pub_.getNumSubscribers() > 0; });
     } catch (const std::exception& e) {  // socket, file or calibration errors
-      NODELET_FATAL("PacketSource inactive: %s", e.what());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "PacketSource inactive: " + std::string(e.what()));
       return;
     }
     diagnostics_->setHardwareId(worker_->describe());
@@ -64,6 +68,7 @@ class PacketSource : public nodelet::Nodelet {
   }
 
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   ros::Publisher pub_, cloud_pub_;
   std::unique_ptr<PacketSourceWorker> worker_;
 };

@@ -23,7 +23,9 @@ class PacketToCloud : public nodelet::Nodelet {
       params_ = loadPacketToCloudParams(getPrivateNodeHandle());
       converter_ = std::make_unique<ScanToCloud>(params_, getNodeHandle());
     } catch (const std::exception& e) {  // ParamError, core::CalibrationError
-      NODELET_FATAL("PacketToCloud inactive: %s", e.what());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "PacketToCloud inactive: " + std::string(e.what()));
       return;
     }
     NODELET_INFO("PacketToCloud: calibration %s, range [%.2f, %.2f] m",
@@ -94,6 +96,7 @@ class PacketToCloud : public nodelet::Nodelet {
   PacketToCloudParams params_;
   std::unique_ptr<ScanToCloud> converter_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   std::mutex connect_mutex_;
   ros::Publisher pub_;
   ros::Subscriber sub_;

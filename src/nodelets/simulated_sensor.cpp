@@ -47,8 +47,10 @@ class SimulatedSensor : public nodelet::Nodelet {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     std::string config_path;
     if (!pnh.getParam("config", config_path) || config_path.empty()) {
-      NODELET_FATAL("SimulatedSensor: parameter ~config (path of a drive YAML such as "
-                    "config/demo_drive.yaml) is required; the nodelet stays idle");
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "SimulatedSensor: parameter ~config (path of a drive YAML such as "
+                     "config/demo_drive.yaml) is required; the nodelet stays idle");
       return false;
     }
     bool first_packet = false;  // header.stamp convention of velodyne_driver (and PacketSource)
@@ -62,7 +64,9 @@ class SimulatedSensor : public nodelet::Nodelet {
       loadParam(pnh, "odom_frame", &frames_.odom);
       loadParam(pnh, "base_frame", &frames_.base_link);
     } catch (const ParamError& e) {
-      NODELET_FATAL("SimulatedSensor: %s; the nodelet stays idle", e.what());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "SimulatedSensor: " + std::string(e.what()) + "; the nodelet stays idle");
       return false;
     }
     stamp_ = first_packet ? ScanStamp::kFirstPacket : ScanStamp::kLastPacket;
@@ -70,7 +74,9 @@ class SimulatedSensor : public nodelet::Nodelet {
       config_ = core::loadSimulationConfig(config_path);
       calibration_ = core::loadCalibration(config_.calibration_file);
     } catch (const std::exception& e) {
-      NODELET_FATAL("SimulatedSensor: %s; the nodelet stays idle", e.what());
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "SimulatedSensor: " + std::string(e.what()) + "; the nodelet stays idle");
       return false;
     }
     return true;
@@ -147,6 +153,7 @@ class SimulatedSensor : public nodelet::Nodelet {
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   std::uint32_t revolutions_ = 0;  // published so far (header.seq), worker thread only
   std::atomic<bool> running_{false};
   std::thread worker_;

@@ -30,7 +30,9 @@ void DetectorNodelet::onInit() {
                                          &classifier_params);
     classifier_ = std::make_unique<core::ObjectClassifier>(classifier_params);
   } catch (const std::exception& e) {
-    NODELET_FATAL("%s: %s; the nodelet stays idle", getName().c_str(), e.what());
+    refusal_ = ros_conv::RefusalDiagnostics::report(
+        getNodeHandle(), getPrivateNodeHandle(), getName(),
+        getName() + ": " + e.what() + "; the nodelet stays idle");
     return;
   }
   startReconfigure(getPrivateNodeHandle());

@@ -75,6 +75,14 @@ bool fromPointCloud2(const sensor_msgs::PointCloud2& msg, CloudXYZIRT* cloud,
              (present.empty() ? std::string("none") : present) + ")";
     return false;
   }
+  for (std::size_t i = 0; i < msg.fields.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (msg.fields[i].name == msg.fields[j].name) {
+        *error = "PointCloud2 with the field '" + msg.fields[i].name + "' defined twice";
+        return false;
+      }
+    }
+  }
   if (msg.is_bigendian) {
     *error = "big-endian PointCloud2 is not supported";
     return false;

@@ -156,5 +156,25 @@ void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
   window_sum_s_ = window_max_s_ = 0.0;
 }
 
+std::unique_ptr<RefusalDiagnostics> RefusalDiagnostics::report(ros::NodeHandle nh,
+                                                               ros::NodeHandle pnh,
+                                                               const std::string& name,
+                                                               const std::string& text) {
+  ROS_FATAL_STREAM_NAMED(name, text);
+  return std::make_unique<RefusalDiagnostics>(nh, pnh, name, text);
+}
+
+RefusalDiagnostics::RefusalDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh,
+                                       const std::string& name, const std::string& text)
+    : updater_(new diagnostic_updater::Updater(nh, pnh, name)), text_(text) {
+  updater_->setHardwareID("none");
+  updater_->add("refused", [this](diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, text_);
+  });
+  timer_ = nh.createWallTimer(ros::WallDuration(1.0),
+                              [this](const ros::WallTimerEvent&) { updater_->force_update(); });
+  updater_->force_update();
+}
+
 }  // namespace ros_conv
 }  // namespace urban_detection

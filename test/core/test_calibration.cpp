@@ -1,6 +1,7 @@
 // Calibration readers: YAML and db.xml parsing, equivalence of the two SZTAKI files, the nominal
 // geometry, and error messages of malformed files.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -308,5 +309,22 @@ TEST(Calibration, MalformedDbXmlNamesFileLaserAndField) {
                "<?xml version=\"1.0\"?><boost_serialization><DB><distLSB_>0.2"
                "</distLSB_></DB></boost_serialization>");
     expectError(f.path(), {"points_"});
+  }
+}
+
+// A directory or a FIFO named as the calibration is refused at once, naming it (a FIFO used to
+// block the loading nodelet's onInit until a writer came).
+TEST(Calibration, DirectoryAndFifoAreRefusedNamingThem) {
+  const std::string dir = ud_test::tempPath("calibration_dir.yaml");
+  ::rmdir(dir.c_str());
+  ASSERT_EQ(::mkdir(dir.c_str(), 0700), 0);
+  expectError(dir, {dir, "is a directory"});
+  ::rmdir(dir.c_str());
+  for (const char* ext : {".yaml", ".xml"}) {
+    const std::string fifo = ud_test::tempPath(std::string("calibration_fifo") + ext);
+    ::unlink(fifo.c_str());
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    expectError(fifo, {fifo, "not a regular file"});
+    ::unlink(fifo.c_str());
   }
 }

@@ -132,6 +132,12 @@ TEST(PointCloud2Input, RejectsMalformedMessages) {
   big_endian.is_bigendian = true;
   EXPECT_FALSE(ros_conv::fromPointCloud2(big_endian, &cloud, &info, &err));
 
+  sensor_msgs::PointCloud2 twice = kittiStyle(2);  // a second "x" (the intensity's bytes)
+  twice.fields.push_back(twice.fields[3]);
+  twice.fields.back().name = "x";
+  EXPECT_FALSE(ros_conv::fromPointCloud2(twice, &cloud, &info, &err));
+  EXPECT_NE(err.find("the field 'x' defined twice"), std::string::npos) << err;
+
   sensor_msgs::PointCloud2 empty = kittiStyle(0);
   EXPECT_TRUE(ros_conv::fromPointCloud2(empty, &cloud, &info, &err));
   EXPECT_TRUE(cloud.empty());

@@ -632,6 +632,7 @@ TEST(PacketSource, PcapLoopKeepsStampsIncreasing) {
 
 TEST(PacketSource, BadParametersFailInitClearly) {
   RosoutWatcher rosout;
+  DiagnosticsWatcher diagnostics;
   nodelet::Loader manager(false);
   ros::param::set("/badsrc/packet_source/port", 70000);
   manager.load("/badsrc/packet_source", "urban_detection/PacketSource", {}, {});
@@ -643,6 +644,35 @@ TEST(PacketSource, BadParametersFailInitClearly) {
     return rosout.contains(rosgraph_msgs::Log::FATAL, "'/badsrc/packet_source/port' = 70000") &&
            rosout.contains(rosgraph_msgs::Log::FATAL, "192.168.1") &&
            rosout.contains(rosgraph_msgs::Log::FATAL, "/nonexistent/drive.pcap");
+  }, 10.0));
+  // The same text on /diagnostics, at ERROR (not "waiting for input").
+  EXPECT_TRUE(waitFor([&] {
+    return diagnostics.sawError("badsrc/packet_source", "'/badsrc/packet_source/port' = 70000") &&
+           diagnostics.sawError("nopcap/packet_source", "/nonexistent/drive.pcap");
+  }, 5.0));
+}
+
+// A value of the wrong type is refused, never replaced by the default (issue 25): strings where
+// numbers belong, as YAML 1.1 reads `cell_size_m: half` and `min_points_per_cell: 5e0`.
+TEST(GridSegmentation, WrongParameterTypesFailInitClearly) {
+  RosoutWatcher rosout;
+  nodelet::Loader manager(false);
+  ros::param::set("/segstr/grid_segmentation/cell_size_m", std::string("half"));
+  manager.load("/segstr/grid_segmentation", "urban_detection/GridSegmentation", {}, {});
+  ros::param::set("/segint/grid_segmentation/min_points_per_cell", std::string("5e0"));
+  manager.load("/segint/grid_segmentation", "urban_detection/GridSegmentation", {}, {});
+  DiagnosticsWatcher diagnostics;
+  EXPECT_TRUE(waitFor([&] {
+    return diagnostics.sawError("segstr/grid_segmentation",
+                                "parameter '/segstr/grid_segmentation/cell_size_m' must be a "
+                                "number");
+  }, 10.0));
+  EXPECT_TRUE(waitFor([&] {
+    return rosout.contains(rosgraph_msgs::Log::FATAL,
+                           "parameter '/segstr/grid_segmentation/cell_size_m' must be a number") &&
+           rosout.contains(rosgraph_msgs::Log::FATAL,
+                           "parameter '/segint/grid_segmentation/min_points_per_cell' must be an "
+                           "integer");
   }, 10.0));
 }
 

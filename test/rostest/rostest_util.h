@@ -79,10 +79,16 @@ class DiagnosticsWatcher {
   }
   /// Whether a WARN status whose name contains `name` had a summary containing `text`.
   bool sawWarning(const std::string& name, const std::string& text) {
+    return saw(name, diagnostic_msgs::DiagnosticStatus::WARN, text);
+  }
+  /// The same for an ERROR status.
+  bool sawError(const std::string& name, const std::string& text) {
+    return saw(name, diagnostic_msgs::DiagnosticStatus::ERROR, text);
+  }
+  bool saw(const std::string& name, std::uint8_t level, const std::string& text) {
     std::lock_guard<std::mutex> lock(mutex_);
     for (const auto& s : statuses_) {
-      if (s.name.find(name) != std::string::npos &&
-          s.level == diagnostic_msgs::DiagnosticStatus::WARN &&
+      if (s.name.find(name) != std::string::npos && s.level == level &&
           s.message.find(text) != std::string::npos) {
         return true;
       }

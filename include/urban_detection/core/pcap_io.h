@@ -57,13 +57,16 @@ class ReplayTimeline {
   /// Timeline time of the next packet, captured at `capture_s`; `anomaly` (optional) says how
   /// its capture time was off.
   double next(double capture_s, Anomaly* anomaly = nullptr);
-  /// A new pass over the file (loop): the next packet comes one nominal period after the last.
+  /// A new pass over the file (loop): the next packet comes one mean packet gap of the file
+  /// (its sane gaps so far; the nominal period if none) after the last.
   void restart() { restarted_ = true; }
 
  private:
   double nominal_gap_s_, max_gap_s_;
   bool started_ = false, restarted_ = false;
   double last_capture_s_ = 0.0, now_s_ = 0.0;
+  double sane_sum_s_ = 0.0;     // sum of the sane gaps (the file's own pace)
+  std::size_t sane_gaps_ = 0;
 };
 const char* toString(ReplayTimeline::Anomaly anomaly);
 

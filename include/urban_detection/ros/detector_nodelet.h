@@ -68,6 +68,7 @@ class DetectorNodelet : public nodelet::Nodelet {
   // ~classifier: threshold and rejection, while the classifier is enabled.
   std::unique_ptr<ros_conv::ValidatedReconfigure<ObjectClassifierConfig>> classifier_reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   int queue_size_ = 2;
   int thread_nice_ = 0;
   std::unique_ptr<ros_conv::StageThread> thread_;  // runs foregroundCb

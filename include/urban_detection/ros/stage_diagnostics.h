@@ -105,5 +105,24 @@ class StageDiagnostics {
   std::vector<double> window_latency_s_;
 };
 
+/// The /diagnostics entry of a nodelet that refused to start (a bad parameter, calibration or
+/// model): ERROR with the refusal's text, the text of its FATAL log line, published once a
+/// second while the nodelet is loaded, so monitoring sees it and not "waiting for input".
+class RefusalDiagnostics {
+ public:
+  /// Logs `text` as FATAL (logger named after the nodelet `name`) and returns the entry that
+  /// keeps it on /diagnostics: `refusal_ = RefusalDiagnostics::report(...)`.
+  static std::unique_ptr<RefusalDiagnostics> report(ros::NodeHandle nh, ros::NodeHandle pnh,
+                                                    const std::string& name,
+                                                    const std::string& text);
+  RefusalDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name,
+                     const std::string& text);
+
+ private:
+  std::unique_ptr<diagnostic_updater::Updater> updater_;
+  ros::WallTimer timer_;
+  std::string text_;
+};
+
 }  // namespace ros_conv
 }  // namespace urban_detection
