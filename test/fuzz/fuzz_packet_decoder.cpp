@@ -118,18 +118,25 @@ void checkPacket(const std::uint8_t* data, std::size_t size, double time_s) {
   UD_FUZZ_CHECK(d.nominal.decode(data, size, time_s, nullptr, nullptr) == expected);
 }
 
-// Cuts counted by the cutter must equal the crossings of the unwrapped azimuth.
+// The cutter against a plain transcription of its documented rules (hdl64e_packet.h), packet by
+// packet; and on a stream that only ever steps forward by at most kMaxStep, the cuts must equal
+// the crossings of the unwrapped azimuth.
 class CutterCheck {
  public:
+  using Step = core::RevolutionCutter::Step;
   explicit CutterCheck(double cut_deg) : cutter_(cut_deg) {
     cut_ = static_cast<long>(std::lround(cutter_.cutAngleDeg() * 100.0));
     UD_FUZZ_CHECK(cut_ >= 0 && cut_ < 36000);
   }
   void feed(std::uint16_t first_azimuth) {
     const long az = first_azimuth % 36000;
-    if (cutter_.startsNewRevolution(first_azimuth)) ++cuts_;
+    const Step got = cutter_.step(first_azimuth);
+    UD_FUZZ_CHECK(got == reference(az));
+    if (got == Step::kCut) ++cuts_;
     if (have_last_) {
-      unwrapped_ += (az - last_ + 36000) % 36000;
+      const long advance = (az - last_ + 36000) % 36000;
+      monotone_ = monotone_ && advance <= core::RevolutionCutter::kMaxStep;
+      unwrapped_ += advance;
     } else {
       start_ = unwrapped_ = az;
       have_last_ = true;
@@ -137,16 +144,49 @@ class CutterCheck {
     last_ = az;
   }
   void verify() const {
-    if (!have_last_) return;
+    if (!have_last_ || !monotone_) return;
     auto floorDiv = [](long a, long b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
     const long crossings = floorDiv(unwrapped_ - cut_, 36000) - floorDiv(start_ - cut_, 36000);
     UD_FUZZ_CHECK(crossings == cuts_);
   }
 
  private:
+  static long forward(long from, long to) { return ((to - from) % 36000 + 36000) % 36000; }
+  bool crosses(long from, long to) const {
+    const long d = forward(from, to), c = forward(from, cut_);
+    return d > 0 && c > 0 && c <= d;
+  }
+  Step reference(long az) {
+    const long max_step = core::RevolutionCutter::kMaxStep;
+    if (head_ < 0) {
+      head_ = az;
+      return Step::kStep;
+    }
+    if (forward(head_, az) <= max_step) {
+      candidate_ = -1;
+      const bool cut = crosses(head_, az);
+      head_ = az;
+      return cut ? Step::kCut : Step::kStep;
+    }
+    if (forward(az, head_) <= max_step) {
+      candidate_ = -1;
+      return Step::kReordered;
+    }
+    if (candidate_ >= 0 && forward(candidate_, az) <= max_step) {
+      const long from = head_, jumped_to = candidate_;
+      candidate_ = -1;
+      head_ = az;
+      if (forward(from, jumped_to) < 18000) return crosses(from, az) ? Step::kCut : Step::kStep;
+      return Step::kRestart;
+    }
+    candidate_ = az;
+    return Step::kJump;
+  }
+
   core::RevolutionCutter cutter_;
   long cut_ = 0, cuts_ = 0, start_ = 0, unwrapped_ = 0, last_ = 0;
-  bool have_last_ = false;
+  long head_ = -1, candidate_ = -1;
+  bool have_last_ = false, monotone_ = true;
 };
 
 }  // namespace
