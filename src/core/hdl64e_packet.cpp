@@ -517,7 +517,6 @@ RevolutionBoundary::Action RevolutionBoundary::add(const std::uint8_t* data, std
     ++invalid_;
     return Action::kSkip;
   }
-  last_status_ = PacketStatus::kOk;
   return add(blockAzimuth(data, 0));
 }
 

@@ -241,7 +241,7 @@ double ReplayTimeline::next(double capture_s, Anomaly* anomaly) {
     const double gap = capture_s - last_capture_s_;
     if (restarted_) {  // a loop, not an anomaly: the file's own mean packet gap
       now_s_ += sane_gaps_ > 0 ? sane_sum_s_ / static_cast<double>(sane_gaps_) : nominal_gap_s_;
-    } else if (!(gap == gap) || gap < 0.0) {
+    } else if (std::isnan(gap) || gap < 0.0) {
       a = Anomaly::kBackwards;
     } else if (gap == 0.0) {
       a = Anomaly::kStill;

@@ -20,6 +20,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 
+#include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/pointcloud2_input.h"
 #include "urban_detection/ros/stage_diagnostics.h"
@@ -94,7 +95,9 @@ class CloudInput : public nodelet::Nodelet {
   }
 
   int queue_size_ = 2;
-  int max_points_ = 800640;  // three revolutions at 300 rpm: 2085 packets x 384 returns
+  // Three revolutions at 300 rpm, as PacketToCloud's max_packets_per_scan.
+  int max_points_ = static_cast<int>(core::RevolutionBoundary::kMaxPacketsPerRevolution *
+                                     core::kBlocksPerPacket * core::kLasersPerBlock);
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   std::string last_error_;  // last malformed-input reason logged (callbacks are serialised)

@@ -29,8 +29,7 @@ VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::T
     case core::RevolutionBoundary::Action::kAppend:
       break;
     case core::RevolutionBoundary::Action::kClose:
-      expected_packets_ = current_->packets.size();
-      last_packets_ = current_->packets.size();
+      expected_packets_ = last_packets_ = current_->packets.size();
       current_->header.seq = ++revolutions_;
       if (stamp_ == ScanStamp::kLastPacket) current_->header.stamp = current_->packets.back().stamp;
       finished.swap(current_);
@@ -122,8 +121,7 @@ StreamingScanDecoder::StreamingScanDecoder(const core::PacketDecoder* decoder,
                                            double cut_angle_deg, const std::string& frame_id,
                                            std::size_t expected_packets, ScanStamp stamp)
     : decoder_(decoder), boundary_(cut_angle_deg), frame_id_(frame_id), stamp_(stamp),
-      expected_packets_(expected_packets > 0 ? expected_packets : 700),
-      nominal_packets_(expected_packets) {}
+      expected_packets_(expected_packets > 0 ? expected_packets : 700) {}
 
 void StreamingScanDecoder::open(const ros::Time& stamp) {
   constexpr std::size_t kReturnsPerPacket = core::kBlocksPerPacket * core::kLasersPerBlock;

@@ -50,8 +50,8 @@ struct PacketToCloudParams {
   std::string target_frame;     // output frame; empty = the scan's frame
   double tf_timeout_s = 0.1;    // [s] how long to wait for the transforms of a revolution
   int queue_size = 2;           // [messages] input queue; small so the newest revolution wins
-  int max_packets_per_scan = 2085;  // [packets] larger VelodyneScans are refused undecoded
-                                    // (default: three revolutions at 300 rpm)
+  // [packets] larger VelodyneScans are refused undecoded (default: three revolutions at 300 rpm)
+  int max_packets_per_scan = static_cast<int>(core::RevolutionBoundary::kMaxPacketsPerRevolution);
 };
 
 /// The decoder's parameters shared by PacketSource (decode: true) and PacketToCloud:

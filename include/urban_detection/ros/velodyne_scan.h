@@ -76,7 +76,7 @@ class ScanAssembler {
   ScanStamp stamp_;
   VelodyneScan::Ptr current_;
   std::size_t expected_packets_ = 700;  // capacity hint: size of the previous revolution
-  std::size_t nominal_packets_ = 700;   // the expected count (rate check)
+  std::size_t nominal_packets_ = 0;     // the expected count (rate check; 0 = unknown)
   std::size_t last_packets_ = 0;
   std::uint32_t revolutions_ = 0;       // returned so far (header.seq)
 };
@@ -133,10 +133,6 @@ class StreamingScanDecoder {
   std::size_t lastPackets() const { return last_packets_; }
   std::size_t partialDropped() const { return boundary_.partialDropped(); }
   std::size_t forcedCuts() const { return boundary_.forcedCuts(); }
-  const core::RevolutionBoundary& boundary() const { return boundary_; }
-  const char* lastSizeProblem() const {
-    return core::revolutionSizeProblem(last_packets_, nominal_packets_);
-  }
 
  private:
   void open(const ros::Time& stamp);
@@ -149,7 +145,6 @@ class StreamingScanDecoder {
   ros::Time first_stamp_, last_stamp_;  // of the open revolution
   ScanDecodeStats stats_, last_stats_;
   std::size_t expected_packets_ = 700;
-  std::size_t nominal_packets_ = 700;  // the expected count (rate check)
   std::size_t last_packets_ = 0;
   std::uint32_t revolutions_ = 0;
 };
