@@ -50,6 +50,28 @@ class LaunchParams(unittest.TestCase):
         self.assertEqual(sections(p, 'object_markers_kdtree'), {'markers'})
         self.assertLess(sum(1 for k in p if k.startswith('/hierarchical_grid_detector/')), 80)
 
+    def test_loaders_respawn_and_the_manager_is_required(self):
+        # A loader that dies (bond broken) is restarted and loads its nodelet again; a dead
+        # manager stops the launch (roslaunch says so) instead of leaving idle loaders.
+        import roslaunch.config
+        import roslaunch.xmlloader
+        import rospkg
+        for launch, argv in (('live.launch', ['detector:=both']), ('demo.launch', []),
+                             ('bag.launch', ['bag:=/tmp/x.bag', 'input:=points'])):
+            path = os.path.join(rospkg.RosPack().get_path(PKG), 'launch', launch)
+            config = roslaunch.config.ROSLaunchConfig()
+            roslaunch.xmlloader.XmlLoader().load(path, config, argv=argv, verbose=False)
+            loaders = [n for n in config.nodes
+                       if n.type == 'nodelet' and n.args.strip().startswith('load')]
+            managers = [n for n in config.nodes
+                        if n.type == 'nodelet' and n.args.strip() == 'manager']
+            self.assertGreaterEqual(len(loaders), 4, launch)
+            for n in loaders:
+                self.assertTrue(n.respawn, '%s: %s does not respawn' % (launch, n.name))
+            self.assertEqual(len(managers), 1, launch)
+            self.assertTrue(managers[0].required, launch)
+            self.assertTrue(managers[0].required, launch)
+
     def test_live_stamps_never_follow_a_bags_sim_time(self):
         self.assertIs(params('live.launch')['/use_sim_time'], False)
         self.assertIs(params('pcap.launch', 'pcap:=/tmp/x.pcap')['/use_sim_time'], False)
