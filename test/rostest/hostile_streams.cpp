@@ -5,6 +5,7 @@
 //  * one extra packet with azimuth 0xFFFF,
 //  * one extra 1206-byte datagram of random bytes (another sender, device_ip empty),
 // must give the same revolutions (header.seq) with the same objects as the clean pcap, at 10 Hz.
+// So must a copy whose capture times go back, stand still and jump a year ahead (issue 25 D).
 // The same packets in another model's layout (VLP-16: every block 0xFFEE) give no revolution
 // and one WARN naming the model.
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
@@ -69,7 +70,18 @@ const Stream& cleanStream() {
   return s;
 }
 
-enum class Alteration { kNone, kSwappedPair, kBadAzimuth, kForeignDatagram, kVlp16 };
+enum class Alteration { kNone, kSwappedPair, kBadAzimuth, kForeignDatagram, kVlp16, kTimes };
+
+// Issue 25 D: capture times that go back 10 s mid-revolution 3, stand still for 200 packets in
+// revolution 6 and jump a year ahead in revolution 9 (the packets themselves unchanged).
+double alteredStamp(const Stream& s, std::size_t i) {
+  const auto mid = [&](std::size_t r) { return s.revolution_start[r] + 150; };
+  double t = s.stamps[i];
+  if (i >= mid(3)) t -= 10.0;
+  if (i >= mid(6) && i < mid(6) + 200) t = s.stamps[mid(6)] - 10.0;
+  if (i >= mid(9)) t += 365.0 * 86400.0;
+  return t;
+}
 
 std::string writePcap(Alteration alteration) {
   const Stream& s = cleanStream();
@@ -99,7 +111,7 @@ std::string writePcap(Alteration alteration) {
       packet[1204] = 0x37;
       packet[1205] = 0x22;
     }
-    writer.write(packet, s.stamps[i]);
+    writer.write(packet, alteration == Alteration::kTimes ? alteredStamp(s, i) : s.stamps[i]);
     if (i == at && alteration == Alteration::kBadAzimuth) {
       core::RawPacket bad = s.packets[i];
       bad[2] = 0xFF;  // block 0 azimuth 65535
@@ -196,6 +208,10 @@ TEST(HostileStreams, AlteredPcapsGiveTheSameRevolutionsAndObjects) {
   {
     SCOPED_TRACE("one foreign datagram per revolution");
     expectSameRevolutions(clean, replay("/hs_foreign", writePcap(Alteration::kForeignDatagram)));
+  }
+  {
+    SCOPED_TRACE("capture time back 10 s, standing still, a year ahead");
+    expectSameRevolutions(clean, replay("/hs_times", writePcap(Alteration::kTimes)));
   }
 }
 
