@@ -127,12 +127,14 @@ HierarchicalGridDetector::HierarchicalGridDetector(const HierarchicalGridDetecto
   nc_ = 2 * half;
   nd_ = nc_ * params_.xi;
   origin_m_ = -half * params_.coarse_cell_m;
-  dense_slot_.assign(static_cast<std::size_t>(nd_) * nd_, -1);
-  dense_bits_.assign((static_cast<std::size_t>(nd_) * nd_ + 63) / 64, 0);
   coarse_of_.resize(nd_);
   for (int i = 0; i < nd_; ++i) coarse_of_[i] = i / params_.xi;
   coarse_slot_.assign(static_cast<std::size_t>(nc_) * nc_, -1);
+  // The bridge tables give the probe margin, which sizes the padded sub-cell maps.
   buildBridgeTables();
+  const std::size_t padded = static_cast<std::size_t>(stride_) * stride_;
+  dense_slot_.assign(padded, -1);
+  dense_bits_.assign((padded + 63) / 64, 0);
 }
 
 inline int HierarchicalGridDetector::directionBin(float x, float y) {
@@ -178,19 +180,22 @@ void HierarchicalGridDetector::buildBridgeTables() {
     }
     bridge_begin_.push_back(static_cast<std::int32_t>(bridge_offsets_.size()));
   }
-  bridge_flat_.clear();
+  // The sub-cell maps are padded by the largest probe offset on every side (sub-cells that
+  // never hold a point), so every probe of steps 3, 3b and 4 is a flat offset without bounds
+  // checks, at the grid's border as inside.
   probe_margin_ = 1;  // the 8-neighbourhood
   for (const CellXY& o : bridge_offsets_) {
-    bridge_flat_.push_back(o.y * nd_ + o.x);
     probe_margin_ = std::max({probe_margin_, std::abs(o.x), std::abs(o.y)});
   }
-  // Probe rows of step 3 for interior sub-cells: per table and direction bin, the four
+  stride_ = nd_ + 2 * probe_margin_;
+  bridge_flat_.clear();
+  for (const CellXY& o : bridge_offsets_) bridge_flat_.push_back(o.y * stride_ + o.x);
+  // Probe rows of step 3: per table and direction bin, the four
   // forward neighbours, then that bin's bridge offsets, padded with offset 0 to the table's
   // longest row (so every row of a table has the same length and the probe loop the same
   // trip count), and a mask of the row's real entries.
   probe_flat_.clear();
   probe_mask_.clear();
-  probe_rows_ok_ = true;
   for (int table = 0; table < 3; ++table) {
     int longest = 0;
     for (int bin = 0; bin < kDirectionBins; ++bin) {
@@ -199,10 +204,11 @@ void HierarchicalGridDetector::buildBridgeTables() {
     }
     probe_row_len_[table] = 4 + longest;
     probe_row_begin_[table] = static_cast<std::int32_t>(probe_flat_.size());
-    probe_rows_ok_ = probe_rows_ok_ && 4 + longest <= 64;
+    // validate() bounds the reach to 9 sub-cells, which keeps every row well within 64 entries.
+    if (4 + longest > 64) throw std::logic_error("HierarchicalGridDetector: probe row > 64");
     for (int bin = 0; bin < kDirectionBins; ++bin) {
       const int b = table * (kDirectionBins + 1) + bin;
-      for (const auto& o : kForward) probe_flat_.push_back(o[1] * nd_ + o[0]);
+      for (const auto& o : kForward) probe_flat_.push_back(o[1] * stride_ + o[0]);
       for (int k = bridge_begin_[b]; k < bridge_begin_[b + 1]; ++k) {
         probe_flat_.push_back(bridge_flat_[k]);
       }
@@ -211,11 +217,6 @@ void HierarchicalGridDetector::buildBridgeTables() {
       probe_mask_.push_back(len >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << len) - 1);
     }
   }
-}
-
-inline bool HierarchicalGridDetector::interior(int ix, int iy) const {
-  return ix >= probe_margin_ && iy >= probe_margin_ && ix < nd_ - probe_margin_ &&
-         iy < nd_ - probe_margin_;
 }
 
 inline bool HierarchicalGridDetector::linked(std::int32_t a, std::int32_t b) const {
@@ -284,18 +285,9 @@ void HierarchicalGridDetector::roofBridges() {
     const std::int32_t* begin =
         &bridge_begin_[kRoofTable * (kDirectionBins + 1) + directionBin(cx, cy)];
     const std::int32_t cell = dense_cell_[b];
-    const bool inside = ix >= probe_margin_ && iy >= probe_margin_ && ix < nd_ - probe_margin_ &&
-                        iy < nd_ - probe_margin_;
     for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
       const int ox = bridge_offsets_[k].x, oy = bridge_offsets_[k].y;
-      std::int32_t a_cell;
-      if (inside) {
-        a_cell = cell - bridge_flat_[k];
-      } else {
-        const int x = ix - ox, y = iy - oy;
-        if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
-        a_cell = y * nd_ + x;
-      }
+      const std::int32_t a_cell = cell - bridge_flat_[k];
       // Dense sub-cells only (the bit map of detect()), then their slot.
       if (!((dense_bits_[a_cell >> 6] >> (a_cell & 63)) & 1u)) continue;
       const std::int32_t a = dense_slot_[a_cell];
@@ -377,12 +369,14 @@ std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground)
   const float nd_f = static_cast<float>(nd_);
   const float max_abs_z = static_cast<float>(params_.max_abs_z_m);
   const LabeledPoint* points = foreground.points.data();
-  // Two passes. The first computes each point's sub-cell (flat index iy * nd_ + ix, or -1
+  // Two passes. The first computes each point's sub-cell (flat index of the padded map, or -1
   // outside the grid or the z range) into point_slot_ and prefetches its slot-map entry: the
   // map is 2.6 MB and the entries come from the outer caches, many at a time instead of one
   // dependent load per point. The second turns the sub-cells into slots in point order.
   std::int32_t* const point_cell = point_slot_.data();
   const std::int32_t* const slot_map_base = dense_slot_.data();
+  // Sub-cell (0, 0) in the padded map.
+  const std::int32_t pad_offset = probe_margin_ * stride_ + probe_margin_;
   std::size_t i = 0;
 #if defined(__SSE2__)
   // Four points at a time: the same float operations as the scalar loop below (subtract,
@@ -392,7 +386,8 @@ std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground)
     const __m128 v_nd = _mm_set1_ps(nd_f), v_zero = _mm_setzero_ps();
     const __m128 v_max_z = _mm_set1_ps(max_abs_z);
     const __m128 v_abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-    const __m128i v_nd_i = _mm_set1_epi32(nd_);
+    const __m128i v_stride = _mm_set1_epi32(stride_);
+    const __m128i v_pad = _mm_set1_epi32(pad_offset);
     for (; i + 4 <= n; i += 4) {
       __m128 x = _mm_loadu_ps(&points[i].x), y = _mm_loadu_ps(&points[i + 1].x);
       __m128 z = _mm_loadu_ps(&points[i + 2].x), w = _mm_loadu_ps(&points[i + 3].x);
@@ -404,14 +399,16 @@ std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground)
                                 _mm_and_ps(_mm_cmpge_ps(fy, v_zero), _mm_cmplt_ps(fy, v_nd))),
                      _mm_cmple_ps(_mm_and_ps(z, v_abs), v_max_z));
       const __m128i ix = _mm_cvttps_epi32(fx), iy = _mm_cvttps_epi32(fy);
-      // iy * nd_ + ix; SSE2 multiplies 32-bit lanes pairwise into 64 bits (even, then odd).
-      const __m128i even = _mm_mul_epu32(iy, v_nd_i);
-      const __m128i odd = _mm_mul_epu32(_mm_srli_si128(iy, 4), v_nd_i);
+      // iy * stride_ + ix + pad_offset; SSE2 multiplies 32-bit lanes pairwise into 64 bits
+      // (even, then odd).
+      const __m128i even = _mm_mul_epu32(iy, v_stride);
+      const __m128i odd = _mm_mul_epu32(_mm_srli_si128(iy, 4), v_stride);
       const __m128i prod = _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
                                               _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
       // Rejected lanes: -1 (all bits set).
       const __m128i ok_i = _mm_castps_si128(ok);
-      const __m128i cell = _mm_or_si128(_mm_and_si128(_mm_add_epi32(prod, ix), ok_i),
+      const __m128i cell =
+          _mm_or_si128(_mm_and_si128(_mm_add_epi32(_mm_add_epi32(prod, ix), v_pad), ok_i),
                                         _mm_andnot_si128(ok_i, _mm_set1_epi32(-1)));
       _mm_storeu_si128(reinterpret_cast<__m128i*>(point_cell + i), cell);
       // (Entry -1 lies before the map; a prefetch never faults.)
@@ -425,7 +422,7 @@ std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground)
     const float fy = (p.y - origin) * inv_dense;
     if (fx >= 0.0f && fx < nd_f && fy >= 0.0f && fy < nd_f && std::fabs(p.z) <= max_abs_z) {
       const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);  // fx, fy < nd_ exactly
-      point_cell[i] = iy * nd_ + ix;
+      point_cell[i] = iy * stride_ + ix + pad_offset;
     } else {
       point_cell[i] = -1;
     }
@@ -474,9 +471,9 @@ void HierarchicalGridDetector::buildCells(std::int32_t nds) {
   const DenseAcc* const acc = dense_acc_.data();
   // Per sub-cell, in slot order (the order of their first points): column and row, super-cell
   // (opened in the order of their first sub-cells), heights gathered to it. The column and row
-  // come back from the flat index: (cell + 0.5) / nd_ in double is at least 0.5 / nd_ from the
-  // next integer and exact to far better than that, so the truncation is the integer division.
-  const double inv_nd = 1.0 / nd_;
+  // come back from the flat index: (cell + 0.5) / stride_ in double is at least 0.5 / stride_ from
+  // the next integer and exact to far better than that, so the truncation is the integer division.
+  const double inv_stride = 1.0 / stride_;
   dense_cell_.resize(nds);
   dense_xy_.resize(nds);
   dense_count_.resize(nds);
@@ -491,7 +488,8 @@ void HierarchicalGridDetector::buildCells(std::int32_t nds) {
   for (std::int32_t s = 0; s < nds; ++s) {
     const DenseAcc& e = acc[s];
     const std::int32_t cell = e.cell;
-    const int iy = static_cast<int>((cell + 0.5) * inv_nd), ix = cell - iy * nd_;
+    const int row = static_cast<int>((cell + 0.5) * inv_stride);
+    const int ix = cell - row * stride_ - probe_margin_, iy = row - probe_margin_;
     dense_cell_[s] = cell;
     dense_xy_[s] = CellXY{ix, iy};
     dense_count_[s] = e.count;
@@ -569,11 +567,6 @@ void HierarchicalGridDetector::weighDensities() {
 // psi-linked, plus the radial bridges (header).
 void HierarchicalGridDetector::linkDense() {
   const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
-  const float origin = static_cast<float>(origin_m_);
-  const float dcell = static_cast<float>(dense_cell_m_);
-  const float bridge_range2 = static_cast<float>(params_.bridge_range_m * params_.bridge_range_m);
-  const float gap_range2 =
-      static_cast<float>(params_.gap_bridge_range_m * params_.gap_bridge_range_m);
   const float psi_max = psi_max_f_;
   const float* key = dense_key_.data() + 1;
   const std::int32_t* slot_map = dense_slot_.data();
@@ -599,84 +592,27 @@ void HierarchicalGridDetector::linkDense() {
     }
     return true;
   };
-  const std::int32_t forward_flat[4] = {
-      kForward[0][1] * nd_ + kForward[0][0], kForward[1][1] * nd_ + kForward[1][0],
-      kForward[2][1] * nd_ + kForward[2][0], kForward[3][1] * nd_ + kForward[3][0]};
   for (std::int32_t s = 0; s < nds; ++s) {
     if (!dense_occupied_[s]) continue;
-    const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
-    const float ks = key[s];
-    const bool inside = interior(ix, iy);
+    // One row of probes (the four forward neighbours, then the bridges of the sub-cell's table
+    // and direction bin; only the forward ones for the sensor's own sub-cells), flat offsets
+    // into the padded map: which of them are dense without branches, then the psi tests and
+    // links of those in the row's order.
     const std::int32_t cell = dense_cell_[s];
     const std::int32_t* here = slot_map + cell;
+    const float ks = key[s];
     root = findRoot(parent, s);
-    if (inside && probe_rows_ok_) {
-      // Interior sub-cell: one row of probes (the four forward neighbours, then the
-      // bridges of its table and direction bin; only the forward ones for the sensor's own
-      // sub-cells), which of them are dense without branches, then the psi tests and links
-      // of those in the row's order: the same links in the same order as one loop for the
-      // neighbours and one for the bridges.
-      const ProbeRow& probe = probe_of_[s];
-      const int len = probe.len;
-      const std::int32_t* row = probe_flat_.data() + probe.begin;
-      const std::uint64_t mask = probe.mask;
-      std::uint64_t dense_row = 0;
-      for (int j = 0; j < len; ++j) {
-        dense_row |= static_cast<std::uint64_t>(denseBit(cell + row[j])) << j;
-      }
-      for (dense_row &= mask; dense_row; dense_row &= dense_row - 1) {
-        const int j = __builtin_ctzll(dense_row);
-        const std::int32_t r = here[row[j]];
-        if (withinPsi(ks, key[r], psi_max) && unite(r) && j >= 4) ++stats_.bridges;
-      }
-      continue;
+    const ProbeRow& probe = probe_of_[s];
+    const int len = probe.len;
+    const std::int32_t* row = probe_flat_.data() + probe.begin;
+    std::uint64_t dense_row = 0;
+    for (int j = 0; j < len; ++j) {
+      dense_row |= static_cast<std::uint64_t>(denseBit(cell + row[j])) << j;
     }
-    if (inside) {
-      // Which of the four are dense first, without branches (their outcomes are
-      // data-dependent), then the psi tests and links of those in the same order.
-      unsigned dense_forward = 0;
-      for (int f = 0; f < 4; ++f) dense_forward |= denseBit(cell + forward_flat[f]) << f;
-      for (; dense_forward; dense_forward &= dense_forward - 1) {
-        const std::int32_t r = here[forward_flat[__builtin_ctz(dense_forward)]];
-        if (withinPsi(ks, key[r], psi_max)) unite(r);
-      }
-    } else {
-      for (int f = 0; f < 4; ++f) {
-        const int x = ix + kForward[f][0], y = iy + kForward[f][1];
-        if (x < 0 || x >= nd_ || y >= nd_) continue;
-        const std::int32_t r = slot_map[y * nd_ + x];
-        if (withinPsi(ks, key[r], psi_max)) unite(r);
-      }
-    }
-    // Outwards along the line of sight (step 3): the precomputed offsets of the ray's
-    // direction bin, every dense sub-cell there.
-    const float cx = (ix + 0.5f) * dcell + origin, cy = (iy + 0.5f) * dcell + origin;
-    const float d2 = cx * cx + cy * cy;
-    if (d2 < dcell * dcell) continue;  // the sensor's own sub-cells have no direction
-    const int table = d2 > gap_range2 ? 2 : d2 > bridge_range2 ? 1 : 0;
-    const int bin = directionBin(cx, cy);
-    const std::int32_t* begin = &bridge_begin_[table * (kDirectionBins + 1) + bin];
-    if (inside) {
-      // As above, up to 64 probes at a time.
-      for (std::int32_t k0 = begin[0]; k0 < begin[1]; k0 += 64) {
-        const std::int32_t* flat = bridge_flat_.data() + k0;
-        const int m = std::min<std::int32_t>(64, begin[1] - k0);
-        std::uint64_t dense_bridge = 0;
-        for (int j = 0; j < m; ++j) {
-          dense_bridge |= static_cast<std::uint64_t>(denseBit(cell + flat[j])) << j;
-        }
-        for (; dense_bridge; dense_bridge &= dense_bridge - 1) {
-          const std::int32_t r = here[flat[__builtin_ctzll(dense_bridge)]];
-          if (withinPsi(ks, key[r], psi_max) && unite(r)) ++stats_.bridges;
-        }
-      }
-      continue;
-    }
-    for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
-      const int x = ix + bridge_offsets_[k].x, y = iy + bridge_offsets_[k].y;
-      if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
-      const std::int32_t r = slot_map[y * nd_ + x];
-      if (withinPsi(ks, key[r], psi_max) && unite(r)) ++stats_.bridges;
+    for (dense_row &= probe.mask; dense_row; dense_row &= dense_row - 1) {
+      const int j = __builtin_ctzll(dense_row);
+      const std::int32_t r = here[row[j]];
+      if (withinPsi(ks, key[r], psi_max) && unite(r) && j >= 4) ++stats_.bridges;
     }
   }
 }
@@ -712,13 +648,9 @@ std::int32_t HierarchicalGridDetector::numberComponents() {
   };
   // The 8-neighbourhood in the order of the original (dy, dx) loops: ties of rho keep the first.
   std::int32_t ring_flat[8];
-  int ring_dx[8], ring_dy[8];
   for (int dy = -1, m = 0; dy <= 1; ++dy) {
     for (int dx = -1; dx <= 1; ++dx) {
-      if (dx == 0 && dy == 0) continue;
-      ring_dx[m] = dx;
-      ring_dy[m] = dy;
-      ring_flat[m++] = dy * nd_ + dx;
+      if (dx != 0 || dy != 0) ring_flat[m++] = dy * stride_ + dx;
     }
   }
   for (std::int32_t s = 0; s < nds; ++s) {
@@ -726,22 +658,13 @@ std::int32_t HierarchicalGridDetector::numberComponents() {
       dense_object_[s] = componentOf(s);
       continue;
     }
-    const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
     const float zs = coarse_zmax_[dense_coarse_[s]];
-    const bool inside = interior(ix, iy);
     const std::int32_t* here = slot_map + dense_cell_[s];
     // The first of the densest (rho >= 1 > -inf), by selects rather than branches.
     std::int32_t best = -1;
     float best_rho = -std::numeric_limits<float>::infinity();
     for (int m = 0; m < 8; ++m) {
-      std::int32_t r;
-      if (inside) {
-        r = here[ring_flat[m]];
-      } else {
-        const int x = ix + ring_dx[m], y = iy + ring_dy[m];
-        if (x < 0 || y < 0 || x >= nd_ || y >= nd_) continue;
-        r = slot_map[y * nd_ + x];
-      }
+      const std::int32_t r = here[ring_flat[m]];
       const float rho_r = rho[r];
       const bool take = withinPsi(zs, key[r], psi_max) & (rho_r > best_rho);
       best = take ? r : best;

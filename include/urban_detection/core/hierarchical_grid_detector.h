@@ -182,9 +182,6 @@ class HierarchicalGridDetector : public ObjectDetector {
                    std::vector<DetectedObject>* objects);
 
   bool linked(std::int32_t coarse_a, std::int32_t coarse_b) const;
-  // Sub-cells at least probe_margin_ from the grid border probe through flat offsets without
-  // bounds checks; the others (never on real data with the default extent) check each probe.
-  bool interior(int ix, int iy) const;
   void resetGrid();
   void buildBridgeTables();
   // Bridge table of step 3b (after the near, far and farthest tables of step 3).
@@ -203,30 +200,36 @@ class HierarchicalGridDetector : public ObjectDetector {
   int nc_;           // super-cells per grid side
   double origin_m_;  // [m] x and y of the grid's lower corner (a multiple of W_S)
 
-  // Grid -> slot maps (-1 = untouched), reset through the touched slot lists.
-  std::vector<std::int32_t> dense_slot_;   // nd_ * nd_
-  std::vector<std::int32_t> coarse_slot_;  // nc_ * nc_
-  std::vector<std::uint64_t> dense_bits_;  // nd_ * nd_ bits: dense sub-cell (rho >= threshold)
+  // Grid -> slot maps (-1 = untouched), reset through the touched slot lists. The sub-cell
+  // maps are padded by probe_margin_ empty sub-cells on every side: sub-cell (ix, iy) is at
+  // flat index (iy + probe_margin_) * stride_ + ix + probe_margin_, and every probe of steps
+  // 3, 3b and 4 is a flat offset from it, with no bounds check.
+  int probe_margin_ = 1;  // [sub-cells] largest probe offset (the padding)
+  int stride_ = 0;        // nd_ + 2 * probe_margin_: padded sub-cells per side
+  std::vector<std::int32_t> dense_slot_;   // stride_ * stride_
+  std::vector<std::uint64_t> dense_bits_;  // stride_ * stride_ bits: dense sub-cell
+  std::vector<std::int32_t> coarse_slot_;  // nc_ * nc_ (not padded)
   std::vector<std::int32_t> coarse_of_;    // sub-cell column or row -> super-cell's (i / xi)
+  // Bridge tables (built once).
   struct CellXY {
     std::int32_t x, y;
   };
   std::vector<CellXY> bridge_offsets_;      // radial bridge offsets, see buildBridgeTables()
   std::vector<std::int32_t> bridge_begin_;  // [near, far][direction bin] -> offsets begin
-  std::vector<std::int32_t> bridge_flat_;   // bridge_offsets_ as flat grid index offsets
-  int probe_margin_ = 1;  // [sub-cells] largest probe offset: farther from the border, no checks
+  std::vector<std::int32_t> bridge_flat_;   // bridge_offsets_ as flat padded-map offsets
   // Step 3's probes per table (near, far, farthest) and direction bin, see buildBridgeTables().
   std::vector<std::int32_t> probe_flat_;   // rows of flat offsets: 4 forward, bridges, padding
   std::vector<std::uint64_t> probe_mask_;  // [table][bin]: the row's real entries
   std::int32_t probe_row_begin_[3] = {0, 0, 0};
-  int probe_row_len_[3] = {0, 0, 0};  // per table: the length of all its rows
-  bool probe_rows_ok_ = false;        // rows fit one 64-bit mask (else the loops per kind)
+  int probe_row_len_[3] = {0, 0, 0};  // per table: the length of all its rows (<= 64)
+
+  // Dense level: per touched sub-cell (slot), in the order of their first points.
   // Binning's per-slot accumulator (see detect()): grown to the largest cloud seen plus one,
   // never shrunk, so the entry a point may open always exists.
   struct DenseAcc {
     float zmax, zmin;     // [m] highest and lowest point
     std::uint32_t count;  // points
-    std::int32_t cell;    // flat grid index
+    std::int32_t cell;    // flat padded-map index
   };
   std::vector<DenseAcc> dense_acc_;
   // Step 3's probe row of a sub-cell: its flat offsets probe_flat_[begin, begin + len) and the
@@ -236,8 +239,7 @@ class HierarchicalGridDetector : public ObjectDetector {
     std::uint64_t mask;
   };
   std::vector<ProbeRow> probe_of_;
-  // Per touched sub-cell (slot).
-  std::vector<std::int32_t> dense_cell_;    // flat grid index
+  std::vector<std::int32_t> dense_cell_;    // flat padded-map index
   std::vector<CellXY> dense_xy_;            // grid column and row
   std::vector<std::uint32_t> dense_count_;  // points
   std::vector<std::int32_t> dense_coarse_;  // slot of its super-cell
@@ -252,7 +254,7 @@ class HierarchicalGridDetector : public ObjectDetector {
   std::vector<float> root_zmin_;
   std::vector<float> root_zmax_;
   std::vector<std::int32_t> dense_flat_;
-  // Per touched super-cell (slot).
+  // Coarse level: per touched super-cell (slot).
   std::vector<std::int32_t> coarse_cell_;
   std::vector<float> coarse_key_;  // [m] Z_max at slot + 1, NaN at 0 (slot -1: empty)
   std::vector<float> coarse_zmax_;
