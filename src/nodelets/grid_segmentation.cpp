@@ -1,6 +1,6 @@
 // urban_detection/GridSegmentation: velodyne_points (CloudXYZIRT) -> segmentation/labeled_points
 // and segmentation/foreground (paper Sec. 3.1). Thin wrapper around core::GridSegmenter;
-// thresholds tunable through dynamic_reconfigure (config/GridSegmentation.cfg). Subscribes with
+// thresholds tunable through dynamic_reconfigure (cfg/GridSegmentation.cfg). Subscribes with
 // the publisher's C++ type, so inside one manager the cloud of PacketSource / PacketToCloud
 // arrives as a pointer, never serialised (a PointCloud2 from elsewhere goes through CloudInput).
 // Runs its callback on a thread of its own (StageThread), never behind another stage.

@@ -1,6 +1,6 @@
 // urban_detection/KdTreeDetector: segmentation/foreground -> objects, objects/points with the
 // kd-tree Euclidean clustering baseline (paper Sec. 5). Parameters: ~kdtree/*
-// (config/kdtree.yaml, config/classification.yaml), tunable in ~kdtree (config/KdTreeDetector.cfg).
+// (config/kdtree.yaml, config/classification.yaml), tunable in ~kdtree (cfg/KdTreeDetector.cfg).
 #include "urban_detection/core/point_types.h"
 
 #include <pluginlib/class_list_macros.hpp>

@@ -1,6 +1,6 @@
 // urban_detection/ObjectMarkers: objects -> objects/markers (MarkerArray) for rviz: DELETEALL,
 // then a yaw-oriented box and an id text per object. Lazy. Parameters: ~markers/*
-// (config/markers.yaml), tunable in ~markers (config/ObjectMarkers.cfg).
+// (config/markers.yaml), tunable in ~markers (cfg/ObjectMarkers.cfg).
 #include <memory>
 #include <mutex>
 

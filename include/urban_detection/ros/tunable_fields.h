@@ -1,5 +1,5 @@
 /// \file tunable_fields.h
-/// Which parameters each dynamic_reconfigure Config (config/*.cfg) mirrors, listed once per
+/// Which parameters each dynamic_reconfigure Config (cfg/*.cfg) mirrors, listed once per
 /// Config. A list is a functor `fields(config, params, f)` calling f(config field, params field)
 /// for every tunable field (either side may be const); toConfig() and fromConfig() copy through
 /// it in either direction, so a new tunable parameter is one line here plus its .cfg entry.
