@@ -391,10 +391,7 @@ SimulatedDriveReader::SimulatedDriveReader(const std::string& pcap_path,
                                            const std::string& gt_path,
                                            const Calibration& calibration, double cut_angle_deg,
                                            const DecoderParams& decoder_params)
-    : pcap_(pcap_path),
-      gt_reader_(gt_path),
-      cutter_(cut_angle_deg),
-      decoder_(calibration, decoder_params) {}
+    : pcap_(pcap_path, cut_angle_deg), gt_reader_(gt_path), decoder_(calibration, decoder_params) {}
 
 bool SimulatedDriveReader::fillWindow(double stamp_s) {
   // Drop frames older than this revolution (revolutions the pcap does not hold), then read
@@ -421,40 +418,17 @@ SimulatedDriveReader::Result SimulatedDriveReader::next(CloudXYZIRT* cloud, Grou
                                                         std::string* message) {
   message->clear();
   cloud->clear();
-  if (!has_pending_) {
-    if (pcap_end_) {
-      *message = end_message_;
-      return Result::kEnd;
-    }
-    const PcapReader::Result r = pcap_.next(&pending_);
-    if (r != PcapReader::Result::kPacket) {
-      pcap_end_ = true;
-      if (r == PcapReader::Result::kTruncated) end_message_ = "truncated pcap";
-      *message = end_message_;
-      return Result::kEnd;
-    }
-    cutter_.startsNewRevolution(blockAzimuth(pending_.data.data(), 0));
-    has_pending_ = true;
+  const PcapRevolutionReader::Result r = pcap_.next(&packets_);
+  if (r != PcapRevolutionReader::Result::kRevolution) {
+    if (r == PcapRevolutionReader::Result::kTruncated) end_message_ = "truncated pcap";
+    *message = end_message_;
+    return Result::kEnd;
   }
-  // The pending packet opens this revolution; read until a packet crosses the cut angle.
-  const double stamp_s = pending_.stamp_s;
-  PcapPacket p = pending_;
-  has_pending_ = false;
-  for (;;) {
+  const double stamp_s = packets_.front().stamp_s;
+  for (const PcapPacket& p : packets_) {
     if (decoder_.decode(p.data.data(), p.data.size(), p.stamp_s - stamp_s, cloud, nullptr) !=
         PacketStatus::kOk) {
       ++bad_packets_;
-    }
-    const PcapReader::Result r = pcap_.next(&p);
-    if (r != PcapReader::Result::kPacket) {
-      pcap_end_ = true;
-      if (r == PcapReader::Result::kTruncated) end_message_ = "truncated pcap";
-      break;
-    }
-    if (cutter_.startsNewRevolution(blockAzimuth(p.data.data(), 0))) {
-      pending_ = p;
-      has_pending_ = true;
-      break;
     }
   }
   ++revolutions_;

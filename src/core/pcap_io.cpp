@@ -270,5 +270,81 @@ const char* toString(ReplayTimeline::Anomaly anomaly) {
   return "?";
 }
 
+PcapRevolutionReader::PcapRevolutionReader(const std::string& path, double cut_angle_deg)
+    : reader_(path), boundary_(cut_angle_deg) {}
+
+void PcapRevolutionReader::rewind() {
+  reader_.rewind();
+  boundary_.reset();
+  has_pending_ = false;
+  first_ = true;
+  first_whole_ = false;
+  done_ = false;
+  previous_packets_ = 0;
+}
+
+PcapRevolutionReader::Result PcapRevolutionReader::next(std::vector<PcapPacket>* packets) {
+  packets->clear();
+  if (done_) return end_ == PcapReader::Result::kTruncated ? Result::kTruncated : Result::kEnd;
+  if (has_pending_) {
+    packets->push_back(pending_);
+    has_pending_ = false;
+  }
+  const auto emit = [&] {
+    previous_packets_ = packets->size();
+    ++revolutions_;
+    first_whole_ = false;
+    return Result::kRevolution;
+  };
+  PcapPacket p;
+  for (;;) {
+    const PcapReader::Result r = reader_.next(&p);
+    if (r != PcapReader::Result::kPacket) {
+      done_ = true;
+      end_ = r;
+      const std::size_t expected = previous_packets_ > 0 ? previous_packets_ : 347;
+      if ((boundary_.openWhole() || first_whole_) && !packets->empty() &&
+          10 * packets->size() >= 9 * expected) {
+        return emit();
+      }
+      packets->clear();
+      return r == PcapReader::Result::kTruncated ? Result::kTruncated : Result::kEnd;
+    }
+    const RevolutionBoundary::Action action = boundary_.add(p.data.data(), p.data.size());
+    switch (action) {
+      case RevolutionBoundary::Action::kSkip:
+        continue;
+      case RevolutionBoundary::Action::kAppend:
+        packets->push_back(p);
+        continue;
+      case RevolutionBoundary::Action::kClose:
+        pending_ = p;
+        has_pending_ = true;
+        return emit();
+      case RevolutionBoundary::Action::kDrop:
+        // The file's first revolution, begun at the cut and closed by a cut (not a restart).
+        if (first_whole_ && boundary_.openWhole()) {
+          pending_ = p;
+          has_pending_ = true;
+          return emit();
+        }
+        break;
+      case RevolutionBoundary::Action::kOpen:
+        if (first_) {
+          const double cut = boundary_.cutAngleDeg();
+          const double past = std::fmod(blockAzimuth(p.data.data(), 0) / 100.0 - cut + 720.0, 360.0);
+          first_whole_ = past < kStartToleranceDeg;
+        }
+        break;
+      case RevolutionBoundary::Action::kForcedCut:
+        first_whole_ = false;
+        break;
+    }
+    first_ = false;
+    packets->clear();
+    packets->push_back(p);
+  }
+}
+
 }  // namespace core
 }  // namespace urban_detection

@@ -152,67 +152,31 @@ class PcapSource : public Source {
   bool next(CloudXYZIRT* cloud, double* decode_ms, double* decode_cpu_ms) override {
     // A revolution's packets are read first (not timed) and then decoded in one timed block:
     // timing every packet would add two clock reads per packet (the thread-CPU clock is a
-    // system call) to the figure. Packets are read ahead by one: the packet that starts the
-    // next revolution is kept. The first, partial revolution of the stream is dropped, as the
-    // driver does, and so is the last one.
+    // system call) to the figure. Revolutions are cut as everywhere else
+    // (core::PcapRevolutionReader).
     cloud->clear();
-    count_ = 0;
-    bool started = false;
-    if (have_pending_) {
-      have_pending_ = false;
-      started = true;
-      keep(packet_);
-    }
-    while (true) {
-      if (reader_.next(&packet_) != core::PcapReader::Result::kPacket) return false;
-      if (packet_.data.size() < 1206 ||
-          core::PacketDecoder::validate(packet_.data.data(), packet_.data.size()) !=
-              core::PacketStatus::kOk) {
-        continue;
-      }
-      if (cutter_.startsNewRevolution(core::blockAzimuth(packet_.data.data(), 0))) {
-        if (started) {
-          have_pending_ = true;
-          break;
-        }
-        started = true;
-      }
-      if (started) keep(packet_);
+    if (reader_.next(&revolution_) != core::PcapRevolutionReader::Result::kRevolution) {
+      return false;
     }
     const double rev_start_s = revolution_[0].stamp_s;
     const auto t0 = Clock::now();
     const double c0 = threadCpuMs();
-    for (std::size_t k = 0; k < count_; ++k) {
-      const core::PcapPacket& p = revolution_[k];
+    for (const core::PcapPacket& p : revolution_) {
       decoder_.decode(p.data.data(), p.data.size(), p.stamp_s - rev_start_s, cloud, &stats_);
     }
     *decode_cpu_ms = threadCpuMs() - c0;
     *decode_ms = msSince(t0);
     return true;
   }
-  void rewind() override {
-    reader_.rewind();
-    cutter_.reset();
-    have_pending_ = false;
-  }
+  void rewind() override { reader_.rewind(); }
   std::string describe() const override { return "packets of " + path_; }
 
  private:
   std::string path_;
-  core::PcapReader reader_;
+  core::PcapRevolutionReader reader_;
   core::PacketDecoder decoder_;
-  core::RevolutionCutter cutter_;
-  core::PcapPacket packet_;                   // the packet just read
   std::vector<core::PcapPacket> revolution_;  // the current revolution's packets (reused)
-  std::size_t count_ = 0;                     // packets of the current revolution
   core::DecodeStats stats_;
-  bool have_pending_ = false;  // packet_ starts the next revolution
-
-  void keep(const core::PcapPacket& p) {
-    if (count_ == revolution_.size()) revolution_.push_back(p);
-    else revolution_[count_] = p;
-    ++count_;
-  }
 };
 
 void usage() {

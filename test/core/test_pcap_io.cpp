@@ -13,6 +13,7 @@
 
 #include "urban_detection/core/hdl64e_packet.h"
 #include "urban_detection/core/pcap_io.h"
+#include "spin_packets.h"
 #include "test_files.h"
 
 namespace uc = urban_detection::core;
@@ -304,4 +305,75 @@ TEST(ReplayTimeline, AnomaliesAdvanceByTheNominalPeriod) {
   loop.restart();
   EXPECT_NEAR(loop.next(5.0, &a), end + 0.3, 1e-12);
   EXPECT_EQ(a, A::kNone);
+}
+
+// One way to cut a capture into revolutions (bench, evaluation, tools): PcapRevolutionReader.
+namespace {
+constexpr int kPacketsPerRev = 348;
+constexpr double kDegPerFiring = 360.0 / (6 * kPacketsPerRev);
+
+std::string writeSpin(const std::string& name, double first_az_deg, int packets,
+                      bool garbage_and_stray = false) {
+  const std::string path = tempPath(name);
+  const auto spin = urban_detection::test::spinPackets(packets, first_az_deg, kDegPerFiring, 288);
+  uc::PcapWriter writer(path);
+  for (int i = 0; i < packets; ++i) {
+    const double t = 1.7e9 + i * 288e-6;
+    writer.write(spin[static_cast<std::size_t>(i)], t);
+    if (garbage_and_stray && i == kPacketsPerRev + 100) {
+      uc::RawPacket garbage;
+      garbage.fill(0x5A);
+      writer.write(garbage, t);                                      // invalid
+      writer.write(spin[static_cast<std::size_t>(i + 170)], t);  // 180 deg ahead: a stray
+    }
+  }
+  return path;
+}
+
+std::vector<std::size_t> revolutionSizes(uc::PcapRevolutionReader* reader) {
+  std::vector<std::size_t> sizes;
+  std::vector<uc::PcapPacket> packets;
+  while (reader->next(&packets) == uc::PcapRevolutionReader::Result::kRevolution) {
+    sizes.push_back(packets.size());
+  }
+  EXPECT_TRUE(packets.empty());
+  return sizes;
+}
+}  // namespace
+
+TEST(PcapRevolutionReader, ACaptureFromTheCutGivesEveryRevolutionWholeIncludingFirstAndLast) {
+  const std::string path = writeSpin("rev_whole.pcap", 0.0, 3 * kPacketsPerRev);
+  uc::PcapRevolutionReader reader(path);
+  const std::vector<std::size_t> expected(3, kPacketsPerRev);
+  EXPECT_EQ(revolutionSizes(&reader), expected);
+  EXPECT_EQ(reader.revolutions(), 3u);
+  reader.rewind();  // the same again, the first-revolution rule included
+  EXPECT_EQ(revolutionSizes(&reader), expected);
+  std::remove(path.c_str());
+}
+
+TEST(PcapRevolutionReader, PartialRevolutionsAtBothEndsAreDropped) {
+  // From 180 deg for 3.5 turns: 180..360 (partial), two whole ones, 0..180 (half: dropped).
+  const std::string path = writeSpin("rev_partial.pcap", 180.0, 3 * kPacketsPerRev + 1);
+  uc::PcapRevolutionReader reader(path);
+  EXPECT_EQ(revolutionSizes(&reader), std::vector<std::size_t>(2, kPacketsPerRev));
+  EXPECT_EQ(reader.boundary().partialDropped(), 1u);
+  std::remove(path.c_str());
+}
+
+TEST(PcapRevolutionReader, InvalidAndStrayPacketsAreSkippedWithoutCutting) {
+  const std::string path = writeSpin("rev_hostile.pcap", 0.0, 3 * kPacketsPerRev, true);
+  uc::PcapRevolutionReader reader(path);
+  std::vector<uc::PcapPacket> packets;
+  std::vector<std::size_t> sizes;
+  while (reader.next(&packets) == uc::PcapRevolutionReader::Result::kRevolution) {
+    sizes.push_back(packets.size());
+    for (const uc::PcapPacket& p : packets) {
+      EXPECT_EQ(uc::PacketDecoder::validate(p.data.data(), p.data.size()), uc::PacketStatus::kOk);
+    }
+  }
+  EXPECT_EQ(sizes, std::vector<std::size_t>(3, kPacketsPerRev));
+  EXPECT_EQ(reader.boundary().invalidPackets(), 1u);
+  EXPECT_EQ(reader.boundary().strayPackets(), 1u);
+  std::remove(path.c_str());
 }

@@ -164,7 +164,7 @@ void buildSimulatedGroundTruth(const GroundTruthFrame& frame,
                                const SimulatedGroundTruthParams& params, EvalFrame* gt);
 
 /// Replays a simulated drive for evaluation: reads the packets of a pcap, cuts them into
-/// revolutions at `cut_angle_deg` (RevolutionCutter, as PacketToCloud does), decodes them with
+/// revolutions at `cut_angle_deg` (PcapRevolutionReader, as PacketSource does), decodes them with
 /// the calibration the drive was simulated with, and pairs each revolution with the
 /// ground-truth frame of the same stamp (findGroundTruthFrame; the stamp of a revolution is
 /// the capture time of its first packet). Both files are streamed: memory does not grow with
@@ -187,18 +187,16 @@ class SimulatedDriveReader {
   Result next(CloudXYZIRT* cloud, GroundTruthFrame* gt, std::string* message);
 
   std::size_t revolutions() const { return revolutions_; }  ///< revolutions cut so far
-  std::size_t badPackets() const { return bad_packets_; }   ///< packets the decoder rejected
+  /// Packets refused (invalid: skipped when the revolutions are cut, or rejected by the decoder).
+  std::size_t badPackets() const { return bad_packets_ + pcap_.boundary().invalidPackets(); }
 
  private:
   bool fillWindow(double stamp_s);
 
-  PcapReader pcap_;
+  PcapRevolutionReader pcap_;
   GroundTruthReader gt_reader_;
-  RevolutionCutter cutter_;
   PacketDecoder decoder_;
-  PcapPacket pending_;          // first packet of the next revolution
-  bool has_pending_ = false;
-  bool pcap_end_ = false;
+  std::vector<PcapPacket> packets_;  // the current revolution's (reused)
   bool gt_end_ = false;
   std::string end_message_;
   std::vector<GroundTruthFrame> window_;  // GT frames read ahead, sorted by stamp

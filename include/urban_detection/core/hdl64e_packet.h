@@ -263,6 +263,8 @@ class RevolutionBoundary {
   void reset();
 
   bool open() const { return packets_ > 0; }
+  /// The open revolution was opened by an observed cut (it will be whole when it closes).
+  bool openWhole() const { return whole_; }
   std::size_t openPackets() const { return packets_; }
   std::size_t partialDropped() const { return partial_dropped_; }
   std::size_t forcedCuts() const { return forced_cuts_; }

@@ -41,6 +41,45 @@ class PcapReader {
   std::size_t skipped_ = 0;
 };
 
+/// Whole revolutions of a capture, assembled by RevolutionBoundary exactly as the nodelets
+/// assemble a live stream (invalid and stray packets skipped and counted, reordered ones kept),
+/// the one way the bench, the evaluation and the tools cut a file. Two rules only a file
+/// allows: its first revolution is whole when the first valid packet lies within
+/// kStartToleranceDeg after the cut angle (a capture that starts at the cut, as the simulator
+/// writes them), and at the end of the file the open revolution is returned when it began at a
+/// cut and holds at least 90 % of the previous revolution's packets (of 347, one revolution at
+/// 600 rpm, when there was none): a capture that stops mid-revolution loses only its tail.
+class PcapRevolutionReader {
+ public:
+  static constexpr double kStartToleranceDeg = 2.0;  // one packet at 1200 rpm
+  enum class Result { kRevolution, kEnd, kTruncated };
+
+  /// Throws std::runtime_error naming the file (PcapReader).
+  explicit PcapRevolutionReader(const std::string& path, double cut_angle_deg = 0.0);
+
+  /// The next whole revolution's packets, in arrival order, into `packets` (its capacity is
+  /// reused). kEnd / kTruncated: nothing more (PcapReader's meaning).
+  Result next(std::vector<PcapPacket>* packets);
+  /// Starts over from the first packet (a new stream: the first-revolution rule applies again).
+  void rewind();
+
+  const RevolutionBoundary& boundary() const { return boundary_; }
+  std::size_t revolutions() const { return revolutions_; }  ///< returned so far
+  std::size_t skippedRecords() const { return reader_.skipped(); }
+
+ private:
+  PcapReader reader_;
+  RevolutionBoundary boundary_;
+  PcapPacket pending_;          // opens the next revolution
+  bool has_pending_ = false;
+  bool first_ = true;           // no revolution opened yet
+  bool first_whole_ = false;    // the open revolution is the file's first and began at the cut
+  bool done_ = false;
+  PcapReader::Result end_ = PcapReader::Result::kEnd;
+  std::size_t previous_packets_ = 0;
+  std::size_t revolutions_ = 0;
+};
+
 /// The timeline of a capture's replay [s]: it follows the packets' capture times while they
 /// advance sanely, and advances by the nominal packet period where they go back, stand still
 /// or jump forward by more than `max_gap_s` (a clock stepped during the capture, a file with
