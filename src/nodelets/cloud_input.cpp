@@ -24,6 +24,7 @@
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/pointcloud2_input.h"
 #include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -42,23 +43,13 @@ class CloudInput : public nodelet::Nodelet {
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
         getNodeHandle(), getPrivateNodeHandle(), getName(), "cloud input");
     diagnostics_->setActive(false);
-    ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
-      connectCb();
-    };
-    std::lock_guard<std::mutex> lock(connect_mutex_);
-    pub_ = getNodeHandle().advertise<CloudXYZIRT>("velodyne_points", 2, connect, connect);
-  }
-
-  void connectCb() {
-    std::lock_guard<std::mutex> lock(connect_mutex_);
-    const bool wanted = pub_.getNumSubscribers() > 0;
-    diagnostics_->setActive(wanted);
-    if (wanted && !sub_) {
+    lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
+      diagnostics_->setActive(wanted);
+      if (!wanted) return sub_.shutdown();
       sub_ = getNodeHandle().subscribe("points_in", queue_size_, &CloudInput::cloudCb, this,
                                        ros::TransportHints().tcpNoDelay());
-    } else if (!wanted && sub_) {
-      sub_.shutdown();
-    }
+    });
+    pub_ = lazy_->advertise<CloudXYZIRT>(getNodeHandle(), "velodyne_points", 2);
   }
 
   void cloudCb(const sensor_msgs::PointCloud2ConstPtr& msg) {
@@ -101,7 +92,7 @@ class CloudInput : public nodelet::Nodelet {
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   std::string last_error_;  // last malformed-input reason logged (callbacks are serialised)
-  std::mutex connect_mutex_;
+  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher pub_;
   ros::Subscriber sub_;
 };

@@ -25,6 +25,7 @@
 #include "urban_detection/ros/stage_thread.h"
 #include "urban_detection/ros/tunable_fields.h"
 #include "urban_detection/ros/validated_reconfigure.h"
+#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -66,26 +67,16 @@ class GridSegmentation : public nodelet::Nodelet {
     diagnostics_.reset(new ros_conv::StageDiagnostics(nh, pnh, getName(), "segmentation"));
     thread_ = std::make_unique<ros_conv::StageThread>();
     diagnostics_->setActive(false);
-    // Lazy: subscribe upstream only while someone listens to an output.
-    ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
-      connectCb();
-    };
-    std::lock_guard<std::mutex> lock(connect_mutex_);
-    labeled_pub_ = nh.advertise<LabeledCloud>("segmentation/labeled_points", 2, connect, connect);
-    foreground_pub_ = nh.advertise<LabeledCloud>("segmentation/foreground", 2, connect, connect);
-  }
-
-  void connectCb() {
-    std::lock_guard<std::mutex> lock(connect_mutex_);
-    const bool wanted =
-        labeled_pub_.getNumSubscribers() > 0 || foreground_pub_.getNumSubscribers() > 0;
-    diagnostics_->setActive(wanted);
-    if (wanted && !sub_) {  // input queue_size: the newest revolutions win when we are slow
+    // Lazy: subscribe upstream only while someone listens to an output. Input queue_size:
+    // the newest revolutions win when we are slow.
+    lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
+      diagnostics_->setActive(wanted);
+      if (!wanted) return sub_.shutdown();
       sub_ = thread_->handle(getNodeHandle())
                  .subscribe("velodyne_points", queue_size_, &GridSegmentation::cloudCb, this);
-    } else if (!wanted && sub_) {
-      sub_.shutdown();
-    }
+    });
+    labeled_pub_ = lazy_->advertise<LabeledCloud>(nh, "segmentation/labeled_points", 2);
+    foreground_pub_ = lazy_->advertise<LabeledCloud>(nh, "segmentation/foreground", 2);
   }
 
   void cloudCb(const boost::shared_ptr<const CloudXYZIRT>& cloud) {  // zero copy
@@ -118,7 +109,7 @@ class GridSegmentation : public nodelet::Nodelet {
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   std::vector<core::SegmentClass> labels_;  // scratch: per-point classes
   std::unique_ptr<ros_conv::StageThread> thread_;  // runs cloudCb
-  std::mutex connect_mutex_;
+  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher labeled_pub_, foreground_pub_;
   ros::Subscriber sub_;
 };

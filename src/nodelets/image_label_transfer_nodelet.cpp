@@ -23,6 +23,7 @@
 #include "urban_detection/ros/image_label_transfer_ros.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -79,32 +80,23 @@ class ImageLabelTransfer : public nodelet::Nodelet {
         Policy(p.queue_size), image_sub_, info_sub_, objects_sub_, points_sub_);
     sync_->getPolicy()->setMaxIntervalDuration(ros::Duration(p.max_sync_interval_s));
     sync_->registerCallback(&ImageLabelTransfer::callback, this);
-    ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
-      connectCb();
-    };
-    std::lock_guard<std::mutex> lock(mutex_);
-    pub_ =
-        getNodeHandle().advertise<DetectedObjectArray>("objects/classified", 2, connect, connect);
-  }
-
-  void connectCb() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    const bool wanted = pub_.getNumSubscribers() > 0;
-    if (wanted && !subscribed_) {
+    lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
+      diagnostics_->setActive(wanted);
+      if (!wanted) {
+        image_sub_.unsubscribe();
+        info_sub_.unsubscribe();
+        objects_sub_.unsubscribe();
+        points_sub_.unsubscribe();
+        return;
+      }
       ros::NodeHandle nh = getNodeHandle();
       const uint32_t q = static_cast<uint32_t>(params_.queue_size);
       image_sub_.subscribe(nh, "image", q);
       info_sub_.subscribe(nh, "camera_info", q);
       objects_sub_.subscribe(nh, "objects", q);
       points_sub_.subscribe(nh, "objects/points", q);
-    } else if (!wanted && subscribed_) {
-      image_sub_.unsubscribe();
-      info_sub_.unsubscribe();
-      objects_sub_.unsubscribe();
-      points_sub_.unsubscribe();
-    }
-    subscribed_ = wanted;
-    diagnostics_->setActive(wanted);
+    });
+    pub_ = lazy_->advertise<DetectedObjectArray>(getNodeHandle(), "objects/classified", 2);
   }
 
   void callback(const sensor_msgs::Image::ConstPtr& image,
@@ -159,9 +151,8 @@ class ImageLabelTransfer : public nodelet::Nodelet {
   message_filters::Subscriber<DetectedObjectArray> objects_sub_;
   message_filters::Subscriber<LabeledCloud> points_sub_;
   std::unique_ptr<message_filters::Synchronizer<Policy>> sync_;
-  std::mutex mutex_;
+  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher pub_;
-  bool subscribed_ = false;
 };
 
 }  // namespace urban_detection

@@ -16,6 +16,7 @@
 #include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/tunable_fields.h"
 #include "urban_detection/ros/validated_reconfigure.h"
+#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -46,22 +47,13 @@ class ObjectMarkers : public nodelet::Nodelet {
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
         getNodeHandle(), getPrivateNodeHandle(), getName(), "markers");
     diagnostics_->setActive(false);
-    ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
-      connectCb();
-    };
-    std::lock_guard<std::mutex> lock(mutex_);
-    pub_ = getNodeHandle().advertise<visualization_msgs::MarkerArray>("objects/markers", 2,
-                                                                     connect, connect);
-  }
-
-  void connectCb() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    diagnostics_->setActive(pub_.getNumSubscribers() > 0);
-    if (pub_.getNumSubscribers() > 0 && !sub_) {
+    lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
+      diagnostics_->setActive(wanted);
+      if (!wanted) return sub_.shutdown();
       sub_ = getNodeHandle().subscribe("objects", queue_size_, &ObjectMarkers::objectsCb, this);
-    } else if (pub_.getNumSubscribers() == 0 && sub_) {
-      sub_.shutdown();
-    }
+    });
+    pub_ = lazy_->advertise<visualization_msgs::MarkerArray>(getNodeHandle(), "objects/markers",
+                                                            2);
   }
 
   void objectsCb(const DetectedObjectArray::ConstPtr& objects) {
@@ -85,7 +77,7 @@ class ObjectMarkers : public nodelet::Nodelet {
   std::unique_ptr<Reconfigure> reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
-  std::mutex mutex_;
+  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher pub_;
   ros::Subscriber sub_;
 };

@@ -13,6 +13,7 @@
 #include "urban_detection/ros/packet_params.h"
 #include "urban_detection/ros/scan_to_cloud.h"
 #include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -34,23 +35,15 @@ class PacketToCloud : public nodelet::Nodelet {
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
         getNodeHandle(), getPrivateNodeHandle(), getName(), "decoding", "scans");
     diagnostics_->setActive(false);
-    std::lock_guard<std::mutex> lock(connect_mutex_);  // connectCb must see pub_ assigned
-    auto connect_cb = [this](const ros::SingleSubscriberPublisher&) { connectCb(); };
-    pub_ = getNodeHandle().advertise<CloudXYZIRT>("velodyne_points", params_.queue_size,
-                                                  connect_cb, connect_cb);
-  }
-
-  void connectCb() {
-    std::lock_guard<std::mutex> lock(connect_mutex_);
-    const bool wanted = pub_.getNumSubscribers() > 0;
-    diagnostics_->setActive(wanted);
-    if (!wanted) {
-      sub_.shutdown();
-    } else if (!sub_) {  // input queue_size: the newest revolutions win when decoding is slow
+    // Input queue_size: the newest revolutions win when decoding is slow.
+    lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
+      diagnostics_->setActive(wanted);
+      if (!wanted) return sub_.shutdown();
       sub_ = getNodeHandle().subscribe("velodyne_packets", params_.queue_size,
                                        &PacketToCloud::scanCb, this,
                                        ros::TransportHints().tcpNoDelay());
-    }
+    });
+    pub_ = lazy_->advertise<CloudXYZIRT>(getNodeHandle(), "velodyne_points", params_.queue_size);
   }
 
   void scanCb(const VelodyneScan::ConstPtr& scan) {
@@ -97,7 +90,7 @@ class PacketToCloud : public nodelet::Nodelet {
   std::unique_ptr<ScanToCloud> converter_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
-  std::mutex connect_mutex_;
+  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher pub_;
   ros::Subscriber sub_;
 };

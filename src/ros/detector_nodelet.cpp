@@ -11,6 +11,7 @@
 #include "urban_detection/ros/detection_params.h"
 #include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/param_loading.h"
+#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -60,13 +61,16 @@ void DetectorNodelet::onInit() {
                                                               getName(), "detection");
   diagnostics_->setActive(false);
   thread_ = std::make_unique<ros_conv::StageThread>(thread_nice_);
-  ros::SubscriberStatusCallback connect = [this](const ros::SingleSubscriberPublisher&) {
-    connectCb();
-  };
-  std::lock_guard<std::mutex> lock(connect_mutex_);
-  objects_pub_ = nh.advertise<DetectedObjectArray>("objects", 2, connect, connect);
-  points_pub_ = nh.advertise<LabeledCloud>("objects/points", 2, connect, connect);
-  rejected_pub_ = nh.advertise<DetectedObjectArray>("objects/rejected", 2, connect, connect);
+  lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
+    diagnostics_->setActive(wanted);
+    if (!wanted) return sub_.shutdown();
+    sub_ = thread_->handle(getNodeHandle())
+               .subscribe("segmentation/foreground", queue_size_, &DetectorNodelet::foregroundCb,
+                          this);
+  });
+  objects_pub_ = lazy_->advertise<DetectedObjectArray>(nh, "objects", 2);
+  points_pub_ = lazy_->advertise<LabeledCloud>(nh, "objects/points", 2);
+  rejected_pub_ = lazy_->advertise<DetectedObjectArray>(nh, "objects/rejected", 2);
   if (classifier_->params().enabled) {
   if (!thread_->niceError().empty()) {
     NODELET_WARN("%s: thread_nice %d not applied: %s", getName().c_str(), thread_nice_,
@@ -88,21 +92,6 @@ DetectorNodelet::~DetectorNodelet() {
 void DetectorNodelet::replaceDetector(std::unique_ptr<core::ObjectDetector> detector) {
   std::lock_guard<std::mutex> lock(detector_mutex_);
   detector_ = std::move(detector);
-}
-
-void DetectorNodelet::connectCb() {
-  std::lock_guard<std::mutex> lock(connect_mutex_);
-  const bool wanted = objects_pub_.getNumSubscribers() > 0 ||
-                      points_pub_.getNumSubscribers() > 0 ||
-                      rejected_pub_.getNumSubscribers() > 0;
-  diagnostics_->setActive(wanted);
-  if (wanted && !sub_) {
-    sub_ = thread_->handle(getNodeHandle())
-               .subscribe("segmentation/foreground", queue_size_, &DetectorNodelet::foregroundCb,
-                          this);
-  } else if (!wanted && sub_) {
-    sub_.shutdown();
-  }
 }
 
 void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& foreground) {

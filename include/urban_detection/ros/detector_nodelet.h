@@ -39,6 +39,7 @@
 #include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/stage_thread.h"
 #include "urban_detection/ros/validated_reconfigure.h"
+#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -58,7 +59,6 @@ class DetectorNodelet : public nodelet::Nodelet {
 
  private:
   void onInit() final;
-  void connectCb();
   void foregroundCb(const boost::shared_ptr<const LabeledCloud>& foreground);  // zero copy
 
   std::mutex detector_mutex_;  // detector_ between revolutions and reconfigure
@@ -75,7 +75,7 @@ class DetectorNodelet : public nodelet::Nodelet {
   std::vector<core::DetectedObject> objects_;   // reused between frames
   std::vector<core::DetectedObject> rejected_;  // non-objects of the classifier
   std::unordered_map<std::uint32_t, std::uint32_t> id_of_index_;
-  std::mutex connect_mutex_;
+  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher objects_pub_, points_pub_, rejected_pub_;
   ros::Subscriber sub_;
 };
