@@ -431,7 +431,6 @@ SimulatedDriveReader::Result SimulatedDriveReader::next(CloudXYZIRT* cloud, Grou
       ++bad_packets_;
     }
   }
-  ++revolutions_;
   char stamp[32];
   std::snprintf(stamp, sizeof(stamp), "%.6f", stamp_s);
   if (!fillWindow(stamp_s)) {

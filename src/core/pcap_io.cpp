@@ -302,7 +302,7 @@ PcapRevolutionReader::Result PcapRevolutionReader::next(std::vector<PcapPacket>*
     if (r != PcapReader::Result::kPacket) {
       done_ = true;
       end_ = r;
-      const std::size_t expected = previous_packets_ > 0 ? previous_packets_ : 347;
+      const std::size_t expected = previous_packets_ > 0 ? previous_packets_ : kNominalPackets;
       if ((boundary_.openWhole() || first_whole_) && !packets->empty() &&
           10 * packets->size() >= 9 * expected) {
         return emit();

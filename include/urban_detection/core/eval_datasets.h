@@ -186,7 +186,7 @@ class SimulatedDriveReader {
   };
   Result next(CloudXYZIRT* cloud, GroundTruthFrame* gt, std::string* message);
 
-  std::size_t revolutions() const { return revolutions_; }  ///< revolutions cut so far
+  std::size_t revolutions() const { return pcap_.revolutions(); }  ///< revolutions cut so far
   /// Packets refused (invalid: skipped when the revolutions are cut, or rejected by the decoder).
   std::size_t badPackets() const { return bad_packets_ + pcap_.boundary().invalidPackets(); }
 
@@ -200,7 +200,6 @@ class SimulatedDriveReader {
   bool gt_end_ = false;
   std::string end_message_;
   std::vector<GroundTruthFrame> window_;  // GT frames read ahead, sorted by stamp
-  std::size_t revolutions_ = 0;
   std::size_t bad_packets_ = 0;
 };
 

@@ -47,11 +47,12 @@ class PcapReader {
 /// allows: its first revolution is whole when the first valid packet lies within
 /// kStartToleranceDeg after the cut angle (a capture that starts at the cut, as the simulator
 /// writes them), and at the end of the file the open revolution is returned when it began at a
-/// cut and holds at least 90 % of the previous revolution's packets (of 347, one revolution at
-/// 600 rpm, when there was none): a capture that stops mid-revolution loses only its tail.
+/// cut and holds at least 90 % of the previous revolution's packets (of kNominalPackets when there
+/// was none): a capture that stops mid-revolution loses only its tail.
 class PcapRevolutionReader {
  public:
   static constexpr double kStartToleranceDeg = 2.0;  // one packet at 1200 rpm
+  static constexpr std::size_t kNominalPackets = 347;  // one revolution at 600 rpm
   enum class Result { kRevolution, kEnd, kTruncated };
 
   /// Throws std::runtime_error naming the file (PcapReader).
@@ -65,7 +66,6 @@ class PcapRevolutionReader {
 
   const RevolutionBoundary& boundary() const { return boundary_; }
   std::size_t revolutions() const { return revolutions_; }  ///< returned so far
-  std::size_t skippedRecords() const { return reader_.skipped(); }
 
  private:
   PcapReader reader_;

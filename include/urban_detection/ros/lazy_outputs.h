@@ -34,12 +34,6 @@ class LazyOutputs {
     return outputs_.back();
   }
 
-  /// Whether an output has a subscriber now.
-  bool wanted() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return wanted_;
-  }
-
  private:
   void update() {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -51,7 +45,7 @@ class LazyOutputs {
   }
 
   std::function<void(bool)> on_change_;
-  mutable std::mutex mutex_;
+  std::mutex mutex_;
   std::vector<ros::Publisher> outputs_;
   bool wanted_ = false;
 };
