@@ -7,7 +7,7 @@
 // Lazy: subscribed to points_in only while someone listens to velodyne_points. A cloud of more
 // than ~max_points points (default: three HDL-64E revolutions at 300 rpm) is refused with an
 // ERROR before it is converted.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <memory>
 #include <mutex>
@@ -20,7 +20,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 
-#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/pointcloud2_input.h"
 #include "urban_detection/ros/stage_diagnostics.h"
@@ -28,7 +28,7 @@
 
 namespace urban_detection {
 
-class CloudInput : public nodelet::Nodelet {
+class CloudInputNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
     try {
@@ -46,7 +46,7 @@ class CloudInput : public nodelet::Nodelet {
     lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
       diagnostics_->setActive(wanted);
       if (!wanted) return sub_.shutdown();
-      sub_ = getNodeHandle().subscribe("points_in", queue_size_, &CloudInput::cloudCb, this,
+      sub_ = getNodeHandle().subscribe("points_in", queue_size_, &CloudInputNodelet::cloudCb, this,
                                        ros::TransportHints().tcpNoDelay());
     });
     pub_ = lazy_->advertise<CloudXYZIRT>(getNodeHandle(), "velodyne_points", 2);
@@ -99,4 +99,4 @@ class CloudInput : public nodelet::Nodelet {
 
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::CloudInput, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::CloudInputNodelet, nodelet::Nodelet)

@@ -4,7 +4,7 @@
 // the publisher's C++ type, so inside one manager the cloud of PacketSource / PacketToCloud
 // arrives as a pointer, never serialised (a PointCloud2 from elsewhere goes through CloudInput).
 // Runs its callback on a thread of its own (StageThread), never behind another stage.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <memory>
 #include <mutex>
@@ -18,9 +18,8 @@
 #include <ros/ros.h>
 
 #include "urban_detection/GridSegmentationConfig.h"
-#include "urban_detection/core/grid_segmenter.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/ros/param_loading.h"
-#include "urban_detection/ros/segmentation_params.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/stage_thread.h"
 #include "urban_detection/ros/tunable_fields.h"
@@ -29,9 +28,9 @@
 
 namespace urban_detection {
 
-class GridSegmentation : public nodelet::Nodelet {
+class GridSegmentationNodelet : public nodelet::Nodelet {
  public:
-  ~GridSegmentation() override {
+  ~GridSegmentationNodelet() override {
     if (thread_) thread_->stop();  // no callback runs on the members below any more
   }
 
@@ -46,7 +45,14 @@ class GridSegmentation : public nodelet::Nodelet {
     } catch (const ParamError& e) {
       error = e.what();
     }
-    if (!error.empty() || !ros_conv::loadGridSegmenterParams(pnh, &params, &error)) {
+    if (error.empty()) {
+      try {
+        loadFields(pnh, &params);
+      } catch (const ParamError& e) {
+        error = e.what();
+      }
+    }
+    if (!error.empty()) {
       refusal_ = ros_conv::RefusalDiagnostics::report(
           getNodeHandle(), getPrivateNodeHandle(), getName(),
           "GridSegmentation: " + error + "; the nodelet stays idle");
@@ -54,12 +60,11 @@ class GridSegmentation : public nodelet::Nodelet {
     }
     segmenter_.reset(new core::GridSegmenter(params));
     reconfigure_ = std::make_unique<Reconfigure>(
-        pnh, ros_conv::toConfig<GridSegmentationConfig>(params, ros_conv::GridSegmenterTunables()),
+        pnh, ros_conv::toConfig<GridSegmentationConfig>(params),
         [this, pnh](const GridSegmentationConfig& c) {
           std::lock_guard<std::mutex> lock(segment_mutex_);  // between two revolutions
-          const core::GridSegmenterParams p = ros_conv::fromConfig(
-              c, segmenter_->params(), ros_conv::GridSegmenterTunables());
-          const std::string why = ros_conv::checkGridSegmenterParams(pnh, p);
+          const core::GridSegmenterParams p = ros_conv::fromConfig(c, segmenter_->params());
+          const std::string why = checkFields(pnh, p);
           if (!why.empty()) return why;
           segmenter_->setParams(p);
           return std::string();
@@ -73,7 +78,7 @@ class GridSegmentation : public nodelet::Nodelet {
       diagnostics_->setActive(wanted);
       if (!wanted) return sub_.shutdown();
       sub_ = thread_->handle(getNodeHandle())
-                 .subscribe("velodyne_points", queue_size_, &GridSegmentation::cloudCb, this);
+                 .subscribe("velodyne_points", queue_size_, &GridSegmentationNodelet::cloudCb, this);
     });
     labeled_pub_ = lazy_->advertise<LabeledCloud>(nh, "segmentation/labeled_points", 2);
     foreground_pub_ = lazy_->advertise<LabeledCloud>(nh, "segmentation/foreground", 2);
@@ -116,4 +121,4 @@ class GridSegmentation : public nodelet::Nodelet {
 
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::GridSegmentation, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::GridSegmentationNodelet, nodelet::Nodelet)

@@ -3,7 +3,7 @@
 // image + camera_info (rectified camera), objects (DetectedObjectArray) and objects/points
 // (LabeledCloud, label = object id). Output: objects/classified (the objects with class_label
 // and class_confidence filled). Lazy. Without model/path the nodelet refuses to start.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <message_filters/subscriber.h>
 #include <message_filters/sync_policies/approximate_time.h>
@@ -27,7 +27,7 @@
 
 namespace urban_detection {
 
-class ImageLabelTransfer : public nodelet::Nodelet {
+class ImageLabelTransferNodelet : public nodelet::Nodelet {
   using Policy =
       message_filters::sync_policies::ApproximateTime<sensor_msgs::Image, sensor_msgs::CameraInfo,
                                                       DetectedObjectArray, LabeledCloud>;
@@ -79,7 +79,7 @@ class ImageLabelTransfer : public nodelet::Nodelet {
     sync_ = std::make_unique<message_filters::Synchronizer<Policy>>(
         Policy(p.queue_size), image_sub_, info_sub_, objects_sub_, points_sub_);
     sync_->getPolicy()->setMaxIntervalDuration(ros::Duration(p.max_sync_interval_s));
-    sync_->registerCallback(&ImageLabelTransfer::callback, this);
+    sync_->registerCallback(&ImageLabelTransferNodelet::callback, this);
     lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
       diagnostics_->setActive(wanted);
       if (!wanted) {
@@ -157,4 +157,4 @@ class ImageLabelTransfer : public nodelet::Nodelet {
 
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::ImageLabelTransfer, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ImageLabelTransferNodelet, nodelet::Nodelet)

@@ -20,12 +20,12 @@
 
 namespace urban_detection {
 
-class ObjectMarkers : public nodelet::Nodelet {
+class ObjectMarkersNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
     const ros::NodeHandle pnh(getPrivateNodeHandle(), "markers");
     try {
-      ros_conv::loadObjectMarkerParams(pnh, &params_);
+      loadFields(pnh, &params_);
       loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     } catch (const ParamError& e) {
       refusal_ = ros_conv::RefusalDiagnostics::report(
@@ -34,12 +34,12 @@ class ObjectMarkers : public nodelet::Nodelet {
       return;
     }
     const ObjectMarkersConfig initial =
-        ros_conv::toConfig<ObjectMarkersConfig>(params_, ros_conv::ObjectMarkerTunables());
+        ros_conv::toConfig<ObjectMarkersConfig>(params_);
     auto apply = [this, pnh](const ObjectMarkersConfig& n) {
       std::lock_guard<std::mutex> lock(params_mutex_);  // applied from the next message on
       const ros_conv::ObjectMarkerParams p =
-          ros_conv::fromConfig(n, params_, ros_conv::ObjectMarkerTunables());
-      const std::string error = ros_conv::checkObjectMarkerParams(pnh, p);
+          ros_conv::fromConfig(n, params_);
+      const std::string error = checkFields(pnh, p);
       if (error.empty()) params_ = p;
       return error;
     };
@@ -50,7 +50,7 @@ class ObjectMarkers : public nodelet::Nodelet {
     lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
       diagnostics_->setActive(wanted);
       if (!wanted) return sub_.shutdown();
-      sub_ = getNodeHandle().subscribe("objects", queue_size_, &ObjectMarkers::objectsCb, this);
+      sub_ = getNodeHandle().subscribe("objects", queue_size_, &ObjectMarkersNodelet::objectsCb, this);
     });
     pub_ = lazy_->advertise<visualization_msgs::MarkerArray>(getNodeHandle(), "objects/markers",
                                                             2);
@@ -84,4 +84,4 @@ class ObjectMarkers : public nodelet::Nodelet {
 
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::ObjectMarkers, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ObjectMarkersNodelet, nodelet::Nodelet)

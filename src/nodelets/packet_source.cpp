@@ -19,9 +19,9 @@
 
 namespace urban_detection {
 
-class PacketSource : public nodelet::Nodelet {
+class PacketSourceNodelet : public nodelet::Nodelet {
  public:
-  ~PacketSource() override { worker_.reset(); }  // joins the thread before the rest goes
+  ~PacketSourceNodelet() override { worker_.reset(); }  // joins the thread before the rest goes
 
  private:
   void onInit() override {
@@ -75,4 +75,4 @@ class PacketSource : public nodelet::Nodelet {
 
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::PacketSource, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::PacketSourceNodelet, nodelet::Nodelet)

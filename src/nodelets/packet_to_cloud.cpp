@@ -17,7 +17,7 @@
 
 namespace urban_detection {
 
-class PacketToCloud : public nodelet::Nodelet {
+class PacketToCloudNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
     try {
@@ -40,7 +40,7 @@ class PacketToCloud : public nodelet::Nodelet {
       diagnostics_->setActive(wanted);
       if (!wanted) return sub_.shutdown();
       sub_ = getNodeHandle().subscribe("velodyne_packets", params_.queue_size,
-                                       &PacketToCloud::scanCb, this,
+                                       &PacketToCloudNodelet::scanCb, this,
                                        ros::TransportHints().tcpNoDelay());
     });
     pub_ = lazy_->advertise<CloudXYZIRT>(getNodeHandle(), "velodyne_points", params_.queue_size);
@@ -97,4 +97,4 @@ class PacketToCloud : public nodelet::Nodelet {
 
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::PacketToCloud, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::PacketToCloudNodelet, nodelet::Nodelet)

@@ -13,16 +13,16 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
-#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/simulation_conversions.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
 
-class SimulatedSensor : public nodelet::Nodelet {
+class SimulatedSensorNodelet : public nodelet::Nodelet {
  public:
-  ~SimulatedSensor() override {
+  ~SimulatedSensorNodelet() override {
     running_ = false;
     if (worker_.joinable()) worker_.join();
   }
@@ -40,7 +40,7 @@ class SimulatedSensor : public nodelet::Nodelet {
     diagnostics_->setHardwareId("simulated HDL-64E");
     if (realtime_) diagnostics_->setExpectedRate(config_.sensor.rpm / 60.0 * rate_factor_);
     running_ = true;
-    worker_ = std::thread(&SimulatedSensor::run, this);
+    worker_ = std::thread(&SimulatedSensorNodelet::run, this);
   }
 
   bool loadParams() {
@@ -161,4 +161,4 @@ class SimulatedSensor : public nodelet::Nodelet {
 
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::SimulatedSensor, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::SimulatedSensorNodelet, nodelet::Nodelet)

@@ -12,6 +12,7 @@
 #include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/lazy_outputs.h"
+#include "urban_detection/ros/tunable_fields.h"
 
 namespace urban_detection {
 
@@ -23,8 +24,7 @@ void DetectorNodelet::onInit() {
               "(nice value of the stage's thread, 0 = the manager's)");
     detector_ = createDetector(getPrivateNodeHandle());
     core::ObjectFilterParams filter_params;
-    ros_conv::loadObjectFilterParams(ros::NodeHandle(getPrivateNodeHandle(), "object_filter"),
-                                     &filter_params);
+    loadFields(ros::NodeHandle(getPrivateNodeHandle(), "object_filter"), &filter_params);
     filter_ = std::make_unique<core::ObjectFilter>(filter_params);
     core::ObjectClassifierParams classifier_params;
     ros_conv::loadObjectClassifierParams(ros::NodeHandle(getPrivateNodeHandle(), "classifier"),
@@ -39,18 +39,14 @@ void DetectorNodelet::onInit() {
   startReconfigure(getPrivateNodeHandle());
   if (classifier_->params().enabled) {
     const ros::NodeHandle classifier_nh(getPrivateNodeHandle(), "classifier");
-    ObjectClassifierConfig initial;
-    initial.min_object_probability = classifier_->params().min_object_probability;
-    initial.reject_non_objects = classifier_->params().reject_non_objects;
-    const std::string ns = classifier_nh.getNamespace();
-    auto apply = [this, ns](const ObjectClassifierConfig& c) -> std::string {
-      const double p = c.min_object_probability;
-      if (!std::isfinite(p) || p < -1.0 || p > 1.0) {
-        return outOfRangeMessage(ns + "/min_object_probability", p, -1.0, 1.0) +
-               " (negative: the model's threshold)";
-      }
+    const ObjectClassifierConfig initial =
+        ros_conv::toConfig<ObjectClassifierConfig>(classifier_->params());
+    auto apply = [this, classifier_nh](const ObjectClassifierConfig& c) -> std::string {
+      const core::ObjectClassifierParams p = ros_conv::fromConfig(c, classifier_->params());
+      const std::string error = checkFields(classifier_nh, p);
+      if (!error.empty()) return error;
       std::lock_guard<std::mutex> lock(detector_mutex_);  // between two revolutions
-      classifier_->setDecision(p, c.reject_non_objects);
+      classifier_->setDecision(p.min_object_probability, p.reject_non_objects);
       return "";
     };
     classifier_reconfigure_ =

@@ -113,28 +113,7 @@ void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerPa
   }
 }
 
-namespace {
-
-// The numeric ranges, shared by the loader and by dynamic_reconfigure.
-ParamTable markerTable(ObjectMarkerParams* p) {
-  ParamTable t;
-  t.add("box_alpha", &p->box_alpha, 0.0, 1.0)
-      .add("text_size_m", &p->text_size_m, 0.01, 10.0, "m")
-      .add("min_box_size_m", &p->min_box_size_m, 0.0, 10.0, "m");
-  return t;
-}
-
-}  // namespace
-
-void loadObjectMarkerParams(const ros::NodeHandle& nh, ObjectMarkerParams* p) {
-  loadParam(nh, "show_ids", &p->show_ids);
-  markerTable(p).load(nh);
-  loadParam(nh, "colour_by_class", &p->colour_by_class);
-}
-
-std::string checkObjectMarkerParams(const ros::NodeHandle& nh, ObjectMarkerParams p) {
-  return markerTable(&p).check(nh);
-}
+std::string validate(const ObjectMarkerParams& params) { return core::checkFieldRanges(params); }
 
 }  // namespace ros_conv
 }  // namespace urban_detection

@@ -44,41 +44,8 @@ void loadParam(const ros::NodeHandle& nh, const std::string& name, std::string* 
   readOptional(nh, name, value, "a string");
 }
 
-ParamTable& ParamTable::add(const std::string& name, double* field, double min, double max,
-                            const std::string& unit) {
-  entries_.push_back(Entry{name, unit, field, nullptr, min, max, 0, 0});
-  return *this;
-}
-
-ParamTable& ParamTable::add(const std::string& name, int* field, int min, int max,
-                            const std::string& unit) {
-  entries_.push_back(Entry{name, unit, nullptr, field, 0.0, 0.0, min, max});
-  return *this;
-}
-
-void ParamTable::load(const ros::NodeHandle& nh) const {
-  for (const Entry& e : entries_) {
-    if (e.d) {
-      loadParam(nh, e.name, e.d, e.dmin, e.dmax, e.unit);
-    } else {
-      loadParam(nh, e.name, e.i, e.imin, e.imax, e.unit);
-    }
-  }
-}
-
-std::string ParamTable::check(const ros::NodeHandle& nh) const {
-  try {
-    for (const Entry& e : entries_) {
-      if (e.d) {
-        checkRange(nh.resolveName(e.name), *e.d, e.dmin, e.dmax, e.unit);
-      } else {
-        checkRange(nh.resolveName(e.name), *e.i, e.imin, e.imax, e.unit);
-      }
-    }
-  } catch (const ParamError& error) {
-    return error.what();
-  }
-  return "";
+void loadParam(const ros::NodeHandle& nh, const std::string& name, std::vector<double>* value) {
+  readOptional(nh, name, value, "a list of numbers");
 }
 
 }  // namespace urban_detection

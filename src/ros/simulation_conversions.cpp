@@ -7,7 +7,7 @@
 #include <tf2_msgs/TFMessage.h>
 #include <topic_tools/shape_shifter.h>
 
-#include "urban_detection/core/object_class.h"
+#include "urban_detection/core/common/object_class.h"
 
 namespace urban_detection {
 namespace ros_conv {

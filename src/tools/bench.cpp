@@ -44,21 +44,20 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/calibration.h"
-#include "urban_detection/core/eval_datasets.h"
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/hough_wall_refiner.h"
-#include "urban_detection/core/kdtree_detector.h"
-#include "urban_detection/core/kitti_io.h"
-#include "urban_detection/core/object_classifier.h"
-#include "urban_detection/core/object_filter.h"
-#include "urban_detection/core/params_yaml.h"
+#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/segmentation/hough_wall_refiner.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/sensor/kitti_io.h"
+#include "urban_detection/core/classification/object_classifier.h"
+#include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/object_markers.h"
-#include "urban_detection/ros/segmentation_params.h"
-#include "urban_detection/core/pcap_io.h"
+#include "urban_detection/core/sensor/pcap_io.h"
 
 #include "tool_common.h"
 
@@ -252,11 +251,6 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  std::string seg_error;
-  if (!urban_detection::ros_conv::validateGridSegmenterParams(params.segmentation, &seg_error)) {
-    std::fprintf(stderr, "error: invalid segmentation parameters: %s\n", seg_error.c_str());
-    return 2;
-  }
   std::unique_ptr<core::GridSegmenter> segmenter, segmenter_no_hough;
   std::unique_ptr<core::HierarchicalGridDetector> hier;
   std::unique_ptr<core::KdTreeDetector> kdtree, kdtree_pcl_default;

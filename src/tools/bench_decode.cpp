@@ -19,7 +19,7 @@
 
 #include "synthetic_scene.h"
 #include "tool_common.h"
-#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 
 namespace uc = urban_detection::core;
 namespace ut = urban_detection::tools;

@@ -21,7 +21,7 @@
 // field by field when the digests differ.
 // --stats: instead of timing, prints the hierarchical grid's stats (HierarchicalGridStats)
 // averaged per revolution: how many cells, links and objects the timed work handles.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <algorithm>
 #include <cinttypes>
@@ -34,9 +34,9 @@
 #include <benchmark/benchmark.h>
 
 #include "tool_common.h"
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/kdtree_detector.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
 
 using namespace urban_detection;
 

@@ -9,7 +9,7 @@
 // other memory before each (timed) frame, as the other stages of the full pipeline do between
 // two segmentations, so the segmenter's scratch buffers are out of L1/L2 as in
 // urban_detection_bench.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <algorithm>
 #include <chrono>
@@ -23,8 +23,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/kitti_io.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/sensor/kitti_io.h"
 
 namespace {
 

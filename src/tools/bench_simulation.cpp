@@ -11,7 +11,7 @@
 #include <benchmark/benchmark.h>
 #include <ros/package.h>
 
-#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 
 #include "tool_common.h"
 

@@ -10,7 +10,7 @@
 // counted over all sweeps and f = dense / (dense + sparse + empty) (cell_fitness.h: empty cells
 // are those 8-adjacent to a non-empty cell). Prints the curve and its maximum; optional PNG.
 // --whole-cloud grids every point instead of the foreground.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -19,8 +19,8 @@
 #include <vector>
 
 #include "tool_common.h"
-#include "urban_detection/core/cell_fitness.h"
-#include "urban_detection/core/grid_segmenter.h"
+#include "urban_detection/core/detection/cell_fitness.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
 
 using namespace urban_detection;
 

@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/eval_datasets.h"
-#include "urban_detection/core/evaluation.h"
-#include "urban_detection/core/kitti_io.h"
-#include "urban_detection/core/object_class.h"
-#include "urban_detection/core/object_detector.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/evaluation/evaluation.h"
+#include "urban_detection/core/sensor/kitti_io.h"
+#include "urban_detection/core/common/object_class.h"
+#include "urban_detection/core/detection/object_detector.h"
 
 namespace urban_detection {
 namespace tools {

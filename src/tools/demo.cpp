@@ -7,7 +7,7 @@
 //
 //   urban_detection_demo [--config FILE] [--revolutions N] [--rpm R] [--calibration FILE]
 //                        [--segmentation FILE] [--every K]
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <algorithm>
 #include <chrono>
@@ -20,13 +20,13 @@
 
 #include <ros/package.h>
 
-#include "urban_detection/core/evaluation.h"
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/kdtree_detector.h"
-#include "urban_detection/core/params_yaml.h"
-#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/core/evaluation/evaluation.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 
 namespace uc = urban_detection::core;
 
@@ -149,7 +149,6 @@ int main(int argc, char** argv) {
       }
       const auto t2 = Clock::now();
       segmenter.segment(cloud, &labels);
-      const auto t3 = Clock::now();
       uc::extractForeground(cloud, labels, &foreground);
       const auto t4 = Clock::now();
       hier.detect(foreground, &objects_hier);

@@ -20,17 +20,16 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/eval_datasets.h"
-#include "urban_detection/core/evaluation.h"
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/kdtree_detector.h"
-#include "urban_detection/core/kitti_io.h"
-#include "urban_detection/core/object_class.h"
-#include "urban_detection/core/object_classifier.h"
-#include "urban_detection/core/object_filter.h"
-#include "urban_detection/core/params_yaml.h"
-#include "urban_detection/ros/segmentation_params.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/evaluation/evaluation.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/sensor/kitti_io.h"
+#include "urban_detection/core/common/object_class.h"
+#include "urban_detection/core/classification/object_classifier.h"
+#include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/params/params_yaml.h"
 
 #include <Eigen/Core>
 #include <opencv2/imgcodecs.hpp>
@@ -601,11 +600,6 @@ int main(int argc, char** argv) {
   }
   if (detectors.empty()) {
     std::fprintf(stderr, "error: --detector must be hierarchical, kdtree or both\n");
-    return 2;
-  }
-  std::string seg_error;
-  if (!urban_detection::ros_conv::validateGridSegmenterParams(params.segmentation, &seg_error)) {
-    std::fprintf(stderr, "error: invalid segmentation parameters: %s\n", seg_error.c_str());
     return 2;
   }
   core::GridSegmenter segmenter(params.segmentation);

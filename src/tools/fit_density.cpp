@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "tool_common.h"
-#include "urban_detection/core/distance_weight.h"
+#include "urban_detection/core/detection/distance_weight.h"
 
 using namespace urban_detection;
 

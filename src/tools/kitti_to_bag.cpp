@@ -7,7 +7,7 @@
 // KITTI's sweeps are already motion compensated and carry no ring or per-point time: both are
 // written as 0. The raw sweeps come without the vehicle's poses, so odom -> base_link is the
 // identity: a fixed frame of odom, base_link or velodyne all show the drive around the sensor.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <algorithm>
 #include <cmath>

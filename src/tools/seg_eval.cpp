@@ -9,7 +9,7 @@
 //   --sim scores against the simulator's exact per-point classes (urban_detection_simulate --gt,
 //   with the pcap it wrote): ground as ground, walls (facades) out of the foreground, cars,
 //   pedestrians and cyclists in the foreground.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <algorithm>
 #include <array>
@@ -23,13 +23,13 @@
 #include <utility>
 #include <vector>
 
-#include "urban_detection/core/calibration.h"
-#include "urban_detection/core/eval_datasets.h"
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/ground_truth.h"
-#include "urban_detection/core/kitti_io.h"
-#include "urban_detection/core/object_class.h"
-#include "urban_detection/core/params_yaml.h"
+#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/simulation/ground_truth.h"
+#include "urban_detection/core/sensor/kitti_io.h"
+#include "urban_detection/core/common/object_class.h"
+#include "urban_detection/core/params/params_yaml.h"
 
 #include "tool_common.h"
 

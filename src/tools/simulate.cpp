@@ -10,9 +10,9 @@
 #include <ros/package.h>
 #include <ros/time.h>
 
-#include "urban_detection/core/ground_truth.h"
-#include "urban_detection/core/pcap_io.h"
-#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/core/simulation/ground_truth.h"
+#include "urban_detection/core/sensor/pcap_io.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 #include "urban_detection/ros/simulation_conversions.h"
 
 #include "tool_common.h"
@@ -28,7 +28,7 @@ void usage() {
       "  --revolutions N      revolutions to simulate (default: the whole drive)\n"
       "  --pcap FILE          write the packets as a pcap (UDP 2368)\n"
       "  --bag FILE           write /velodyne_packets, /ground_truth, /tf, /tf_static\n"
-      "  --gt FILE            write the ground-truth file (format: core/ground_truth.h)\n"
+      "  --gt FILE            write the ground-truth file (format: core/simulation/ground_truth.h)\n"
       "  --calibration FILE   override the config's calibration (velodyne YAML or db.xml)\n"
       "  --seed N             override the scene seed\n"
       "  --rpm R              override the spin rate (300..1200)\n");

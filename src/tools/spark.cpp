@@ -20,7 +20,7 @@
 //       measures what projection, occlusion handling and voting lose with a perfect 2-D input.
 //       Also times the transfer on all objects the hierarchical grid detector finds in the
 //       revolution (the added cost per revolution beyond the network).
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <pcl/io/pcd_io.h>
 #include <yaml-cpp/yaml.h>
@@ -38,14 +38,14 @@
 #include <vector>
 
 #include "tool_common.h"
-#include "urban_detection/core/eval_datasets.h"
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/image_label_transfer.h"
-#include "urban_detection/core/spark_capture.h"
-#include "urban_detection/core/spark_instances.h"
-#include "urban_detection/core/spark_scene.h"
-#include "urban_detection/core/spark_segmenter.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/spark/image_label_transfer.h"
+#include "urban_detection/core/spark/spark_capture.h"
+#include "urban_detection/core/spark/spark_instances.h"
+#include "urban_detection/core/spark/spark_scene.h"
+#include "urban_detection/core/spark/spark_segmenter.h"
 #include "urban_detection/ros/image_label_transfer_ros.h"
 #include "urban_detection/ros/object_conversions.h"
 

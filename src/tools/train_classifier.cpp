@@ -35,13 +35,12 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/evaluation.h"
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/kdtree_detector.h"
-#include "urban_detection/core/object_classifier.h"
-#include "urban_detection/core/object_features.h"
-#include "urban_detection/ros/segmentation_params.h"
+#include "urban_detection/core/evaluation/evaluation.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/classification/object_classifier.h"
+#include "urban_detection/core/classification/object_features.h"
 
 #include "datasets.h"
 #include "tool_common.h"
@@ -287,11 +286,6 @@ int main(int argc, char** argv) {
 
   urban_detection::tools::PipelineParams params;
   if (!urban_detection::tools::loadConfigs(configs, &params)) return 2;
-  std::string seg_error;
-  if (!urban_detection::ros_conv::validateGridSegmenterParams(params.segmentation, &seg_error)) {
-    std::fprintf(stderr, "error: invalid segmentation parameters: %s\n", seg_error.c_str());
-    return 2;
-  }
   core::ObjectFeatureParams fp;
   fp.sensor_height_m = params.segmentation.sensor_height_m;
   core::GridSegmenter segmenter(params.segmentation);

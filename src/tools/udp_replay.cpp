@@ -14,7 +14,7 @@
 #include <cstring>
 #include <string>
 
-#include "urban_detection/core/pcap_io.h"
+#include "urban_detection/core/sensor/pcap_io.h"
 
 #include "tool_common.h"
 

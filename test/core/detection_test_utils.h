@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/object_detector.h"
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/detection/object_detector.h"
+#include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
 namespace test {

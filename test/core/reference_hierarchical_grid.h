@@ -44,9 +44,9 @@
 #include <utility>
 #include <vector>
 
-#include "urban_detection/core/distance_weight.h"
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/detection/distance_weight.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
 namespace reference {

@@ -16,7 +16,7 @@
 #include <limits>
 #include <vector>
 
-#include "urban_detection/core/grid_segmenter.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
 
 namespace urban_detection {
 namespace reference {

@@ -3,7 +3,7 @@
 // sampling for terrain shapes (slopes, camber, curbs).
 #pragma once
 
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <cmath>
 #include <functional>

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/spark_segmenter.h"
+#include "urban_detection/core/spark/spark_segmenter.h"
 
 namespace urban_detection {
 namespace test {

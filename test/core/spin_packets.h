@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "urban_detection/core/calibration.h"
-#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 
 namespace urban_detection {
 namespace test {

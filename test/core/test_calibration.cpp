@@ -12,7 +12,7 @@
 #include <sstream>
 #include <string>
 
-#include "urban_detection/core/calibration.h"
+#include "urban_detection/core/sensor/calibration.h"
 #include "test_files.h"
 
 namespace uc = urban_detection::core;

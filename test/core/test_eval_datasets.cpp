@@ -13,10 +13,10 @@
 #include <set>
 #include <stdexcept>
 
-#include "urban_detection/core/eval_datasets.h"
-#include "urban_detection/core/kitti_io.h"
-#include "urban_detection/core/lidar_simulator.h"
-#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/sensor/kitti_io.h"
+#include "urban_detection/core/simulation/lidar_simulator.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 #include "test_files.h"
 
 namespace urban_detection {

@@ -7,7 +7,7 @@
 #include <numeric>
 #include <random>
 
-#include "urban_detection/core/evaluation.h"
+#include "urban_detection/core/evaluation/evaluation.h"
 
 namespace urban_detection {
 namespace core {

@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "detection_test_utils.h"
-#include "urban_detection/core/far_object_merger.h"
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/object_geometry.h"
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/detection/far_object_merger.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/object_geometry.h"
+#include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
 namespace {
@@ -267,7 +267,7 @@ TEST(FarObjectMerger, ValidatesItsParameters) {
   EXPECT_NE(core::validate(p).find("max_width_m"), std::string::npos);
   core::HierarchicalGridDetectorParams h;
   h.far_merge.max_z_gap_m = -1.0;
-  EXPECT_NE(core::validate(h).find("far_merge.max_z_gap_m"), std::string::npos);
+  EXPECT_NE(core::validate(h).find("far_merge/max_z_gap_m"), std::string::npos);
 }
 
 // The pair rule of far_object_merger.h evaluated plainly, by projecting the four corners of

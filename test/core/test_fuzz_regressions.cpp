@@ -13,9 +13,9 @@
 #include <sstream>
 #include <string>
 
-#include "urban_detection/core/calibration.h"
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/pcap_io.h"
+#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/pcap_io.h"
 #include "test_files.h"
 
 namespace uc = urban_detection::core;

@@ -1,5 +1,5 @@
 // Tests of the simple-grid segmentation (paper Sec. 3.1) on synthetic scenes.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 
 #include "segmentation_scene.h"
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/simple_grid.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/segmentation/simple_grid.h"
 
 namespace urban_detection {
 namespace {

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/calibration.h"
-#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 
 namespace uc = urban_detection::core;
 using urban_detection::CloudXYZIRT;

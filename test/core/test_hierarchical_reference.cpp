@@ -6,7 +6,7 @@
 // (config/demo_drive.yaml) through the segmenter, and on the SemanticKITTI scans of
 // ../shared/data (skipped when absent). Scenes run back to back through one detector per
 // parameter set, so stale scratch state from the previous scene would show up as a mismatch.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <algorithm>
 #include <cmath>
@@ -21,17 +21,17 @@
 
 #include "detection_test_utils.h"
 #include "reference_hierarchical_grid.h"
-#include "urban_detection/core/eval_datasets.h"
-#include "urban_detection/core/far_object_merger.h"
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/kitti_io.h"
-#include "urban_detection/core/lidar_simulator.h"
-#include "urban_detection/core/object_geometry.h"
-#include "urban_detection/core/params_yaml.h"
-#include "urban_detection/core/scene_generator.h"
-#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/detection/far_object_merger.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/sensor/kitti_io.h"
+#include "urban_detection/core/simulation/lidar_simulator.h"
+#include "urban_detection/core/detection/object_geometry.h"
+#include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/simulation/scene_generator.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 
 namespace urban_detection {
 namespace {

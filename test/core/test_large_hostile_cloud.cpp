@@ -3,7 +3,7 @@
 // 3000 points in a single grid cell. Expected labels and objects come from how the scene was
 // built, not from running the code: the lattice is ground, the car box and the post are the
 // only short objects, every hostile point is unknown and in no object.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <gtest/gtest.h>
 
@@ -13,9 +13,9 @@
 #include <random>
 #include <vector>
 
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/kdtree_detector.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
 
 namespace urban_detection {
 namespace {

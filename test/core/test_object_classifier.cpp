@@ -13,9 +13,9 @@
 
 #include <gtest/gtest.h>
 
-#include "urban_detection/core/object_classifier.h"
-#include "urban_detection/core/object_features.h"
-#include "urban_detection/core/params_yaml.h"
+#include "urban_detection/core/classification/object_classifier.h"
+#include "urban_detection/core/classification/object_features.h"
+#include "urban_detection/core/params/params_yaml.h"
 #include "synthetic_scans.h"
 #include "test_files.h"
 

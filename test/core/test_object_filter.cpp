@@ -14,8 +14,8 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
-#include "urban_detection/core/object_filter.h"
-#include "urban_detection/core/params_yaml.h"
+#include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/params/params_yaml.h"
 #include "synthetic_scans.h"
 #include "test_files.h"
 

@@ -1,6 +1,6 @@
 // Shared object geometry (hull, minimum-area box), the distance weight and its polynomial fit
 // (paper Sec. 4), and the cell fitness value.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <algorithm>
 #include <cmath>
@@ -12,9 +12,9 @@
 #include <gtest/gtest.h>
 
 #include "detection_test_utils.h"
-#include "urban_detection/core/cell_fitness.h"
-#include "urban_detection/core/distance_weight.h"
-#include "urban_detection/core/object_geometry.h"
+#include "urban_detection/core/detection/cell_fitness.h"
+#include "urban_detection/core/detection/distance_weight.h"
+#include "urban_detection/core/detection/object_geometry.h"
 
 namespace urban_detection {
 namespace {

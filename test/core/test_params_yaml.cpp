@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "urban_detection/core/params_yaml.h"
+#include "urban_detection/core/params/params_yaml.h"
 
 namespace urban_detection {
 namespace core {

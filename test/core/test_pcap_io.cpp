@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/pcap_io.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/pcap_io.h"
 #include "spin_packets.h"
 #include "test_files.h"
 

@@ -4,7 +4,7 @@
 
 #include <pcl/common/io.h>
 
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 namespace ud = urban_detection;
 

@@ -1,7 +1,7 @@
 // Accuracy regression of the grid segmentation on the SemanticKITTI scans of ../shared/data
 // (skipped when the data is absent). Bounds sit a little below what
 // urban_detection_seg_eval measures, so a real regression fails and noise does not.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <filesystem>
 #include <string>
@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/kitti_io.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/sensor/kitti_io.h"
 #include "test_files.h"
 
 namespace urban_detection {

@@ -5,7 +5,7 @@
 // and under parameter variants that switch the optional branches on and off. Frames run
 // back to back through one segmenter, so stale scratch state from the previous frame would
 // show up as a mismatch.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <cmath>
 #include <cstring>
@@ -18,9 +18,9 @@
 
 #include "reference_segmenter.h"
 #include "segmentation_scene.h"
-#include "urban_detection/core/eval_datasets.h"
-#include "urban_detection/core/grid_segmenter.h"
-#include "urban_detection/core/kitti_io.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/sensor/kitti_io.h"
 
 namespace urban_detection {
 namespace {

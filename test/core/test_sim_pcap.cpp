@@ -4,10 +4,10 @@
 
 #include <cstdio>
 
-#include "urban_detection/core/ground_truth.h"
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/pcap_io.h"
-#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/core/simulation/ground_truth.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/pcap_io.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 #include "test_files.h"
 
 namespace ud = urban_detection::core;

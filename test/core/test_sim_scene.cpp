@@ -6,9 +6,9 @@
 #include <cmath>
 #include <random>
 
-#include "urban_detection/core/scene_generator.h"
-#include "urban_detection/core/sim_scene.h"
-#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/core/simulation/scene_generator.h"
+#include "urban_detection/core/simulation/sim_scene.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 
 namespace ud = urban_detection::core;
 using Eigen::Vector3d;

@@ -1,7 +1,7 @@
 // Offline SPARK workflow: capture path, orthographic z-buffer rendering, back-projection,
 // DBSCAN (against a brute-force oracle), instances on a synthetic scene with known classes
 // segmented by the tiny colour network, JSON export read back with OpenCV's JSON parser.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <gtest/gtest.h>
 
@@ -14,10 +14,10 @@
 #include <set>
 
 #include "spark_test_model.h"
-#include "urban_detection/core/spark_capture.h"
-#include "urban_detection/core/spark_instances.h"
-#include "urban_detection/core/spark_scene.h"
-#include "urban_detection/core/spark_segmenter.h"
+#include "urban_detection/core/spark/spark_capture.h"
+#include "urban_detection/core/spark/spark_instances.h"
+#include "urban_detection/core/spark/spark_scene.h"
+#include "urban_detection/core/spark/spark_segmenter.h"
 
 namespace urban_detection {
 namespace {

@@ -1,7 +1,7 @@
 // Segmentation scores, the ONNX segmentation model (tiny colour network built at test time) and
 // the live image -> object label transfer: synthetic camera with hand-computed projections, and
 // KITTI object frames (calibration, label_2 2-D boxes) from the shared data.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <gtest/gtest.h>
 
@@ -13,10 +13,10 @@
 #include <opencv2/core.hpp>
 
 #include "spark_test_model.h"
-#include "urban_detection/core/eval_datasets.h"
-#include "urban_detection/core/image_label_transfer.h"
-#include "urban_detection/core/kitti_io.h"
-#include "urban_detection/core/spark_segmenter.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/spark/image_label_transfer.h"
+#include "urban_detection/core/sensor/kitti_io.h"
+#include "urban_detection/core/spark/spark_segmenter.h"
 
 namespace urban_detection {
 namespace {

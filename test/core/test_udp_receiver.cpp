@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "urban_detection/core/udp_receiver.h"
+#include "urban_detection/core/sensor/udp_receiver.h"
 
 namespace urban_detection {
 namespace core {

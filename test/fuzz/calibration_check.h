@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "fuzz_common.h"
-#include "urban_detection/core/calibration.h"
-#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 
 namespace urban_detection {
 namespace fuzz {

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "fuzz_common.h"
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/pcap_io.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/pcap_io.h"
 
 namespace core = urban_detection::core;
 

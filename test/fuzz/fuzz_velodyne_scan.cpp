@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "fuzz_common.h"
-#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/ros/velodyne_scan.h"
 
 namespace ud = urban_detection;

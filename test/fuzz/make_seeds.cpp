@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/calibration.h"
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/pcap_io.h"
+#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/pcap_io.h"
 #if UD_HAVE_MSGS
 #include <ros/serialization.h>
 #include <urban_detection/VelodyneScan.h>

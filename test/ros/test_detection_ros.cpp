@@ -1,6 +1,6 @@
 // Detection ROS layer without a master: core -> message conversion, objects/points, markers,
 // and config/{hierarchical_grid,kdtree,markers}.yaml mirroring the params structs.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <cmath>
 #include <set>
@@ -10,8 +10,8 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include "urban_detection/core/hierarchical_grid_detector.h"
-#include "urban_detection/core/kdtree_detector.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/object_markers.h"
 

@@ -1,6 +1,6 @@
 // ROS layer of the segmentation: PointCloud2 input conversion by field name and parameter
 // range checks. No master needed.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <cstring>
 #include <limits>
@@ -11,7 +11,6 @@
 #include <sensor_msgs/PointCloud2.h>
 
 #include "urban_detection/ros/pointcloud2_input.h"
-#include "urban_detection/ros/segmentation_params.h"
 
 namespace urban_detection {
 namespace {
@@ -141,24 +140,6 @@ TEST(PointCloud2Input, RejectsMalformedMessages) {
   sensor_msgs::PointCloud2 empty = kittiStyle(0);
   EXPECT_TRUE(ros_conv::fromPointCloud2(empty, &cloud, &info, &err));
   EXPECT_TRUE(cloud.empty());
-}
-
-TEST(SegmentationParams, DefaultsAreValidAndRangesAreNamed) {
-  core::GridSegmenterParams p;
-  std::string err;
-  EXPECT_TRUE(ros_conv::validateGridSegmenterParams(p, &err)) << err;
-  p.cell_size_m = 0.0;
-  EXPECT_FALSE(ros_conv::validateGridSegmenterParams(p, &err));
-  EXPECT_NE(err.find("cell_size_m"), std::string::npos) << err;
-  EXPECT_NE(err.find("[0.05, 5]"), std::string::npos) << err;
-  p = core::GridSegmenterParams();
-  p.hough.min_tall_fraction = 1.5;
-  EXPECT_FALSE(ros_conv::validateGridSegmenterParams(p, &err));
-  EXPECT_NE(err.find("hough/min_tall_fraction"), std::string::npos) << err;
-  p = core::GridSegmenterParams();
-  p.max_range_m = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_FALSE(ros_conv::validateGridSegmenterParams(p, &err));
-  EXPECT_NE(err.find("max_range_m"), std::string::npos) << err;
 }
 
 }  // namespace

@@ -8,9 +8,9 @@
 
 #include <pcl_conversions/pcl_conversions.h>
 
-#include "urban_detection/core/lidar_simulator.h"
-#include "urban_detection/core/scene_generator.h"
-#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/core/simulation/lidar_simulator.h"
+#include "urban_detection/core/simulation/scene_generator.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 
 #include "urban_detection/ros/velodyne_scan.h"
 #include "../core/spin_packets.h"

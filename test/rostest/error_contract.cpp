@@ -6,7 +6,7 @@
 //    counted (non_finite_points);
 //  * a truncated pcap: the whole revolutions before the cut are published, one ERROR saying
 //    the file is truncated, the replay stops (counted: truncated_captures), no crash.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
@@ -29,9 +29,9 @@
 #include <thread>
 #include <vector>
 
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/pcap_io.h"
-#include "urban_detection/core/segment_class.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/pcap_io.h"
+#include "urban_detection/core/common/segment_class.h"
 #include "../core/spin_packets.h"
 #include "rostest_util.h"
 

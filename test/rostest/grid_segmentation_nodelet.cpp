@@ -1,7 +1,7 @@
 // rostest: CloudInput + the GridSegmentation nodelet segment a KITTI-style PointCloud2 (x y z
 // intensity, no ring/time, published on points_in) of a synthetic street, publishes labelled and foreground clouds whose indices
 // match the input, and survives a malformed message.
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 #include <cmath>
 #include <mutex>
@@ -14,7 +14,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 
-#include "urban_detection/core/segment_class.h"
+#include "urban_detection/core/common/segment_class.h"
 
 namespace urban_detection {
 namespace {

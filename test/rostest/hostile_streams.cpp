@@ -8,7 +8,7 @@
 // So must a copy whose capture times go back, stand still and jump a year ahead (issue 25 D).
 // The same packets in another model's layout (VLP-16: every block 0xFFEE) give no revolution
 // and one WARN naming the model.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <gtest/gtest.h>
 #include <nodelet/loader.h>
@@ -33,9 +33,9 @@
 #include <pcl_conversions/pcl_conversions.h>
 #include <pcl_ros/point_cloud.h>
 #include <sensor_msgs/PointCloud2.h>
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/pcap_io.h"
-#include "urban_detection/core/simulation_config.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/pcap_io.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 #include "rostest_util.h"
 
 namespace urban_detection {

@@ -3,7 +3,7 @@
 // config/image_label_transfer.yaml (loaded by the .test file) and the colour network of
 // test/spark_colour_model.py built here. A synthetic camera (static tf from the LiDAR frame)
 // sees a red and a green region; objects projecting there must come back as car / vegetation.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <gtest/gtest.h>
 #include <nodelet/NodeletList.h>

@@ -7,7 +7,7 @@
 //  * Back-pressure: a burst of clouds far faster than GridSegmentation can segment them: its
 //    input queue (queue_size 1) stays bounded, the newest revolution wins, and the revolutions
 //    it never saw are counted exactly (skipped_revolutions) and reported as a warning.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <arpa/inet.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -30,7 +30,7 @@
 #include <thread>
 #include <vector>
 
-#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "../core/spin_packets.h"
 #include "rostest_util.h"
 

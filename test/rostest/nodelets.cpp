@@ -1,7 +1,7 @@
 // PacketSource and PacketToCloud loaded into this process with nodelet::Loader: the process is
 // a nodelet manager, and the test's own subscribers sit in the same manager as the nodelets.
 // Covers zero copy, laziness, UDP on 127.0.0.1, pcap replay, bad packets and bad parameters.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <arpa/inet.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -27,8 +27,8 @@
 #include <thread>
 #include <vector>
 
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/pcap_io.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/pcap_io.h"
 #include "urban_detection/ros/velodyne_scan.h"
 #include "../core/spin_packets.h"
 #include "rostest_util.h"

@@ -1,7 +1,7 @@
 // The object filter as the detector nodelets apply it (nodelets loaded into this process):
 // rejected (vegetation) objects are not published on `objects` nor in `objects/points`, kept
 // ones are; `object_filter/enabled: false` publishes everything; a bad parameter fails onInit.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <gtest/gtest.h>
 #include <nodelet/loader.h>

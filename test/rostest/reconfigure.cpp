@@ -9,7 +9,7 @@
 //    are what the service answers next and ~parameter_updates publishes;
 //  * `dynparam set` of a refused value exits non-zero and prints the reason;
 //  * out-of-range parameters at start fail onInit naming the parameter and its range.
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <dynamic_reconfigure/Config.h>
 #include <dynamic_reconfigure/Reconfigure.h>
@@ -31,7 +31,7 @@
 #include <thread>
 #include <vector>
 
-#include "urban_detection/core/segment_class.h"
+#include "urban_detection/core/common/segment_class.h"
 #include "rostest_util.h"
 
 namespace urban_detection {

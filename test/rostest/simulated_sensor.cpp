@@ -12,7 +12,7 @@
 #include <urban_detection/GroundTruth.h>
 #include <urban_detection/VelodyneScan.h>
 
-#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 
 namespace ud = urban_detection;
 

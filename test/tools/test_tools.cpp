@@ -5,6 +5,9 @@
 // No timing is asserted (numbers come from benchmarks, not tests); the F-rate comparison is on
 // the simulator's seeded drive, so it is deterministic.
 #include <gtest/gtest.h>
+
+#include <fstream>
+#include <iterator>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -77,6 +80,24 @@ void expectStage(const pt::ptree& json, const std::string& stage) {
   const double median = node->get<double>("median_ms"), p95 = node->get<double>("p95_ms");
   EXPECT_GT(median, 0.0);
   EXPECT_GE(p95, median);
+}
+
+// docs/parameters.md is what urban_detection_params prints from the field tables: a parameter
+// added, removed or changed in a table without regenerating the page fails here.
+TEST(ParamsTool, DocsParametersIsCurrent) {
+  const std::string out =
+      (fs::temp_directory_path() / ("ud_params_" + std::to_string(getpid()) + ".md")).string();
+  ASSERT_EQ(0, std::system((kTools + "/urban_detection_params >" + out).c_str()));
+  auto slurp = [](const std::string& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  const std::string printed = slurp(out), page = slurp(std::string(UD_SOURCE_DIR) +
+                                                        "/docs/parameters.md");
+  fs::remove(out);
+  EXPECT_NE(printed.find("`hough/votes`"), std::string::npos);
+  EXPECT_NE(printed.find("`far_merge/max_gap_m`"), std::string::npos);
+  EXPECT_EQ(page, printed) << "regenerate: urban_detection_params > docs/parameters.md";
 }
 
 TEST_F(ToolsTest, BenchWritesStagesPipelineAndNoSpeedupWithoutKdTree) {

@@ -20,7 +20,7 @@
 /// ObjectClassifier.cfg), applied from the next revolution.
 #pragma once
 
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <memory>
 #include <mutex>
@@ -33,9 +33,9 @@
 #include <ros/ros.h>
 
 #include "urban_detection/ObjectClassifierConfig.h"
-#include "urban_detection/core/object_classifier.h"
-#include "urban_detection/core/object_detector.h"
-#include "urban_detection/core/object_filter.h"
+#include "urban_detection/core/classification/object_classifier.h"
+#include "urban_detection/core/detection/object_detector.h"
+#include "urban_detection/core/classification/object_filter.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/stage_thread.h"
 #include "urban_detection/ros/validated_reconfigure.h"

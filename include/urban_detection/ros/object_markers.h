@@ -11,6 +11,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include "urban_detection/DetectedObjectArray.h"
+#include "urban_detection/core/common/param_fields.h"
 
 namespace urban_detection {
 namespace ros_conv {
@@ -23,6 +24,9 @@ struct ObjectMarkerParams {
   double min_box_size_m = 0.05;  // [m] box dimensions are at least this (flat objects stay visible)
   bool colour_by_class = true;   // [-] classified objects take their class colour, others the id's
 };
+
+/// "" when every field is in its table range (ParamFields<ObjectMarkerParams> below).
+std::string validate(const ObjectMarkerParams& params);
 
 /// Colour of object `id`: hue from the golden-ratio sequence, so an id always gets the same
 /// colour and consecutive ids contrast.
@@ -41,12 +45,20 @@ std_msgs::ColorRGBA colourForClass(const std::string& class_label, double alpha)
 void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerParams& params,
                         visualization_msgs::MarkerArray* markers);
 
-/// Reads the options set under `nh` (the nodelet's ~markers); throws ParamError naming the
-/// first parameter out of its accepted range.
-void loadObjectMarkerParams(const ros::NodeHandle& nh, ObjectMarkerParams* params);
-/// The loader's range checks on a complete set (dynamic_reconfigure): "" when accepted, else
-/// the reason naming the parameter (resolved in `nh`) and its range.
-std::string checkObjectMarkerParams(const ros::NodeHandle& nh, ObjectMarkerParams params);
-
 }  // namespace ros_conv
+
+/// ObjectMarkerParams' field table (core/common/param_fields.h); loaded from ~markers.
+template <>
+struct core::ParamFields<ros_conv::ObjectMarkerParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f({"show_ids", "a text marker with the object id (and class if known)"}, p.show_ids);
+    f({"box_alpha", "", 0.0, 1.0, "box opacity"}, p.box_alpha);
+    f({"text_size_m", "m", 0.01, 10.0, "height of the id text"}, p.text_size_m);
+    f({"min_box_size_m", "m", 0.0, 10.0, "box dimensions are at least this"}, p.min_box_size_m);
+    f({"colour_by_class", "classified objects take their class colour, others the id's"},
+      p.colour_by_class);
+  }
+};
+
 }  // namespace urban_detection

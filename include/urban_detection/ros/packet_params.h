@@ -9,7 +9,7 @@
 
 #include <string>
 
-#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {

@@ -15,8 +15,8 @@
 
 #include <ros/time.h>
 
-#include "urban_detection/core/pcap_io.h"
-#include "urban_detection/core/udp_receiver.h"
+#include "urban_detection/core/sensor/pcap_io.h"
+#include "urban_detection/core/sensor/udp_receiver.h"
 #include "urban_detection/ros/packet_params.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/velodyne_scan.h"

@@ -9,8 +9,9 @@
 
 #include <ros/node_handle.h>
 
+#include "urban_detection/core/common/param_fields.h"
+
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -23,18 +24,8 @@ class ParamError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// The one wording of an out-of-range value, at start-up and in a refused dynamic_reconfigure
-/// update of every stage: "parameter '<name>' = <value> is out of range: accepted [<min>,
-/// <max>] <unit>". `name` is the name shown to the user (resolved where a node handle is at
-/// hand), `unit` is appended to the range ("m", "s", "deg"; may be empty).
-template <typename T>
-std::string outOfRangeMessage(const std::string& name, T value, T min, T max,
-                              const std::string& unit = "") {
-  std::ostringstream msg;
-  msg << "parameter '" << name << "' = " << value << " is out of range: accepted [" << min
-      << ", " << max << "]" << (unit.empty() ? "" : " ") << unit;
-  return msg.str();
-}
+/// The one wording of an out-of-range value (core/common/param_fields.h).
+using core::outOfRangeMessage;
 
 /// Throws ParamError with outOfRangeMessage() unless min <= value <= max (NaN is rejected).
 template <typename T>
@@ -56,32 +47,31 @@ void loadParam(const ros::NodeHandle& nh, const std::string& name, std::string* 
 void loadParam(const ros::NodeHandle& nh, const std::string& name, double* value);
 void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value);
 
-/// The numeric fields of one params struct with their accepted ranges: the one list that both
-/// the start-up loader (load()) and dynamic_reconfigure (check()) use, so a value is accepted
-/// through one path exactly when it is accepted through the other. Holds pointers to the fields
-/// of one struct instance; build it for the instance to load or check.
-class ParamTable {
- public:
-  /// `name` relative to the node handle given to load() / check() ("weight/max_weight" is fine).
-  ParamTable& add(const std::string& name, double* field, double min, double max,
-                  const std::string& unit = "");
-  ParamTable& add(const std::string& name, int* field, int min, int max,
-                  const std::string& unit = "");
-  /// loadParam() of every field in order: throws ParamError on the first bad one.
-  void load(const ros::NodeHandle& nh) const;
-  /// "" when every field is within its range, else the ParamError message of the first one
-  /// that is not (naming the parameter resolved in `nh`, its value and the accepted range).
-  std::string check(const ros::NodeHandle& nh) const;
+/// A list of numbers (e.g. polynomial coefficients).
+void loadParam(const ros::NodeHandle& nh, const std::string& name, std::vector<double>* value);
 
- private:
-  struct Entry {
-    std::string name, unit;
-    double* d;  // exactly one of d, i is set
-    int* i;
-    double dmin, dmax;
-    int imin, imax;
-  };
-  std::vector<Entry> entries_;
-};
+/// "" when `params` is valid, else why not: the field table's ranges (core/common/param_fields.h)
+/// with the parameter named as resolved in `nh`, then validate()'s cross-field rules. The
+/// start-up loader and every dynamic_reconfigure update check through here.
+template <class Params>
+std::string checkFields(const ros::NodeHandle& nh, const Params& params) {
+  std::string error = core::checkFieldRanges(
+      params, [&nh](const std::string& name) { return nh.resolveName(name); });
+  if (error.empty()) {
+    error = validate(params);  // core::validate, or the ROS layer's for its own structs
+    if (!error.empty()) error = "in " + nh.getNamespace() + ": " + error;
+  }
+  return error;
+}
+
+/// Reads every field of `params`' table that is set under `nh` (a value of the wrong type is an
+/// error, not ignored), then checkFields(): throws ParamError with the first problem.
+template <class Params>
+void loadFields(const ros::NodeHandle& nh, Params* params) {
+  core::forEachField(*params,
+                     [&nh](const core::FieldInfo& info, auto& field) { loadParam(nh, info.name, &field); });
+  const std::string error = checkFields(nh, *params);
+  if (!error.empty()) throw ParamError(error);
+}
 
 }  // namespace urban_detection

@@ -9,7 +9,7 @@
 
 #include <sensor_msgs/PointCloud2.h>
 
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
 namespace ros_conv {

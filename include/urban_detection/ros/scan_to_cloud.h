@@ -5,7 +5,7 @@
 /// revolution start in the cloud's sensor_origin_.
 #pragma once
 
-#include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <memory>
 #include <string>
@@ -14,8 +14,8 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
-#include "urban_detection/core/calibration.h"
-#include "urban_detection/core/hdl64e_packet.h"
+#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/ros/packet_params.h"
 #include "urban_detection/ros/velodyne_scan.h"
 

@@ -12,7 +12,7 @@
 #include <urban_detection/GroundTruth.h>
 #include <urban_detection/VelodyneScan.h>
 
-#include "urban_detection/core/lidar_simulator.h"
+#include "urban_detection/core/simulation/lidar_simulator.h"
 
 namespace rosbag {
 class Bag;

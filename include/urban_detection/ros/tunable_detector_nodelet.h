@@ -3,13 +3,12 @@
 /// dynamic_reconfigure in, one private sub-namespace. A detector nodelet is then a traits
 /// struct:
 ///   struct Traits {
-///     using Params = ...; using Config = ...; using Detector = ...; using Fields = ...;
+///     using Params = ...; using Config = ...; using Detector = ...;
 ///     static constexpr const char* kNamespace = "...";  // ~<kNamespace>/*
-///     static void load(const ros::NodeHandle& nh, Params* p);  // throws ParamError
-///     static std::string check(const ros::NodeHandle& nh, const Params& p);  // "" = ok
 ///   };
-/// Every reconfigure update is validated as a whole with Traits::check() (the loader's ranges
-/// and cross-field checks), then a new detector replaces the old between two revolutions.
+/// Params are loaded with loadFields() and every reconfigure update is validated as a whole
+/// with checkFields() (the field table's ranges and validate()'s cross-field rules), then a new
+/// detector replaces the old between two revolutions.
 #pragma once
 
 #include <memory>
@@ -18,6 +17,7 @@
 #include <ros/node_handle.h>
 
 #include "urban_detection/ros/detector_nodelet.h"
+#include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/tunable_fields.h"
 #include "urban_detection/ros/validated_reconfigure.h"
 
@@ -32,20 +32,20 @@ class TunableDetectorNodelet : public DetectorNodelet {
  protected:
   std::unique_ptr<core::ObjectDetector> createDetector(const ros::NodeHandle& pnh) override {
     params_nh_ = ros::NodeHandle(pnh, Traits::kNamespace);
-    Traits::load(params_nh_, &params_);
+    loadFields(params_nh_, &params_);
     return std::make_unique<typename Traits::Detector>(params_);
   }
 
   void startReconfigure(const ros::NodeHandle& /*pnh*/) override {
     reconfigure_ = std::make_unique<Reconfigure>(
-        params_nh_, ros_conv::toConfig<Config>(params_, typename Traits::Fields()),
+        params_nh_, ros_conv::toConfig<Config>(params_),
         [this](const Config& config) { return apply(config); });
   }
 
  private:
   std::string apply(const Config& config) {
-    const Params p = ros_conv::fromConfig(config, params_, typename Traits::Fields());
-    const std::string error = Traits::check(params_nh_, p);
+    const Params p = ros_conv::fromConfig(config, params_);
+    const std::string error = checkFields(params_nh_, p);
     if (!error.empty()) return error;
     replaceDetector(std::make_unique<typename Traits::Detector>(p));
     params_ = p;

@@ -16,8 +16,8 @@
 #include <functional>
 #include <string>
 
-#include "urban_detection/core/hdl64e_packet.h"
-#include "urban_detection/core/point_types.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
 

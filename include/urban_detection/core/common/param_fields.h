@@ -1,0 +1,137 @@
+/// \file param_fields.h
+/// One field table per parameter struct: every parameter's name, unit, accepted range and
+/// meaning, written once beside its struct as a ParamFields<Params> specialisation. Everything
+/// else is derived from it:
+///   - validate(Params) checks the table's ranges (checkFieldRanges) before its cross-field rules;
+///   - the YAML reader (core/params/params_yaml.h) binds exactly the table's keys, rejecting
+///     unknown keys and wrong types;
+///   - the ROS loader and the dynamic_reconfigure check (ros/param_loading.h) read, type-check
+///     and range-check the same fields under the same names;
+///   - dynamic_reconfigure Configs are filled from and copied back to the struct by name
+///     (ros/param_loading.h), and a test checks that every .cfg entry names a table field;
+///   - docs/parameters.md is printed from the tables (urban_detection_params), and a test checks
+///     that it is current.
+/// A new parameter is therefore one struct member and one line in its table.
+///
+/// A table is `template <class P, class F> static void visit(P& p, F&& f)` (P is the struct or
+/// const struct) calling `f(FieldInfo{...}, p.member)` for every field in order; nested
+/// parameter structs are visited with forEachField(p.sub, "sub", f), which names their fields
+/// "sub/field". Fields are double, int, bool, std::string or std::vector<double>; ranges apply to
+/// the numbers (and are inclusive), the other types take any value of their type.
+#pragma once
+
+#include <limits>
+#include <sstream>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace urban_detection {
+namespace core {
+
+/// What the field table says about one parameter.
+struct FieldInfo {
+  /// A number with its accepted range [min, max] (inclusive) and unit ("m", "deg", "" ...).
+  FieldInfo(std::string name, std::string unit, double min, double max, std::string description)
+      : name(std::move(name)),
+        unit(std::move(unit)),
+        min(min),
+        max(max),
+        description(std::move(description)) {}
+  /// A flag, a text or a list (no range).
+  FieldInfo(std::string name, std::string description)
+      : name(std::move(name)), description(std::move(description)) {}
+
+  std::string name;  // relative name; nested structs as "sub/field"
+  std::string unit;
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  std::string description;
+};
+
+/// Specialised beside every parameter struct (see the file comment).
+template <class Params>
+struct ParamFields;
+
+/// Calls `f(const FieldInfo&, field&)` for every field of `params` (const or not), in table order.
+template <class Params, class F>
+void forEachField(Params& params, F&& f) {
+  ParamFields<std::remove_const_t<Params>>::visit(params, f);
+}
+
+/// The fields of a nested struct, named "<prefix>/<field>".
+template <class Sub, class F>
+void forEachField(Sub& sub, const std::string& prefix, F&& f) {
+  forEachField(sub, [&](const FieldInfo& info, auto& field) {
+    FieldInfo nested = info;
+    nested.name = prefix + "/" + info.name;
+    f(nested, field);
+  });
+}
+
+/// True for the field types a range applies to.
+template <class T>
+constexpr bool kRangedField = std::is_arithmetic_v<T> && !std::is_same_v<T, bool>;
+
+/// The one wording of an out-of-range value, at start-up, in YAML files, in a refused
+/// dynamic_reconfigure update and in validate(): "parameter '<name>' = <value> is out of range:
+/// accepted [<min>, <max>] <unit>".
+template <typename T>
+std::string outOfRangeMessage(const std::string& name, T value, T min, T max,
+                              const std::string& unit = "") {
+  std::ostringstream msg;
+  msg << "parameter '" << name << "' = " << value << " is out of range: accepted [" << min
+      << ", " << max << "]" << (unit.empty() ? "" : " ") << unit;
+  return msg.str();
+}
+
+/// "" when every number of `params` lies in its table range, else outOfRangeMessage() of the
+/// first one that does not (NaN never does). `shown` maps a field name to the name shown to the
+/// user (e.g. resolved in a ROS namespace).
+template <class Params, class Shown>
+std::string checkFieldRanges(const Params& params, Shown shown) {
+  std::string error;
+  forEachField(params, [&](const FieldInfo& info, const auto& value) {
+    using T = std::decay_t<decltype(value)>;
+    if constexpr (kRangedField<T>) {
+      if (error.empty() && !(value >= info.min && value <= info.max)) {
+        error = outOfRangeMessage(shown(info.name), value, static_cast<T>(info.min),
+                                  static_cast<T>(info.max), info.unit);
+      }
+    }
+  });
+  return error;
+}
+
+template <class Params>
+std::string checkFieldRanges(const Params& params) {
+  return checkFieldRanges(params, [](const std::string& name) { return name; });
+}
+
+/// The Markdown table of `params`' fields (name, default = the value in `params`, range, unit,
+/// description): docs/parameters.md is made of these (urban_detection_params).
+template <class Params>
+std::string fieldTableMarkdown(const Params& params) {
+  std::ostringstream md;
+  md << "| parameter | default | range | unit | description |\n|---|---|---|---|---|\n";
+  forEachField(params, [&md](const FieldInfo& info, const auto& value) {
+    using T = std::decay_t<decltype(value)>;
+    md << "| `" << info.name << "` | ";
+    if constexpr (std::is_same_v<T, bool>) {
+      md << (value ? "true" : "false") << " | | | ";
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      md << "\"" << value << "\" | | | ";
+    } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+      md << value.size() << " numbers | | | ";
+    } else {
+      md << value << " | [" << static_cast<T>(info.min) << ", " << static_cast<T>(info.max)
+         << "] | " << info.unit << " | ";
+    }
+    md << info.description << " |\n";
+  });
+  return md.str();
+}
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,449 @@
+#include "urban_detection/core/classification/object_classifier.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+#include <opencv2/core.hpp>
+#include <opencv2/ml.hpp>
+
+namespace urban_detection {
+namespace core {
+
+namespace {
+
+constexpr const char* kFormat = "urban_detection_object_classifier";
+constexpr int kVersion = 1;
+
+int featureCount(bool use_intensity) {
+  return use_intensity ? kNumObjectFeatures : kFirstIntensityFeature;
+}
+
+// Rows of the used features as an OpenCV sample matrix (CV_32F, one row per object).
+cv::Mat sampleMatrix(const std::vector<ObjectFeatureVector>& rows, int used) {
+  cv::Mat m(static_cast<int>(rows.size()), used, CV_32F);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    float* dst = m.ptr<float>(static_cast<int>(r));
+    for (int k = 0; k < used; ++k) dst[k] = std::isfinite(rows[r][k]) ? rows[r][k] : 0.0f;
+  }
+  return m;
+}
+
+[[noreturn]] void refuse(const std::string& path, const std::string& what) {
+  throw std::runtime_error("object classifier model " + path + ": " + what);
+}
+
+}  // namespace
+
+bool parseObjectCategory(const std::string& name, ObjectCategory* c) {
+  for (int k = 0; k < kNumObjectCategories; ++k) {
+    const auto cat = static_cast<ObjectCategory>(k);
+    if (name == toString(cat)) {
+      *c = cat;
+      return true;
+    }
+  }
+  return false;
+}
+
+ObjectCategory categoryOfClassName(const std::string& name) {
+  static const char* const kVehicles[] = {
+      "car", "truck", "bus", "other-vehicle", "on-rails", "moving-car", "moving-bus",
+      "moving-truck", "moving-other-vehicle", "moving-on-rails", "Car", "Van", "Truck", "Tram",
+      "van", "vehicle"};
+  static const char* const kPedestrians[] = {"person", "moving-person", "Pedestrian",
+                                             "Person_sitting", "pedestrian"};
+  static const char* const kCyclists[] = {"bicyclist", "motorcyclist", "bicycle", "motorcycle",
+                                          "moving-bicyclist", "moving-motorcyclist", "Cyclist",
+                                          "cyclist"};
+  static const char* const kOthers[] = {"other-object", "Misc", "bin", "bench", "other_object"};
+  for (const char* n : kVehicles) {
+    if (name == n) return ObjectCategory::kVehicle;
+  }
+  for (const char* n : kPedestrians) {
+    if (name == n) return ObjectCategory::kPedestrian;
+  }
+  for (const char* n : kCyclists) {
+    if (name == n) return ObjectCategory::kCyclist;
+  }
+  for (const char* n : kOthers) {
+    if (name == n) return ObjectCategory::kOtherObject;
+  }
+  return ObjectCategory::kUnknown;
+}
+
+std::string validate(const ClassifierTrainingParams& p) {
+  std::string error;
+  auto require = [&error](bool ok, const char* field, const char* range) {
+    if (!ok && error.empty()) error = std::string(field) + " must be " + range;
+  };
+  require(p.trees >= 1 && p.trees <= 10000, "trees", "in [1, 10000]");
+  require(p.max_depth >= 1 && p.max_depth <= 64, "max_depth", "in [1, 64]");
+  require(p.min_sample_count >= 1 && p.min_sample_count <= 100000, "min_sample_count",
+          "in [1, 100000]");
+  require(p.active_var_count >= 0 && p.active_var_count <= kNumObjectFeatures, "active_var_count",
+          "in [0, number of features]");
+  require(std::isfinite(p.object_threshold) && p.object_threshold >= 0.0 &&
+              p.object_threshold <= 1.0,
+          "object_threshold", "in [0, 1]");
+  return error;
+}
+
+std::string validate(const ObjectClassifierParams& p) {
+  std::string error = checkFieldRanges(p);
+  if (error.empty() && p.enabled && p.model_path.empty()) {
+    error = "model must name a model file when enabled";
+  }
+  return error;
+}
+
+// ------------------------------------------------------------------------------------------
+// ObjectClassifierModel
+
+ObjectClassifierModel::ObjectClassifierModel() = default;
+ObjectClassifierModel::~ObjectClassifierModel() = default;
+ObjectClassifierModel::ObjectClassifierModel(ObjectClassifierModel&&) noexcept = default;
+ObjectClassifierModel& ObjectClassifierModel::operator=(ObjectClassifierModel&&) noexcept =
+    default;
+
+bool ObjectClassifierModel::trained() const { return forest_ && forest_->isTrained(); }
+
+int ObjectClassifierModel::trees() const {
+  return trained() ? static_cast<int>(forest_->getRoots().size()) : 0;
+}
+
+int ObjectClassifierModel::usedFeatures() const { return featureCount(use_intensity_); }
+
+ObjectClassifierModel ObjectClassifierModel::train(
+    const std::vector<ObjectFeatureVector>& features, const std::vector<ObjectCategory>& classes,
+    const ClassifierTrainingParams& params, const ObjectFeatureParams& feature_params) {
+  std::string error = validate(params);
+  if (error.empty()) error = validate(feature_params);
+  if (!error.empty()) throw std::invalid_argument("classifier training: " + error);
+  if (features.size() != classes.size()) {
+    throw std::invalid_argument("classifier training: one class per feature row needed");
+  }
+  std::vector<ObjectFeatureVector> rows;
+  std::vector<int> labels;
+  std::array<std::size_t, kNumObjectCategories> count{};
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    const int c = static_cast<int>(classes[i]);
+    if (c < 0 || c >= kNumObjectCategories) continue;
+    rows.push_back(features[i]);
+    labels.push_back(c);
+    ++count[c];
+  }
+  // Classes without samples get probability 0 (e.g. no cyclist in a cross-validation fold);
+  // the object / non-object decision needs both sides.
+  std::size_t objects = 0;
+  for (int c = 1; c < kNumObjectCategories; ++c) objects += count[c];
+  if (count[0] == 0 || objects == 0) {
+    throw std::invalid_argument(
+        "classifier training: needs samples of non_object and of at least one object class");
+  }
+  ObjectClassifierModel m;
+  m.use_intensity_ = params.use_intensity;
+  m.object_threshold_ = params.object_threshold;
+  m.feature_params_ = feature_params;
+  m.description_ = params.description;
+  const int used = m.usedFeatures();
+  const cv::Mat samples = sampleMatrix(rows, used);
+  const cv::Mat responses(static_cast<int>(labels.size()), 1, CV_32S, labels.data());
+  cv::Mat var_type(1, used + 1, CV_8U, cv::Scalar(cv::ml::VAR_ORDERED));
+  var_type.at<std::uint8_t>(0, used) = cv::ml::VAR_CATEGORICAL;
+  const cv::Ptr<cv::ml::TrainData> data = cv::ml::TrainData::create(
+      samples, cv::ml::ROW_SAMPLE, responses, cv::noArray(), cv::noArray(), cv::noArray(),
+      var_type);
+  cv::Ptr<cv::ml::RTrees> forest = cv::ml::RTrees::create();
+  forest->setMaxDepth(params.max_depth);
+  forest->setMinSampleCount(params.min_sample_count);
+  forest->setRegressionAccuracy(0.0f);
+  forest->setUseSurrogates(false);
+  forest->setMaxCategories(kNumObjectCategories);
+  forest->setCalculateVarImportance(false);
+  forest->setActiveVarCount(params.active_var_count);
+  forest->setTermCriteria(cv::TermCriteria(cv::TermCriteria::MAX_ITER, params.trees, 0.0));
+  // The forest draws its bootstrap samples and split candidates from OpenCV's global RNG;
+  // seeding it makes training reproducible bit for bit.
+  cv::theRNG().state = 0x5eed5eedULL;
+  if (!forest->train(data)) throw std::runtime_error("classifier training: the forest failed");
+  m.forest_ = forest;
+  m.flatten();
+  return m;
+}
+
+void ObjectClassifierModel::save(const std::string& path) const {
+  if (!trained()) throw std::runtime_error("cannot save an untrained classifier to " + path);
+  cv::FileStorage fs;
+  try {
+    if (!fs.open(path, cv::FileStorage::WRITE)) {
+      throw std::runtime_error("cannot write object classifier model " + path);
+    }
+    fs << "format" << kFormat << "version" << kVersion;
+    fs << "description" << description_;
+    fs << "object_threshold" << object_threshold_;
+    fs << "use_intensity" << static_cast<int>(use_intensity_);
+    fs << "feature_params" << "{"
+       << "sensor_height_m" << feature_params_.sensor_height_m << "row_gap_deg"
+       << feature_params_.row_gap_deg << "max_azimuth_gap_deg"
+       << feature_params_.max_azimuth_gap_deg << "jump_m" << feature_params_.jump_m
+       << "azimuth_resolution_deg" << feature_params_.azimuth_resolution_deg << "}";
+    fs << "features" << "[";
+    for (int k = 0; k < usedFeatures(); ++k) fs << featureName(k);
+    fs << "]";
+    fs << "classes" << "[";
+    for (int c = 0; c < kNumObjectCategories; ++c) fs << toString(static_cast<ObjectCategory>(c));
+    fs << "]";
+    fs << "forest" << "{";
+    forest_->write(fs);
+    fs << "}";
+    fs.release();
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error("cannot write object classifier model " + path + ": " + e.what());
+  }
+}
+
+ObjectClassifierModel ObjectClassifierModel::load(const std::string& path) {
+  std::error_code ec;
+  if (path.empty()) refuse("''", "no file given");
+  if (!std::filesystem::exists(path, ec)) refuse(path, "no such file");
+  if (!std::filesystem::is_regular_file(path, ec)) refuse(path, "not a regular file");
+  ObjectClassifierModel m;
+  try {
+    cv::FileStorage fs(path, cv::FileStorage::READ);
+    if (!fs.isOpened()) refuse(path, "cannot be opened");
+    std::string format;
+    fs["format"] >> format;
+    if (format != kFormat) {
+      refuse(path, "not an urban_detection object classifier (format '" + format + "')");
+    }
+    int version = 0;
+    fs["version"] >> version;
+    if (version != kVersion) {
+      refuse(path, "version " + std::to_string(version) + ", this build reads version " +
+                       std::to_string(kVersion));
+    }
+    fs["description"] >> m.description_;
+    double threshold = -1.0;
+    fs["object_threshold"] >> threshold;
+    if (!(threshold >= 0.0 && threshold <= 1.0)) refuse(path, "object_threshold not in [0, 1]");
+    m.object_threshold_ = threshold;
+    int use_intensity = -1;
+    fs["use_intensity"] >> use_intensity;
+    if (use_intensity != 0 && use_intensity != 1) refuse(path, "use_intensity must be 0 or 1");
+    m.use_intensity_ = use_intensity == 1;
+    const cv::FileNode fp = fs["feature_params"];
+    if (!fp.isMap()) refuse(path, "feature_params missing");
+    fp["sensor_height_m"] >> m.feature_params_.sensor_height_m;
+    fp["row_gap_deg"] >> m.feature_params_.row_gap_deg;
+    fp["max_azimuth_gap_deg"] >> m.feature_params_.max_azimuth_gap_deg;
+    fp["jump_m"] >> m.feature_params_.jump_m;
+    fp["azimuth_resolution_deg"] >> m.feature_params_.azimuth_resolution_deg;
+    const std::string fp_error = validate(m.feature_params_);
+    if (!fp_error.empty()) refuse(path, "feature_params: " + fp_error);
+    std::vector<std::string> names, classes;
+    fs["features"] >> names;
+    if (static_cast<int>(names.size()) != m.usedFeatures()) {
+      refuse(path, "lists " + std::to_string(names.size()) + " features, this build computes " +
+                       std::to_string(m.usedFeatures()));
+    }
+    for (int k = 0; k < m.usedFeatures(); ++k) {
+      if (names[k] != featureName(k)) {
+        refuse(path, "feature " + std::to_string(k) + " is '" + names[k] + "', this build's is '" +
+                         featureName(k) + "'");
+      }
+    }
+    fs["classes"] >> classes;
+    if (static_cast<int>(classes.size()) != kNumObjectCategories) {
+      refuse(path, "lists " + std::to_string(classes.size()) + " classes, expected " +
+                       std::to_string(kNumObjectCategories));
+    }
+    for (int c = 0; c < kNumObjectCategories; ++c) {
+      if (classes[c] != toString(static_cast<ObjectCategory>(c))) {
+        refuse(path, "class " + std::to_string(c) + " is '" + classes[c] + "'");
+      }
+    }
+    const cv::FileNode forest_node = fs["forest"];
+    if (!forest_node.isMap()) refuse(path, "no forest");
+    cv::Ptr<cv::ml::RTrees> forest = cv::ml::RTrees::create();
+    forest->read(forest_node);
+    if (!forest->isTrained() || forest->getRoots().empty()) refuse(path, "the forest is empty");
+    if (forest->getVarCount() != m.usedFeatures()) {
+      refuse(path, "the forest takes " + std::to_string(forest->getVarCount()) +
+                       " features, the file lists " + std::to_string(m.usedFeatures()));
+    }
+    if (!forest->isClassifier()) refuse(path, "the forest is not a classifier");
+    m.forest_ = forest;
+    m.flatten();
+    // Every node index must lie inside the forest and every split test a listed feature
+    // (a hand-edited or damaged file must not make predict() read out of bounds).
+    const std::int32_t n = static_cast<std::int32_t>(m.flat_.size());
+    for (const std::int32_t r : m.roots_) {
+      if (r < 0 || r >= n) refuse(path, "a tree root outside the forest");
+    }
+    // OpenCV stores children after their parent: requiring it also rules out cycles.
+    for (std::int32_t i = 0; i < n; ++i) {
+      const FlatNode& f = m.flat_[static_cast<std::size_t>(i)];
+      if (f.var >= m.usedFeatures() ||
+          (f.var >= 0 && (f.left <= i || f.left >= n || f.right <= i || f.right >= n))) {
+        refuse(path, "a node outside the forest or testing an unknown feature");
+      }
+    }
+  } catch (const cv::Exception& e) {
+    refuse(path, std::string("corrupt (") + e.err + ")");
+  }
+  return m;
+}
+
+void ObjectClassifierModel::flatten() {
+  flat_.clear();
+  roots_.clear();
+  const std::vector<cv::ml::DTrees::Node>& nodes = forest_->getNodes();
+  const std::vector<cv::ml::DTrees::Split>& splits = forest_->getSplits();
+  // The forest's node array already holds every tree; its indices are kept.
+  flat_.reserve(nodes.size());
+  for (const cv::ml::DTrees::Node& n : nodes) {
+    FlatNode f{-1, 0.0f, -1, -1, static_cast<std::int32_t>(std::lround(n.value))};
+    if (n.split >= 0) {
+      const cv::ml::DTrees::Split& sp = splits[static_cast<std::size_t>(n.split)];
+      f.var = sp.varIdx;
+      f.threshold = sp.c;
+      // OpenCV goes left when value <= c, the other way for an inversed split.
+      f.left = sp.inversed ? n.right : n.left;
+      f.right = sp.inversed ? n.left : n.right;
+    }
+    flat_.push_back(f);
+  }
+  for (const int r : forest_->getRoots()) roots_.push_back(r);
+}
+
+void ObjectClassifierModel::predict(
+    const std::vector<ObjectFeatureVector>& features,
+    std::vector<std::array<float, kNumObjectCategories>>* probabilities) const {
+  probabilities->assign(features.size(), std::array<float, kNumObjectCategories>{});
+  if (features.empty() || roots_.empty()) return;
+  const float vote = 1.0f / static_cast<float>(roots_.size());
+  const int used = usedFeatures();
+  for (std::size_t r = 0; r < features.size(); ++r) {
+    float x[kNumObjectFeatures];
+    for (int k = 0; k < used; ++k) x[k] = std::isfinite(features[r][k]) ? features[r][k] : 0.0f;
+    auto& p = (*probabilities)[r];
+    for (const std::int32_t root : roots_) {
+      const FlatNode* n = &flat_[static_cast<std::size_t>(root)];
+      while (n->var >= 0) {
+        n = &flat_[static_cast<std::size_t>(x[n->var] <= n->threshold ? n->left : n->right)];
+      }
+      if (n->label >= 0 && n->label < kNumObjectCategories) p[n->label] += vote;
+    }
+  }
+}
+
+void ObjectClassifierModel::predictReference(
+    const std::vector<ObjectFeatureVector>& features,
+    std::vector<std::array<float, kNumObjectCategories>>* probabilities) const {
+  probabilities->assign(features.size(), std::array<float, kNumObjectCategories>{});
+  if (features.empty() || !trained()) return;
+  const cv::Mat samples = sampleMatrix(features, usedFeatures());
+  cv::Mat votes;
+  forest_->getVotes(samples, votes, 0);
+  // Row 0 holds the class values of the columns; rows 1..N the votes of each sample.
+  const int trees = std::max(1, this->trees());
+  for (int r = 0; r < static_cast<int>(features.size()) && r + 1 < votes.rows; ++r) {
+    auto& p = (*probabilities)[r];
+    for (int c = 0; c < votes.cols; ++c) {
+      const int cls = votes.at<int>(0, c);
+      if (cls >= 0 && cls < kNumObjectCategories) {
+        p[cls] = static_cast<float>(votes.at<int>(r + 1, c)) / static_cast<float>(trees);
+      }
+    }
+  }
+}
+
+// ------------------------------------------------------------------------------------------
+// ObjectClassifier
+
+namespace {
+
+ObjectClassifierModel loadIfEnabled(const ObjectClassifierParams& params) {
+  const std::string error = validate(params);
+  if (!error.empty()) throw std::invalid_argument("ObjectClassifier: " + error);
+  return params.enabled ? ObjectClassifierModel::load(params.model_path) : ObjectClassifierModel();
+}
+
+}  // namespace
+
+ObjectClassifier::ObjectClassifier(const ObjectClassifierParams& params)
+    : ObjectClassifier(params, loadIfEnabled(params)) {}
+
+ObjectClassifier::ObjectClassifier(const ObjectClassifierParams& params,
+                                   ObjectClassifierModel model)
+    : params_(params), model_(std::move(model)), extractor_(model_.featureParams()) {
+  if (!(params_.min_object_probability <= 1.0) || !std::isfinite(params_.min_object_probability)) {
+    throw std::invalid_argument("ObjectClassifier: min_object_probability must be in [0, 1]");
+  }
+  if (params_.enabled && !model_.trained()) {
+    throw std::invalid_argument("ObjectClassifier: enabled without a trained model");
+  }
+}
+
+double ObjectClassifier::threshold() const {
+  return params_.min_object_probability >= 0.0 ? params_.min_object_probability
+                                               : model_.objectThreshold();
+}
+
+void ObjectClassifier::setDecision(double min_object_probability, bool reject_non_objects) {
+  if (!std::isfinite(min_object_probability) || min_object_probability < -1.0 ||
+      min_object_probability > 1.0) {
+    throw std::invalid_argument("ObjectClassifier: min_object_probability must be in [-1, 1]");
+  }
+  params_.min_object_probability = min_object_probability;
+  params_.reject_non_objects = reject_non_objects;
+}
+
+ObjectClassifierStats ObjectClassifier::apply(const LabeledCloud& foreground,
+                                              std::vector<DetectedObject>* objects,
+                                              std::vector<DetectedObject>* rejected) {
+  ObjectClassifierStats s;
+  s.input = objects->size();
+  if (rejected) rejected->clear();
+  features_.clear();
+  if (!params_.enabled || objects->empty()) {
+    s.kept = objects->size();
+    return s;
+  }
+  extractor_.computeAll(foreground, *objects, &features_);
+  model_.predict(features_, &probabilities_);
+  const double t = threshold();
+  kept_.clear();
+  for (std::size_t i = 0; i < objects->size(); ++i) {
+    DetectedObject& o = (*objects)[i];
+    const auto& p = probabilities_[i];
+    const double p_object = 1.0 - p[0];
+    int best = 1;
+    for (int c = 2; c < kNumObjectCategories; ++c) {
+      if (p[c] > p[best]) best = c;
+    }
+    if (p_object >= t) {
+      o.category = static_cast<ObjectCategory>(best);
+      o.class_confidence = p[best];
+    } else {
+      o.category = ObjectCategory::kNonObject;
+      o.class_confidence = p[0];
+    }
+    ++s.by_class[static_cast<int>(o.category)];
+    if (o.category == ObjectCategory::kNonObject) {
+      ++s.rejected;
+      if (rejected) rejected->push_back(o);
+      if (params_.reject_non_objects) continue;
+    }
+    kept_.push_back(std::move(o));
+  }
+  objects->swap(kept_);
+  renumberObjects(objects);
+  s.kept = objects->size();
+  return s;
+}
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,309 @@
+#include "urban_detection/core/classification/object_features.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+
+namespace urban_detection {
+namespace core {
+
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+const char* const kFeatureNames[kNumObjectFeatures] = {
+    "points",          "points_at_10m",      "range_m",         "length_m",
+    "width_m",         "height_m",           "footprint_m2",    "bottom_m",
+    "top_m",           "mean_above_bottom_m", "std_z_m",        "linearity",
+    "planarity",       "scattering",         "normal_z",        "principal_z",
+    "xy_elongation",   "profile_0",          "profile_1",       "profile_2",
+    "profile_3",       "below_0_5m",         "above_1_5m",      "rows",
+    "points_per_row",  "azimuth_fill",       "row_neighbours",  "jump_fraction",
+    "mean_second_diff_m", "intensity_mean",  "intensity_std",   "intensity_q10",
+    "intensity_q50",   "intensity_q90",      "intensity_max"};
+
+
+// Intensity buckets of the quantile selection, monotone in the value: below 0, one per unit of
+// [0, 256) (an HDL-64E reports integer intensities, so a bucket usually holds one value), 256
+// and above.
+constexpr int kIntensityBuckets = 258;
+inline int intensityBucket(float v) {
+  return v < 0.0f ? 0 : v >= 256.0f ? kIntensityBuckets - 1 : 1 + static_cast<int>(v);
+}
+
+}  // namespace
+
+void selectRanks(const std::vector<float>& values, const std::size_t* ranks, int count,
+                 float* out, std::vector<float>* scratch) {
+  std::uint32_t start[kIntensityBuckets + 1] = {};
+  for (const float v : values) ++start[intensityBucket(v) + 1];
+  for (int b = 1; b <= kIntensityBuckets; ++b) start[b] += start[b - 1];
+  int b = 0;
+  for (int r = 0; r < count; ++r) {
+    const std::size_t k = ranks[r];
+    if (r > 0 && k == ranks[r - 1]) {
+      out[r] = out[r - 1];
+      continue;
+    }
+    while (start[b + 1] <= k) ++b;  // the bucket holding rank k (ranks ascending)
+    scratch->clear();
+    for (const float v : values) {
+      if (intensityBucket(v) == b) scratch->push_back(v);
+    }
+    const auto kth = scratch->begin() + static_cast<std::ptrdiff_t>(k - start[b]);
+    std::nth_element(scratch->begin(), kth, scratch->end());
+    out[r] = *kth;
+  }
+}
+
+std::string validate(const ObjectFeatureParams& p) {
+  std::string error;
+  auto require = [&error](bool ok, const char* field, const char* range) {
+    if (!ok && error.empty()) error = std::string(field) + " must be " + range;
+  };
+  require(std::isfinite(p.sensor_height_m) && p.sensor_height_m >= -10.0 &&
+              p.sensor_height_m <= 10.0,
+          "sensor_height_m", "in [-10, 10] m");
+  require(std::isfinite(p.row_gap_deg) && p.row_gap_deg > 0.0 && p.row_gap_deg <= 5.0,
+          "row_gap_deg", "in (0, 5] deg");
+  require(std::isfinite(p.max_azimuth_gap_deg) && p.max_azimuth_gap_deg > 0.0 &&
+              p.max_azimuth_gap_deg <= 10.0,
+          "max_azimuth_gap_deg", "in (0, 10] deg");
+  require(std::isfinite(p.jump_m) && p.jump_m > 0.0 && p.jump_m <= 10.0, "jump_m", "in (0, 10] m");
+  require(std::isfinite(p.azimuth_resolution_deg) && p.azimuth_resolution_deg > 0.0 &&
+              p.azimuth_resolution_deg <= 5.0,
+          "azimuth_resolution_deg", "in (0, 5] deg");
+  return error;
+}
+
+const char* featureName(int feature) {
+  return feature >= 0 && feature < kNumObjectFeatures ? kFeatureNames[feature] : "?";
+}
+
+ObjectFeatureExtractor::ObjectFeatureExtractor(const ObjectFeatureParams& params)
+    : params_(params) {
+  const std::string error = validate(params);
+  if (!error.empty()) throw std::invalid_argument("ObjectFeatureExtractor: " + error);
+}
+
+void ObjectFeatureExtractor::indexForeground(const LabeledCloud& foreground) {
+  index_.build(foreground);
+}
+
+ObjectFeatureVector ObjectFeatureExtractor::compute(const LabeledCloud& foreground,
+                                                    const DetectedObject& object) {
+  ObjectFeatureVector f;
+  f.fill(0.0f);
+  const double range = std::hypot(object.centroid.x(), object.centroid.y());
+  const double length = std::max(object.obb_size.x(), object.obb_size.y());
+  const double width = std::min(object.obb_size.x(), object.obb_size.y());
+  f[kFeatRange] = static_cast<float>(range);
+  f[kFeatLength] = static_cast<float>(length);
+  f[kFeatWidth] = static_cast<float>(width);
+  f[kFeatFootprint] = static_cast<float>(length * width);
+
+  // One pass: moments, z and intensity ranges, the scan-row coordinates.
+  rows_.clear();
+  intensities_.clear();
+  const double ux = range > 1e-6 ? object.centroid.x() / range : 1.0;
+  const double uy = range > 1e-6 ? object.centroid.y() / range : 0.0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d sq = Eigen::Matrix3d::Zero();
+  double zmin = 0.0, zmax = 0.0;
+  for (const std::uint32_t idx : object.indices) {
+    const LabeledPoint* found = index_.find(foreground, idx);
+    if (!found) continue;
+    const LabeledPoint& p = *found;
+    if (!isFinitePoint(p)) continue;
+    const double rho = std::sqrt(static_cast<double>(p.x) * p.x + static_cast<double>(p.y) * p.y);
+    if (!(rho > 1e-3)) continue;
+    const Eigen::Vector3d q(p.x, p.y, p.z);
+    if (rows_.empty()) zmin = zmax = q.z();
+    zmin = std::min(zmin, q.z());
+    zmax = std::max(zmax, q.z());
+    sum += q;
+    sq.noalias() += q * q.transpose();
+    // Rows and neighbours are found on tangents, not angles: tan(elevation) = z / rho, and
+    // tan(azimuth relative to the centroid's direction) = cross / dot. Both are monotonic
+    // (within +-90 deg of the centroid's direction, all of an object but around the sensor)
+    // and within 1.2x of the angle's steps at an HDL-64E's elevations and within +-25 deg of
+    // azimuth, which the gap thresholds allow for; no atan2 per point.
+    const double dot = ux * p.x + uy * p.y;
+    const double cross = ux * p.y - uy * p.x;
+    const double tan_az = dot > 1e-3 ? cross / dot : (cross >= 0.0 ? 1e3 : -1e3);
+    rows_.push_back({static_cast<float>(q.z() / rho), static_cast<float>(tan_az),
+                     static_cast<float>(std::sqrt(rho * rho + q.z() * q.z())),
+                     static_cast<float>(q.z())});
+    intensities_.push_back(std::isfinite(p.intensity) ? p.intensity : 0.0f);
+  }
+  const std::size_t n = rows_.size();
+  f[kFeatPoints] = static_cast<float>(n);
+  f[kFeatPointsAt10m] = static_cast<float>(n * (range / 10.0) * (range / 10.0));
+  if (n == 0) return f;
+  const double nd = static_cast<double>(n);
+  const Eigen::Vector3d mean = sum / nd;
+  Eigen::Matrix3d cov = sq / nd - mean * mean.transpose();
+  cov = 0.5 * (cov + cov.transpose());
+  const double ground = -params_.sensor_height_m;
+  f[kFeatHeight] = static_cast<float>(zmax - zmin);
+  f[kFeatBottom] = static_cast<float>(zmin - ground);
+  f[kFeatTop] = static_cast<float>(zmax - ground);
+  f[kFeatMeanAboveBottom] = static_cast<float>(mean.z() - zmin);
+  f[kFeatStdZ] = static_cast<float>(std::sqrt(std::max(0.0, cov(2, 2))));
+
+  // Shape: eigenvalues ascending (l3 <= l2 <= l1).
+  if (n >= 3) {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(cov);
+    const Eigen::Vector3d ev = eig.eigenvalues().cwiseMax(0.0);
+    const double l1 = ev(2), l2 = ev(1), l3 = ev(0);
+    if (l1 > 1e-12) {
+      f[kFeatLinearity] = static_cast<float>((l1 - l2) / l1);
+      f[kFeatPlanarity] = static_cast<float>((l2 - l3) / l1);
+      f[kFeatScattering] = static_cast<float>(l3 / l1);
+    }
+    f[kFeatNormalZ] = static_cast<float>(std::abs(eig.eigenvectors()(2, 0)));
+    f[kFeatPrincipalZ] = static_cast<float>(std::abs(eig.eigenvectors()(2, 2)));
+    const double a = cov(0, 0), b = cov(0, 1), c = cov(1, 1);
+    const double mid = 0.5 * (a + c), dev = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+    if (mid + dev > 1e-12) f[kFeatXyElongation] = static_cast<float>(1.0 - (mid - dev) / (mid + dev));
+  }
+
+  // Vertical profile.
+  const double height = zmax - zmin;
+  std::size_t quarter[4] = {0, 0, 0, 0}, below = 0, above = 0;
+  for (const RowPoint& r : rows_) {
+    const double z = r.z - zmin;
+    const int qi = height > 1e-6 ? std::min(3, static_cast<int>(4.0 * z / height)) : 0;
+    ++quarter[std::max(0, qi)];
+    below += z < 0.5;
+    above += z > 1.5;
+  }
+  for (int k = 0; k < 4; ++k) f[kFeatProfile0 + k] = static_cast<float>(quarter[k] / nd);
+  f[kFeatBelow05] = static_cast<float>(below / nd);
+  f[kFeatAbove15] = static_cast<float>(above / nd);
+
+  // Scan rows: elevation bins `row_gap` wide; a row is a run of occupied bins (an HDL-64E's
+  // rows are 0.33 deg or more apart, so an empty bin lies between two rows). The points are
+  // ordered by bin with a counting sort (an object spans at most a few hundred bins), then
+  // by azimuth inside each row.
+  const float row_gap = static_cast<float>(std::tan(params_.row_gap_deg * kDegToRad));
+  const float max_gap = static_cast<float>(std::tan(params_.max_azimuth_gap_deg * kDegToRad));
+  float emin = rows_[0].elevation, emax = emin;
+  for (const RowPoint& r : rows_) {
+    emin = std::min(emin, r.elevation);
+    emax = std::max(emax, r.elevation);
+  }
+  const std::size_t bins = static_cast<std::size_t>((emax - emin) / row_gap) + 1;
+  constexpr std::size_t kMaxBins = 1u << 16;  // beyond (absurd objects): a plain sort
+  bin_start_.assign(std::min(bins, kMaxBins) + 1, 0u);
+  if (bins <= kMaxBins) {
+    auto binOf = [&](const RowPoint& r) {
+      return std::min(bins - 1, static_cast<std::size_t>((r.elevation - emin) / row_gap));
+    };
+    for (const RowPoint& r : rows_) ++bin_start_[binOf(r) + 1];
+    for (std::size_t b = 1; b <= bins; ++b) bin_start_[b] += bin_start_[b - 1];
+    sorted_.resize(n);
+    fill_ = bin_start_;
+    for (const RowPoint& r : rows_) sorted_[fill_[binOf(r)]++] = r;
+    rows_.swap(sorted_);
+  } else {
+    std::sort(rows_.begin(), rows_.end(),
+              [](const RowPoint& a, const RowPoint& b) { return a.elevation < b.elevation; });
+  }
+  std::size_t num_rows = 0, triplets = 0, jumps = 0, steps = 0, both_sides = 0;
+  double second_diff = 0.0, step_sum = 0.0;
+  std::size_t begin = 0;
+  std::size_t bin = 0;  // first bin of the next row (counting-sort path)
+  while (begin < n) {
+    std::size_t end = begin + 1;
+    if (bins <= kMaxBins) {
+      while (bin_start_[bin + 1] == bin_start_[bin]) ++bin;  // skip empty bins
+      while (bin < bins && bin_start_[bin + 1] > bin_start_[bin]) ++bin;  // the run
+      end = bin_start_[bin];
+    } else {
+      while (end < n && rows_[end].elevation - rows_[end - 1].elevation <= row_gap) ++end;
+    }
+    ++num_rows;
+    // Decoded packets and KITTI files list a ring's returns in azimuth order, so a row is
+    // usually sorted already (or reversed): check before sorting.
+    const auto row_begin = rows_.begin() + static_cast<std::ptrdiff_t>(begin);
+    const auto row_end = rows_.begin() + static_cast<std::ptrdiff_t>(end);
+    auto by_azimuth = [](const RowPoint& a, const RowPoint& b) { return a.azimuth < b.azimuth; };
+    if (!std::is_sorted(row_begin, row_end, by_azimuth)) {
+      auto reversed = [](const RowPoint& a, const RowPoint& b) { return a.azimuth > b.azimuth; };
+      if (std::is_sorted(row_begin, row_end, reversed)) {
+        std::reverse(row_begin, row_end);
+      } else {
+        std::sort(row_begin, row_end, by_azimuth);
+      }
+    }
+    for (std::size_t k = begin + 1; k < end; ++k) {
+      const float step = rows_[k].azimuth - rows_[k - 1].azimuth;
+      if (step <= max_gap) {
+        ++steps;
+        step_sum += step;
+      }
+    }
+    for (std::size_t k = begin + 1; k + 1 < end; ++k) {
+      const RowPoint& a = rows_[k - 1];
+      const RowPoint& b = rows_[k];
+      const RowPoint& c = rows_[k + 1];
+      if (b.azimuth - a.azimuth > max_gap || c.azimuth - b.azimuth > max_gap) continue;
+      ++triplets;
+      ++both_sides;
+      const double d = std::abs(b.range - 0.5 * (a.range + c.range));
+      second_diff += d;
+      if (d > params_.jump_m) ++jumps;
+    }
+    begin = end;
+  }
+  f[kFeatRows] = static_cast<float>(num_rows);
+  f[kFeatPointsPerRow] = static_cast<float>(nd / static_cast<double>(num_rows));
+  if (steps > 0) {
+    f[kFeatAzimuthFill] = static_cast<float>(step_sum / static_cast<double>(steps) /
+                                             (params_.azimuth_resolution_deg * kDegToRad));
+  }
+  f[kFeatRowNeighbours] = static_cast<float>(both_sides / nd);
+  if (triplets > 0) {
+    f[kFeatJumpFraction] = static_cast<float>(jumps / static_cast<double>(triplets));
+    f[kFeatMeanSecondDiff] = static_cast<float>(second_diff / static_cast<double>(triplets));
+  }
+
+  // Intensity.
+  double isum = 0.0, isq = 0.0;
+  float imax = intensities_[0];
+  for (const float v : intensities_) {
+    isum += v;
+    isq += static_cast<double>(v) * v;
+    imax = std::max(imax, v);
+  }
+  const double imean = isum / nd;
+  f[kFeatIntensityMean] = static_cast<float>(imean);
+  f[kFeatIntensityStd] = static_cast<float>(std::sqrt(std::max(0.0, isq / nd - imean * imean)));
+  f[kFeatIntensityMax] = imax;
+  // The k-th smallest values, exactly as a sort would place them.
+  const std::size_t ranks[3] = {std::min(n - 1, static_cast<std::size_t>(0.1 * nd)),
+                                std::min(n - 1, static_cast<std::size_t>(0.5 * nd)),
+                                std::min(n - 1, static_cast<std::size_t>(0.9 * nd))};
+  float quantiles[3];
+  selectRanks(intensities_, ranks, 3, quantiles, &bucket_values_);
+  f[kFeatIntensityQ10] = quantiles[0];
+  f[kFeatIntensityQ50] = quantiles[1];
+  f[kFeatIntensityQ90] = quantiles[2];
+  return f;
+}
+
+void ObjectFeatureExtractor::computeAll(const LabeledCloud& foreground,
+                                        const std::vector<DetectedObject>& objects,
+                                        std::vector<ObjectFeatureVector>* features) {
+  indexForeground(foreground);
+  features->clear();
+  features->reserve(objects.size());
+  for (const DetectedObject& o : objects) features->push_back(compute(foreground, o));
+}
+
+}  // namespace core
+}  // namespace urban_detection

@@ -1,0 +1,62 @@
+// urban_detection_params: every stage's parameters (name, default, range, unit, description),
+// printed as Markdown from the field tables (core/common/param_fields.h). docs/parameters.md is
+// its output, and test_tools checks that it is current:
+//
+//   urban_detection_params > docs/parameters.md
+#include <cstdio>
+#include <iostream>
+#include <string>
+
+#include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/ros/object_markers.h"
+
+using namespace urban_detection;
+
+namespace {
+
+template <class Params>
+void section(const std::string& title, const std::string& where) {
+  std::cout << "## " << title << "\n\n" << where << "\n\n"
+            << core::fieldTableMarkdown(Params()) << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc > 1) {
+    std::fprintf(stderr,
+                 "usage: urban_detection_params\n"
+                 "  prints every stage's parameter table as Markdown (docs/parameters.md)\n");
+    return std::string(argv[1]) == "-h" || std::string(argv[1]) == "--help" ? 0 : 2;
+  }
+  std::cout
+      << "# Parameters\n\n"
+      << "Printed by `urban_detection_params` from the field tables beside each parameter struct\n"
+         "(`include/urban_detection/core/common/param_fields.h`); do not edit by hand. The same\n"
+         "names, ranges and types are used by the YAML files (offline tools), the ROS parameter\n"
+         "server (nodelets, at start-up) and dynamic_reconfigure (live; the `.cfg` name of\n"
+         "`hough/votes` is `hough_votes`). A value of the wrong type, an unknown YAML key or a\n"
+         "number outside its range is refused with a message naming it; ranges are inclusive.\n\n";
+  section<core::GridSegmenterParams>(
+      "Segmentation (GridSegmentation)",
+      "`config/segmentation.yaml` (top level); nodelet parameters `~<name>`; tunable.");
+  section<core::HierarchicalGridDetectorParams>(
+      "Hierarchical grid detector (HierarchicalGridDetector)",
+      "`config/hierarchical_grid.yaml`, map `hierarchical_grid:`; nodelet parameters "
+      "`~hierarchical_grid/<name>`; tunable.");
+  section<core::KdTreeDetectorParams>(
+      "kd-tree detector (KdTreeDetector)",
+      "`config/kdtree.yaml`, map `kdtree:`; nodelet parameters `~kdtree/<name>`; tunable.");
+  section<core::ObjectFilterParams>(
+      "Object filter (after either detector)",
+      "`config/classification.yaml`, map `object_filter:`; nodelet parameters "
+      "`~object_filter/<name>`.");
+  section<core::ObjectClassifierParams>(
+      "Object classifier (after either detector)",
+      "`config/classification.yaml`, map `classifier:`; nodelet parameters `~classifier/<name>`; "
+      "`min_object_probability` and `reject_non_objects` tunable.");
+  section<ros_conv::ObjectMarkerParams>(
+      "Markers (ObjectMarkers)",
+      "`config/markers.yaml`, map `markers:`; nodelet parameters `~markers/<name>`; tunable.");
+  return 0;
+}
