@@ -149,7 +149,7 @@ void Tracker::setParams(const TrackerParams& params) {
 }
 
 void Tracker::reset() {
-  for (const Track& t : tracks_) died_.push_back(t.id);
+  for (const Track& t : tracks_) reset_died_.push_back(t.id);
   tracks_.clear();
   filters_.clear();
   have_stamp_ = false;
@@ -159,6 +159,7 @@ const TrackerStats& Tracker::update(const std::vector<DetectedObject>& objects,
                                     const Eigen::Isometry3d& odom_T_sensor, double stamp_s) {
   stats_ = TrackerStats();
   died_.clear();
+  died_.swap(reset_died_);  // tracks dropped by reset() since the last update
   stats_.detections = objects.size();
 
   // Time step. A stamp going back or jumping far is a new stream: start over.
@@ -167,6 +168,8 @@ const TrackerStats& Tracker::update(const std::vector<DetectedObject>& objects,
     dt = stamp_s - last_stamp_s_;
     if (dt < 0.0 || dt > params_.max_dt_s) {
       reset();
+      died_.insert(died_.end(), reset_died_.begin(), reset_died_.end());
+      reset_died_.clear();
       stats_.restarted = true;
       dt = 0.0;
     } else if (dt == 0.0) {

@@ -114,14 +114,14 @@ class Tracker {
 
   /// Every live track (tentative, confirmed, lost), ordered by id.
   const std::vector<Track>& tracks() const { return tracks_; }
-  /// Ids of the tracks deleted in the latest update.
+  /// Ids of the tracks deleted in the latest update (and by reset() calls before it).
   const std::vector<std::uint32_t>& died() const { return died_; }
   const TrackerStats& stats() const { return stats_; }
   const TrackerParams& params() const { return params_; }
   /// Replaces the parameters (between revolutions); throws std::invalid_argument like the
   /// constructor. The tracks are kept.
   void setParams(const TrackerParams& params);
-  /// Drops every track (ids keep rising).
+  /// Drops every track (ids keep rising); the next update() reports them in died().
   void reset();
 
  private:
@@ -148,6 +148,7 @@ class Tracker {
   std::vector<Track> tracks_;
   std::vector<Filter> filters_;
   std::vector<std::uint32_t> died_;
+  std::vector<std::uint32_t> reset_died_;  // dropped by reset(), reported by the next update
   TrackerStats stats_;
   std::uint32_t next_id_ = 1;
   bool have_stamp_ = false;
