@@ -165,6 +165,7 @@ void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::
 
 void loadTrackerParams(const ros::NodeHandle& nh, core::TrackerParams* p) {
   loadParam(nh, "gate_distance_m", &p->gate_distance_m);
+  loadParam(nh, "gate_sigmas", &p->gate_sigmas);
   loadParam(nh, "overlap_weight_m", &p->overlap_weight_m);
   loadParam(nh, "birth_hits", &p->birth_hits);
   loadParam(nh, "death_misses", &p->death_misses);

@@ -447,6 +447,8 @@ void usage() {
       "                  detections right; yellow boxes missed objects, red false detections\n"
       "  --png-view CX,CY,HALF_M   the square shown [m] (default 0,0,30)\n"
       "  --tracking      with --sim: the tracker after the pipeline, scored with CLEAR-MOT\n"
+      "  --tracker-config FILE  the tracker's parameters (config/object_tracker.yaml's\n"
+      "                  tracker: map; default: the in-class defaults it mirrors)\n"
       "  --kitti-tracking DIR  the same on the KITTI tracking layout (velodyne/<seq>/, label_02/,\n"
       "                  calib/); rules in src/tools/tracking_eval.h, docs/tracking.md\n");
 }
@@ -464,7 +466,7 @@ int main(int argc, char** argv) {
   std::string png_dir, features_path, filter_arg, classifier_arg, detections_dir;
   PngView png_view;
   bool tracking = false;
-  std::string kitti_tracking_dir;
+  std::string kitti_tracking_dir, tracker_config;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* what) { return urban_detection::tools::optionValue(argc, argv, &i, what); };
@@ -497,6 +499,7 @@ int main(int argc, char** argv) {
     else if (a == "--png") png_dir = value("--png");
     else if (a == "--tracking") tracking = true;
     else if (a == "--kitti-tracking") kitti_tracking_dir = value("--kitti-tracking");
+    else if (a == "--tracker-config") tracker_config = value("--tracker-config");
     else if (a == "--png-view") {
       const std::string v = value("--png-view");
       if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &png_view.cx, &png_view.cy, &png_view.half_m) !=
@@ -629,6 +632,12 @@ int main(int argc, char** argv) {
     tp.classifier = classifier.get();
     tp.min_gt_points = static_cast<std::size_t>(min_gt_points);
     if (max_frames >= 0) tp.max_frames = static_cast<std::size_t>(max_frames);
+    std::string tracker_error;
+    if (!tracker_config.empty() &&
+        !urban_detection::tools::loadTrackerYaml(tracker_config, &tp.tracker, &tracker_error)) {
+      std::fprintf(stderr, "error: %s\n", tracker_error.c_str());
+      return 2;
+    }
     if (!kitti_tracking_dir.empty()) {
       return urban_detection::tools::runKittiTracking(tp, kitti_tracking_dir, json_path);
     }

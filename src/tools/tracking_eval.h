@@ -27,6 +27,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -34,6 +35,8 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <yaml-cpp/yaml.h>
 
 #include "urban_detection/core/eval_datasets.h"
 #include "urban_detection/core/grid_segmenter.h"
@@ -52,6 +55,42 @@ namespace urban_detection {
 namespace tools {
 
 namespace core = urban_detection::core;
+
+// Reads the `tracker:` map of a YAML file (config/object_tracker.yaml) over `p`; false with
+// `error` set on an unknown key, a wrong type or a value validate() refuses.
+inline bool loadTrackerYaml(const std::string& path, core::TrackerParams* p, std::string* error) {
+  try {
+    const YAML::Node root = YAML::LoadFile(path);
+    const YAML::Node node = root["tracker"] ? root["tracker"] : root;
+    for (const auto& kv : node) {
+      const std::string key = kv.first.as<std::string>();
+      if (key == "gate_distance_m") p->gate_distance_m = kv.second.as<double>();
+      else if (key == "gate_sigmas") p->gate_sigmas = kv.second.as<double>();
+      else if (key == "overlap_weight_m") p->overlap_weight_m = kv.second.as<double>();
+      else if (key == "birth_hits") p->birth_hits = kv.second.as<int>();
+      else if (key == "death_misses") p->death_misses = kv.second.as<int>();
+      else if (key == "tentative_max_misses") p->tentative_max_misses = kv.second.as<int>();
+      else if (key == "measurement_std_m") p->measurement_std_m = kv.second.as<double>();
+      else if (key == "process_accel_std_mps2") p->process_accel_std_mps2 = kv.second.as<double>();
+      else if (key == "initial_velocity_std_mps") {
+        p->initial_velocity_std_mps = kv.second.as<double>();
+      } else if (key == "smoothing") p->smoothing = kv.second.as<double>();
+      else if (key == "default_dt_s") p->default_dt_s = kv.second.as<double>();
+      else if (key == "max_dt_s") p->max_dt_s = kv.second.as<double>();
+      else if (key == "moving_speed_mps") p->moving_speed_mps = kv.second.as<double>();
+      else {
+        *error = path + ": unknown tracker parameter '" + key + "'";
+        return false;
+      }
+    }
+  } catch (const std::exception& e) {
+    *error = path + ": " + e.what();
+    return false;
+  }
+  const std::string invalid = p->validate();
+  if (!invalid.empty()) *error = path + ": " + invalid;
+  return invalid.empty();
+}
 
 // The stages before the tracker, owned by eval's main().
 struct TrackingPipeline {
@@ -112,13 +151,6 @@ inline std::string motJson(const core::ClearMotResult& r) {
                 jsonNumber(r.idSwitchesPer100GtTracks()).c_str(), r.fragmentations,
                 r.mostly_tracked, r.partially_tracked, r.mostly_lost);
   return buf;
-}
-
-inline double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 // --tracking on a simulated drive. Returns the process exit code.
@@ -182,6 +214,34 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
     }
     std::vector<int> matched;
     mot.addFrame(gts, hyps, &matched);
+    if (std::getenv("UD_TRACK_DEBUG")) {  // identity switches, one line each
+      static std::map<std::uint32_t, std::uint32_t> last;
+      for (std::size_t g = 0; g < gts.size(); ++g) {
+        if (matched[g] < 0) continue;
+        const std::uint32_t h = hyps[matched[g]].id;
+        const auto it = last.find(gts[g].id);
+        if (it != last.end() && it->second != h) {
+          const core::Track* prev = nullptr;
+          for (const core::Track& t : tracker.tracks()) {
+            if (t.id == it->second) prev = &t;
+          }
+          const Eigen::Vector3d rel = gt.sensor_pose.inverse() *
+                                      gt_of[g]->center.cast<double>();
+          std::printf("IDSW rev %zu gt %u %s pts %u at (%.1f, %.1f) sensor frame: %u -> %u "
+                      "(age %u hits %u); previous %s\n",
+                      frames, gts[g].id, core::toString(gt_of[g]->object_class),
+                      gt_of[g]->num_points, rel.x(), rel.y(), it->second, h,
+                      track_of[matched[g]]->age, track_of[matched[g]]->hits,
+                      prev ? (std::string(core::toString(prev->state)) + " misses " +
+                              std::to_string(prev->misses) + " dist " +
+                              std::to_string((prev->center - gt_of[g]->center.cast<double>())
+                                                 .head<2>().norm()))
+                                 .c_str()
+                           : "dead");
+        }
+        last[gts[g].id] = h;
+      }
+    }
     for (std::size_t g = 0; g < gts.size(); ++g) {
       if (matched[g] < 0) continue;
       const core::GroundTruthObject& o = *gt_of[g];

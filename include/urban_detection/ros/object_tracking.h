@@ -58,6 +58,7 @@ struct TrackerTunables {
   template <class C, class P, class F>
   void operator()(C& c, P& p, F f) const {
     f(c.gate_distance_m, p.gate_distance_m);
+    f(c.gate_sigmas, p.gate_sigmas);
     f(c.overlap_weight_m, p.overlap_weight_m);
     f(c.birth_hits, p.birth_hits);
     f(c.death_misses, p.death_misses);

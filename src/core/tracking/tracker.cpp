@@ -29,6 +29,7 @@ struct Range {
 };
 const Range kRanges[] = {
     {"gate_distance_m", &TrackerParams::gate_distance_m, nullptr, 0.1, 20.0, "m"},
+    {"gate_sigmas", &TrackerParams::gate_sigmas, nullptr, 0.0, 10.0, ""},
     {"overlap_weight_m", &TrackerParams::overlap_weight_m, nullptr, 0.0, 20.0, "m"},
     {"birth_hits", nullptr, &TrackerParams::birth_hits, 1, 100, ""},
     {"death_misses", nullptr, &TrackerParams::death_misses, 1, 1000, ""},
@@ -283,14 +284,35 @@ void Tracker::associate() {
   track_match_.assign(nt, -1);
   meas_match_.assign(nm, -1);
   if (nt == 0 || nm == 0) return;
+  // Established tracks (confirmed, lost) choose first; tentative tracks get what is left, so a
+  // fresh duplicate never takes the detections of the object's older track.
+  associateStage(false);
+  associateStage(true);
+}
 
-  // Gated pairs and their costs.
+void Tracker::associateStage(bool tentative) {
+  const int nt = static_cast<int>(tracks_.size());
+  const int nm = static_cast<int>(measurements_.size());
+  // Gated pairs and their costs. The gate widens with the predicted centre's uncertainty (a
+  // track coasting through missed revolutions, a new track whose velocity is unknown), up to
+  // twice gate_distance_m.
   pairs_.clear();
-  const double gate2 = params_.gate_distance_m * params_.gate_distance_m;
   for (int t = 0; t < nt; ++t) {
     const Track& tr = tracks_[t];
+    if ((tr.state == TrackState::kTentative) != tentative || track_match_[t] >= 0) continue;
     const Eigen::Vector2d tc = tr.center.head<2>();
+    const Eigen::Matrix2d& P = filters_[t].P.topLeftCorner<2, 2>();
+    // Largest eigenvalue of the 2x2 position covariance.
+    const double half_trace = 0.5 * (P(0, 0) + P(1, 1));
+    const double lambda_max =
+        half_trace + std::sqrt(std::max(0.0, 0.25 * (P(0, 0) - P(1, 1)) * (P(0, 0) - P(1, 1)) +
+                                                 P(0, 1) * P(1, 0)));
+    const double gate = std::min(params_.gate_distance_m + params_.gate_sigmas *
+                                                               std::sqrt(std::max(0.0, lambda_max)),
+                                 2.0 * params_.gate_distance_m);
+    const double gate2 = gate * gate;
     for (int m = 0; m < nm; ++m) {
+      if (meas_match_[m] >= 0) continue;
       const Measurement& me = measurements_[m];
       const double d2 = (me.center.head<2>() - tc).squaredNorm();
       if (d2 > gate2) continue;

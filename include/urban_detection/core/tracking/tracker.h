@@ -10,10 +10,13 @@
 ///   2. every track is predicted to the revolution's stamp;
 ///   3. detections are assigned to tracks by a minimum-cost one-to-one assignment (Hungarian
 ///      algorithm, hungarian.h) over the gated pairs: a pair is admissible when the distance
-///      between the predicted centre and the detected centre is at most `gate_distance_m`;
-///      its cost is that distance plus `overlap_weight_m * (1 - bird's-eye IoU)` of the two
-///      yaw-oriented boxes. The gated pairs split the problem into independent groups, each
-///      solved on its own (a street of 100 objects is many 1x1 and 2x2 problems);
+///      between the predicted centre and the detected centre is at most the track's gate,
+///      `gate_distance_m + gate_sigmas * sigma` (sigma: std dev of the predicted centre along
+///      its most uncertain axis; at most 2 x gate_distance_m); its cost is that distance plus
+///      `overlap_weight_m * (1 - bird's-eye IoU)` of the two yaw-oriented boxes. Confirmed and
+///      lost tracks are assigned first, tentative tracks then share the detections left. The
+///      gated pairs split each stage into independent groups, each solved on its own (a street
+///      of 100 objects is many 1x1 and 2x2 problems);
 ///   4. matched tracks are updated; unmatched detections start tentative tracks; a tentative
 ///      track becomes confirmed after `birth_hits` hits and is deleted after
 ///      `tentative_max_misses` consecutive misses; a confirmed track that misses becomes lost
@@ -37,9 +40,11 @@ namespace core {
 /// Parameters of the Tracker. Units in the comments; ranges in validate().
 struct TrackerParams {
   double gate_distance_m = 2.0;        // [m] largest predicted-to-detected centre distance
+  double gate_sigmas = 2.0;            // [-] the gate widens by this many std devs of the
+                                       //   predicted centre (at most to 2 x gate_distance_m)
   double overlap_weight_m = 1.0;       // [m] cost of a pair with no box overlap vs full overlap
   int birth_hits = 3;                  // [-] hits that confirm a tentative track (N)
-  int death_misses = 5;                // [-] consecutive misses that delete a confirmed track (M)
+  int death_misses = 20;               // [-] consecutive misses that delete a confirmed track (M)
   int tentative_max_misses = 2;        // [-] consecutive misses that delete a tentative track
   double measurement_std_m = 0.3;      // [m] std dev of a detected box centre
   double process_accel_std_mps2 = 2.0; // [m/s^2] std dev of the unmodelled acceleration
@@ -141,6 +146,7 @@ class Tracker {
 
   void predict(double dt_s);
   void associate();
+  void associateStage(bool tentative);
   void updateTrack(std::size_t t, const Measurement& m);
   void startTrack(const Measurement& m);
 
