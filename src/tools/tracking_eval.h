@@ -166,12 +166,50 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
   }
   TrackingPipelineRunner pipeline(p);
   core::Tracker tracker(p.tracker);
-  core::ClearMot mot, detections_mot;
+  core::ClearMot mot, detections_mot, oracle_mot;
+  core::Tracker oracle(p.tracker);  // fed the GT boxes themselves: the tracker without the detector
+  std::vector<core::DetectedObject> gt_boxes;
   CloudXYZIRT cloud;
   core::GroundTruthFrame gt;
   std::vector<double> speed_error, static_speed, update_ms;
   std::size_t frames = 0, skipped = 0;
   std::uint32_t detection_ids = 0;
+  // UD_TRACK_DEBUG=1: one line per identity switch, with the state of the previous track.
+  std::map<std::string, std::map<std::uint32_t, std::uint32_t>> last_hyp;
+  std::vector<const core::GroundTruthObject*> gt_of;
+  auto debugSwitches = [&](const char* tag, const std::vector<core::MotGroundTruth>& gts,
+                           const std::vector<core::MotHypothesis>& hyps,
+                           const std::vector<int>& matched, const core::Tracker& tracker) {
+    if (!std::getenv("UD_TRACK_DEBUG")) return;
+    {
+      std::map<std::uint32_t, std::uint32_t>& last = last_hyp[tag];
+      for (std::size_t g = 0; g < gts.size(); ++g) {
+        if (matched[g] < 0) continue;
+        const std::uint32_t h = hyps[matched[g]].id;
+        const auto it = last.find(gts[g].id);
+        if (it != last.end() && it->second != h) {
+          const core::Track* prev = nullptr;
+          for (const core::Track& t : tracker.tracks()) {
+            if (t.id == it->second) prev = &t;
+          }
+          const Eigen::Vector3d rel = gt.sensor_pose.inverse() *
+                                      gt_of[g]->center.cast<double>();
+          std::printf("%s IDSW rev %zu gt %u %s pts %u at (%.1f, %.1f) sensor frame: %u -> %u "
+                      "(age %u hits %u); previous %s\n",
+                      tag, frames, gts[g].id, core::toString(gt_of[g]->object_class),
+                      gt_of[g]->num_points, rel.x(), rel.y(), it->second, h,
+                      0u, 0u,
+                      prev ? (std::string(core::toString(prev->state)) + " misses " +
+                              std::to_string(prev->misses) + " dist " +
+                              std::to_string((prev->center - gt_of[g]->center.cast<double>())
+                                                 .head<2>().norm()))
+                                 .c_str()
+                           : "dead");
+        }
+        last[gts[g].id] = h;
+      }
+    }
+  };
   while (frames < p.max_frames) {
     std::string message;
     const auto status = reader->next(&cloud, &gt, &message);
@@ -187,7 +225,7 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
     update_ms.push_back(1e3 * (steadySeconds() - t0));
 
     std::vector<core::MotGroundTruth> gts;
-    std::vector<const core::GroundTruthObject*> gt_of;
+    gt_of.clear();
     for (const core::GroundTruthObject& o : gt.objects) {
       if (o.num_points == 0) continue;
       const bool street = core::isStreetObject(o.object_class);
@@ -214,34 +252,7 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
     }
     std::vector<int> matched;
     mot.addFrame(gts, hyps, &matched);
-    if (std::getenv("UD_TRACK_DEBUG")) {  // identity switches, one line each
-      static std::map<std::uint32_t, std::uint32_t> last;
-      for (std::size_t g = 0; g < gts.size(); ++g) {
-        if (matched[g] < 0) continue;
-        const std::uint32_t h = hyps[matched[g]].id;
-        const auto it = last.find(gts[g].id);
-        if (it != last.end() && it->second != h) {
-          const core::Track* prev = nullptr;
-          for (const core::Track& t : tracker.tracks()) {
-            if (t.id == it->second) prev = &t;
-          }
-          const Eigen::Vector3d rel = gt.sensor_pose.inverse() *
-                                      gt_of[g]->center.cast<double>();
-          std::printf("IDSW rev %zu gt %u %s pts %u at (%.1f, %.1f) sensor frame: %u -> %u "
-                      "(age %u hits %u); previous %s\n",
-                      frames, gts[g].id, core::toString(gt_of[g]->object_class),
-                      gt_of[g]->num_points, rel.x(), rel.y(), it->second, h,
-                      track_of[matched[g]]->age, track_of[matched[g]]->hits,
-                      prev ? (std::string(core::toString(prev->state)) + " misses " +
-                              std::to_string(prev->misses) + " dist " +
-                              std::to_string((prev->center - gt_of[g]->center.cast<double>())
-                                                 .head<2>().norm()))
-                                 .c_str()
-                           : "dead");
-        }
-        last[gts[g].id] = h;
-      }
-    }
+    debugSwitches("tracker", gts, hyps, matched, tracker);
     for (std::size_t g = 0; g < gts.size(); ++g) {
       if (matched[g] < 0) continue;
       const core::GroundTruthObject& o = *gt_of[g];
@@ -266,6 +277,33 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
       dets.push_back(h);
     }
     detections_mot.addFrame(gts, dets);
+
+    // The same tracker on the scored GT objects' own boxes (in the sensor frame, as a detector
+    // would give them): what the tracker does when the detector is perfect.
+    gt_boxes.clear();
+    const Eigen::Isometry3d sensor_T_world = gt.sensor_pose.inverse();
+    const double pose_yaw = std::atan2(gt.sensor_pose.linear()(1, 0), gt.sensor_pose.linear()(0, 0));
+    for (std::size_t g = 0; g < gts.size(); ++g) {
+      if (gts[g].ignored) continue;
+      core::DetectedObject o;
+      o.obb_center = (sensor_T_world * gt_of[g]->center.cast<double>()).cast<float>();
+      o.centroid = o.obb_center;
+      o.obb_size = gt_of[g]->size;
+      o.obb_yaw_rad = static_cast<float>(gt_of[g]->yaw_rad - pose_yaw);
+      gt_boxes.push_back(o);
+    }
+    oracle.update(gt_boxes, gt.sensor_pose, gt.stamp_s);
+    std::vector<core::MotHypothesis> oracle_hyps;
+    for (const core::Track& t : oracle.tracks()) {
+      if (t.state != core::TrackState::kConfirmed) continue;
+      core::MotHypothesis h;
+      h.id = t.id;
+      h.position = t.center.head<2>();
+      oracle_hyps.push_back(h);
+    }
+    std::vector<int> oracle_matched;
+    oracle_mot.addFrame(gts, oracle_hyps, &oracle_matched);
+    debugSwitches("oracle", gts, oracle_hyps, oracle_matched, oracle);
   }
   if (frames == 0) {
     std::fprintf(stderr, "error: no revolution with ground truth in %s\n", pcap_path.c_str());
@@ -273,6 +311,7 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
   }
   const core::ClearMotResult r = mot.result();
   const core::ClearMotResult d = detections_mot.result();
+  const core::ClearMotResult o = oracle_mot.result();
   std::printf("tracking on the simulated drive (%zu revolutions, %zu skipped), detector %s, "
               "classifier %s\n",
               frames, skipped, p.detector->name().c_str(), p.classifier ? "on" : "off");
@@ -280,6 +319,7 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
   std::printf("%-28s recall %.3f  precision %.3f  (MOTA <= recall of the tracks; the detector "
               "bounds it unless coasting fills its gaps)\n",
               "detector alone", d.recall(), d.precision());
+  printMot("tracker on GT boxes", o);
   std::printf("speed error of matched moving cars/vans: median %.3f m/s, p90 %.3f m/s "
               "(%zu matches); speed of matched parked cars/vans: median %.3f m/s, p90 %.3f m/s "
               "(%zu)\n",
@@ -295,6 +335,7 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
     out << "{\n  \"dataset\": \"sim\",\n  \"pcap\": \"" << jsonEscape(pcap_path)
         << "\",\n  \"revolutions\": " << frames << ",\n  \"tracker\": " << motJson(r)
         << ",\n  \"detector_alone\": " << motJson(d)
+        << ",\n  \"tracker_on_ground_truth_boxes\": " << motJson(o)
         << ",\n  \"moving_vehicle_speed_error_mps\": {\"median\": "
         << jsonNumber(median(speed_error)) << ", \"p90\": "
         << jsonNumber(percentile(speed_error, 0.9)) << ", \"n\": " << speed_error.size()
