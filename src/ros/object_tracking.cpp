@@ -167,7 +167,6 @@ void loadTrackerParams(const ros::NodeHandle& nh, core::TrackerParams* p) {
   loadParam(nh, "gate_distance_m", &p->gate_distance_m);
   loadParam(nh, "gate_sigmas", &p->gate_sigmas);
   loadParam(nh, "overlap_weight_m", &p->overlap_weight_m);
-  loadParam(nh, "duplicate_iou", &p->duplicate_iou);
   loadParam(nh, "birth_hits", &p->birth_hits);
   loadParam(nh, "death_misses", &p->death_misses);
   loadParam(nh, "tentative_max_misses", &p->tentative_max_misses);

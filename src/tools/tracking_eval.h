@@ -67,7 +67,6 @@ inline bool loadTrackerYaml(const std::string& path, core::TrackerParams* p, std
       if (key == "gate_distance_m") p->gate_distance_m = kv.second.as<double>();
       else if (key == "gate_sigmas") p->gate_sigmas = kv.second.as<double>();
       else if (key == "overlap_weight_m") p->overlap_weight_m = kv.second.as<double>();
-      else if (key == "duplicate_iou") p->duplicate_iou = kv.second.as<double>();
       else if (key == "birth_hits") p->birth_hits = kv.second.as<int>();
       else if (key == "death_misses") p->death_misses = kv.second.as<int>();
       else if (key == "tentative_max_misses") p->tentative_max_misses = kv.second.as<int>();

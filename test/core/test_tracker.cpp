@@ -300,29 +300,6 @@ TEST(Hungarian, OptimalOnSmallMatricesAgainstBruteForce) {
   EXPECT_TRUE(a.empty());
 }
 
-TEST(Tracker, DuplicateTracksOfOneObjectAreMerged) {
-  // A parked car is tracked, then lost while its detection jumps 1 m (a new view of it): a
-  // second track is born on it. Once both are established and overlap, the one with fewer hits
-  // goes and the older keeps the object, with the fresh position.
-  core::TrackerParams p = fast();
-  p.gate_distance_m = 0.5;  // small gate: the jumped detection starts a new track
-  p.gate_sigmas = 0.0;
-  p.death_misses = 50;
-  core::Tracker tracker(p);
-  double t = 0.0;
-  for (int k = 0; k < 10; ++k) tracker.update({box(10, 0)}, Eigen::Isometry3d::Identity(), t += kDt);
-  const std::uint32_t old_id = tracker.tracks()[0].id;
-  for (int k = 0; k < p.birth_hits; ++k) {
-    tracker.update({box(11, 0)}, Eigen::Isometry3d::Identity(), t += kDt);
-  }
-  ASSERT_EQ(tracker.tracks().size(), 1u);
-  EXPECT_EQ(tracker.tracks()[0].id, old_id);
-  EXPECT_EQ(tracker.tracks()[0].state, core::TrackState::kConfirmed);
-  EXPECT_NEAR(tracker.tracks()[0].center.x(), 11.0, 0.1);
-  ASSERT_EQ(tracker.died().size(), 1u);
-  EXPECT_NE(tracker.died()[0], old_id);
-}
-
 TEST(Tracker, ResetReportsTheDroppedTracks) {
   core::Tracker tracker(fast());
   tracker.update({box(1, 1), box(9, 9)}, Eigen::Isometry3d::Identity(), 0.0);

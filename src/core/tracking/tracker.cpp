@@ -31,7 +31,6 @@ const Range kRanges[] = {
     {"gate_distance_m", &TrackerParams::gate_distance_m, nullptr, 0.1, 20.0, "m"},
     {"gate_sigmas", &TrackerParams::gate_sigmas, nullptr, 0.0, 10.0, ""},
     {"overlap_weight_m", &TrackerParams::overlap_weight_m, nullptr, 0.0, 20.0, "m"},
-    {"duplicate_iou", &TrackerParams::duplicate_iou, nullptr, 0.05, 1.0, ""},
     {"birth_hits", nullptr, &TrackerParams::birth_hits, 1, 100, ""},
     {"death_misses", nullptr, &TrackerParams::death_misses, 1, 1000, ""},
     {"tentative_max_misses", nullptr, &TrackerParams::tentative_max_misses, 1, 100, ""},
@@ -244,7 +243,6 @@ const TrackerStats& Tracker::update(const std::vector<DetectedObject>& objects,
   }
   tracks_.resize(keep);
   filters_.resize(keep);
-  removeDuplicates();
   stats_.died = died_.size();
 
   for (std::size_t k = 0; k < measurements_.size(); ++k) {
@@ -256,66 +254,6 @@ const TrackerStats& Tracker::update(const std::vector<DetectedObject>& objects,
     stats_.lost += t.state == TrackState::kLost;
   }
   return stats_;
-}
-
-void Tracker::removeDuplicates() {
-  const std::size_t n = tracks_.size();
-  if (n < 2) return;
-  track_match_.assign(n, 0);  // reused as the "delete" mark
-  bool any = false;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Track& a = tracks_[i];
-    if (a.state == TrackState::kTentative || track_match_[i]) continue;
-    const double ra = 0.5 * a.size.head<2>().norm();
-    for (std::size_t j = i + 1; j < n; ++j) {
-      const Track& b = tracks_[j];
-      if (b.state == TrackState::kTentative || track_match_[j]) continue;
-      const double rb = 0.5 * b.size.head<2>().norm();
-      if ((a.center.head<2>() - b.center.head<2>()).squaredNorm() >= (ra + rb) * (ra + rb)) {
-        continue;
-      }
-      const double iou = bevIoU(a.center.head<2>(), a.size.x(), a.size.y(), a.yaw_rad,
-                                b.center.head<2>(), b.size.x(), b.size.y(), b.yaw_rad);
-      if (iou < params_.duplicate_iou) continue;
-      // Keep the track with more hits (on a tie the older one, the lower id); when the one
-      // dropped was detected now and the kept one was not, the kept one takes its state.
-      const bool drop_a = b.hits > a.hits;
-      const std::size_t kept = drop_a ? j : i, dropped = drop_a ? i : j;
-      if (tracks_[dropped].misses == 0 && tracks_[kept].misses > 0) {
-        Track& k = tracks_[kept];
-        const Track& d = tracks_[dropped];
-        k.center = d.center;
-        k.velocity = d.velocity;
-        k.velocity_covariance = d.velocity_covariance;
-        k.position_covariance = d.position_covariance;
-        k.size = d.size;
-        k.yaw_rad = d.yaw_rad;
-        k.detection = d.detection;
-        k.misses = 0;
-        k.state = TrackState::kConfirmed;
-        filters_[kept].x = filters_[dropped].x;
-        filters_[kept].P = filters_[dropped].P;
-      }
-      track_match_[dropped] = 1;
-      any = true;
-      if (drop_a) break;
-    }
-  }
-  if (!any) return;
-  std::size_t keep = 0;
-  for (std::size_t t = 0; t < n; ++t) {
-    if (track_match_[t]) {
-      died_.push_back(tracks_[t].id);
-      continue;
-    }
-    if (keep != t) {
-      tracks_[keep] = tracks_[t];
-      filters_[keep] = filters_[t];
-    }
-    ++keep;
-  }
-  tracks_.resize(keep);
-  filters_.resize(keep);
 }
 
 void Tracker::predict(double dt) {

@@ -21,11 +21,7 @@
 ///      track becomes confirmed after `birth_hits` hits and is deleted after
 ///      `tentative_max_misses` consecutive misses; a confirmed track that misses becomes lost
 ///      (coasting on its prediction) and is deleted after `death_misses` consecutive misses;
-///      a lost track that is matched again is confirmed again, keeping its id;
-///   5. two established (confirmed or lost) tracks whose boxes overlap by `duplicate_iou` or more
-///      (bird's-eye IoU) follow one object (one of them lost it for a while and the other was
-///      born on it): the one with fewer hits is deleted, so the object does not flip between
-///      two ids.
+///      a lost track that is matched again is confirmed again, keeping its id.
 /// Ids start at 1 and are never reused within one Tracker.
 #pragma once
 
@@ -47,8 +43,6 @@ struct TrackerParams {
   double gate_sigmas = 2.0;            // [-] the gate widens by this many std devs of the
                                        //   predicted centre (at most to 2 x gate_distance_m)
   double overlap_weight_m = 1.0;       // [m] cost of a pair with no box overlap vs full overlap
-  double duplicate_iou = 0.3;          // [0..1] two established tracks whose boxes overlap this
-                                       //   much are one object: the one with fewer hits goes
   int birth_hits = 3;                  // [-] hits that confirm a tentative track (N)
   int death_misses = 20;               // [-] consecutive misses that delete a confirmed track (M)
   int tentative_max_misses = 2;        // [-] consecutive misses that delete a tentative track
@@ -155,7 +149,6 @@ class Tracker {
   void associateStage(bool tentative);
   void updateTrack(std::size_t t, const Measurement& m);
   void startTrack(const Measurement& m);
-  void removeDuplicates();
 
   TrackerParams params_;
   std::vector<Track> tracks_;
