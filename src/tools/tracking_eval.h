@@ -140,12 +140,13 @@ inline void printMot(const char* what, const core::ClearMotResult& r) {
 inline std::string motJson(const core::ClearMotResult& r) {
   char buf[640];
   std::snprintf(buf, sizeof buf,
-                "{\"frames\": %zu, \"gt\": %zu, \"gt_tracks\": %zu, \"mota\": %s, \"motp_m\": %s, "
+                "{\"frames\": %zu, \"gt\": %zu, \"gt_tracks\": %zu, \"matches\": %zu, \"mota\": %s, "
+                "\"motp_m\": %s, "
                 "\"recall\": %s, \"precision\": %s, \"misses\": %zu, \"false_positives\": %zu, "
                 "\"id_switches\": %zu, \"id_switches_per_100_gt_tracks\": %s, "
                 "\"fragmentations\": %zu, \"mostly_tracked\": %zu, \"partially_tracked\": %zu, "
                 "\"mostly_lost\": %zu}",
-                r.frames, r.gt, r.gt_tracks, jsonNumber(r.mota()).c_str(),
+                r.frames, r.gt, r.gt_tracks, r.matches, jsonNumber(r.mota()).c_str(),
                 jsonNumber(r.motp_m()).c_str(), jsonNumber(r.recall()).c_str(),
                 jsonNumber(r.precision()).c_str(), r.misses, r.false_positives, r.id_switches,
                 jsonNumber(r.idSwitchesPer100GtTracks()).c_str(), r.fragmentations,
