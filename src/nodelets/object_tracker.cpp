@@ -78,8 +78,11 @@ class ObjectTracker : public nodelet::Nodelet {
     *pose = Eigen::Isometry3d::Identity();
     if (!tf_buffer_ || fixed_frame_ == header.frame_id) return header.frame_id;
     try {
+      // Waits up to 50 ms for a transform that is late, not for a frame nobody publishes.
+      const bool known = tf_buffer_->_frameExists(fixed_frame_) &&
+                         tf_buffer_->_frameExists(header.frame_id);
       *pose = tf2::transformToEigen(tf_buffer_->lookupTransform(
-          fixed_frame_, header.frame_id, header.stamp, ros::Duration(0.05)));
+          fixed_frame_, header.frame_id, header.stamp, ros::Duration(known ? 0.05 : 0.0)));
       return fixed_frame_;
     } catch (const tf2::TransformException& e) {
       diagnostics_->count("tf_failures");

@@ -367,7 +367,10 @@ void Tracker::associateStage(bool tentative) {
     const int g = group_of_root[find(nt + m)];
     if (g >= 0) group_cols_[g].push_back(m);
   }
-  std::vector<int> local_row(nt, -1), local_col(nm, -1);  // small, per revolution
+  std::vector<int>& local_row = local_row_;  // index of a track / detection in its group
+  std::vector<int>& local_col = local_col_;
+  local_row.assign(nt, -1);
+  local_col.assign(nm, -1);
   for (std::size_t g = 0; g < groups; ++g) {
     const std::vector<int>& rows = group_rows_[g];
     const std::vector<int>& cols = group_cols_[g];
@@ -390,8 +393,8 @@ void Tracker::associateStage(bool tentative) {
       if (group_of_root[find(p.track)] != static_cast<int>(g)) continue;
       cost_[static_cast<std::size_t>(local_row[p.track]) * nc + local_col[p.meas]] = p.cost;
     }
-    std::vector<int> row_to_col;
-    solveAssignment(cost_, nr, nc, &row_to_col);
+    std::vector<int>& row_to_col = row_to_col_;
+    solveAssignment(cost_, nr, nc, &row_to_col, &hungarian_scratch_);
     for (int r = 0; r < nr; ++r) {
       const int c = row_to_col[r];
       if (c < 0 || cost_[static_cast<std::size_t>(r) * nc + c] >= kForbidden) continue;

@@ -165,7 +165,8 @@ class Tracker {
   std::vector<int> meas_match_;   // per measurement: track index or -1
   std::vector<int> parent_;       // union-find over tracks + measurements
   std::vector<std::vector<int>> group_rows_, group_cols_;
-  std::vector<double> cost_;
+  std::vector<double> cost_, hungarian_scratch_;
+  std::vector<int> local_row_, local_col_, row_to_col_;
   std::vector<int> assignment_;
   struct Pair {
     int track, meas;
