@@ -6,6 +6,7 @@
 // (config/object_tracker.yaml); tunable in ~tracker (cfg/ObjectTracker.cfg).
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 
 #include <boost/make_shared.hpp>
@@ -142,7 +143,7 @@ class ObjectTracker : public nodelet::Nodelet {
       }
       if (want_markers) {
         ros_conv::buildTrackMarkers(*tracked, tracker_->died(), marker_params_,
-                                    tracker_->params().moving_speed_mps, markers.get());
+                                    tracker_->params().moving_speed_mps, &arrows_, markers.get());
       }
     }
     if (tracks_pub_.getNumSubscribers() > 0) {
@@ -161,6 +162,7 @@ class ObjectTracker : public nodelet::Nodelet {
   ros_conv::TrackMarkerParams marker_params_;
   std::string fixed_frame_ = "odom";
   std::string frame_;  // the frame the current tracks live in
+  std::set<std::uint32_t> arrows_;  // tracks whose velocity arrow is shown
   int queue_size_ = 2;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;

@@ -85,7 +85,7 @@ void toMsg(const core::Track& t, TrackedObject* msg) {
 
 void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::uint32_t>& deleted,
                        const TrackMarkerParams& params, double moving_speed_mps,
-                       visualization_msgs::MarkerArray* markers) {
+                       std::set<std::uint32_t>* arrows, visualization_msgs::MarkerArray* markers) {
   markers->markers.clear();
   markers->markers.reserve(3 * tracks.objects.size() + 3 * deleted.size());
   visualization_msgs::Marker m;
@@ -126,7 +126,8 @@ void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::
       m.color = colour;
       m.color.a = 1.0f;
       markers->markers.push_back(m);
-    } else {
+      arrows->insert(t.id);
+    } else if (arrows->erase(t.id)) {
       visualization_msgs::Marker del;
       del.header = tracks.header;
       del.ns = m.ns;
@@ -152,6 +153,7 @@ void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::
     m.text.clear();
   }
   for (const std::uint32_t id : deleted) {
+    arrows->erase(id);
     for (const char* ns : {"tracks", "track_velocities", "track_labels"}) {
       visualization_msgs::Marker del;
       del.header = tracks.header;

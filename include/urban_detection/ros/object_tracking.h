@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -38,11 +39,12 @@ void toMsg(const core::Track& track, TrackedObject* msg);
 /// show_tentative) a box (ns "tracks"), a velocity arrow (ns "track_velocities", only when
 /// moving faster than `moving_speed_mps`) and a text "id class speed" (ns "track_labels",
 /// speed in m/s), all with marker id = track id and the track's colour (colourForId: stable per
-/// id). Then DELETE markers in all three namespaces for each id in `deleted` (tracks that died
-/// or stopped being drawn) and for arrows of tracks that stopped moving.
+/// id). Then DELETE markers in all three namespaces for each id in `deleted` (tracks that
+/// died), and for the arrow of a track in `arrows` (the ids that had one in the previous call;
+/// updated here) that no longer moves.
 void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::uint32_t>& deleted,
                        const TrackMarkerParams& params, double moving_speed_mps,
-                       visualization_msgs::MarkerArray* markers);
+                       std::set<std::uint32_t>* arrows, visualization_msgs::MarkerArray* markers);
 
 /// Reads ~tracker/* into `params` (each optional; throws ParamError naming the first bad one,
 /// with the range of TrackerParams::validate()).
