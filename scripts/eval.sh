@@ -55,6 +55,10 @@ if [ -x "$BIN/urban_detection_simulate" ]; then
   run sim --sim "$OUT/sim/drive.gt" --pcap "$OUT/sim/drive.pcap" --max-frames 40
   run sim_no_classifier --sim "$OUT/sim/drive.gt" --pcap "$OUT/sim/drive.pcap" --max-frames 40 \
       --classifier off
+  echo "== eval: tracking (CLEAR-MOT) on the whole simulated drive"
+  "${PIN[@]}" "$BIN/urban_detection_eval" --tracking --sim "$OUT/sim/drive.gt" \
+      --pcap "$OUT/sim/drive.pcap" "${CONFIGS[@]}" --tracker-config "$REPO/config/object_tracker.yaml" \
+      --json "$OUT/tracking_sim.json" | tee "$OUT/tracking_sim.txt"
 else
   echo "== eval: skipping the simulated drive (urban_detection_simulate not built)"
 fi

@@ -60,6 +60,7 @@
 #include "urban_detection/core/sensor/pcap_io.h"
 
 #include "tool_common.h"
+#include "tracker_bench.h"
 
 namespace core = urban_detection::core;
 using urban_detection::CloudXYZIRT;
@@ -389,6 +390,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: no frame could be read\n");
     return 1;
   }
+  // The tracker (issue 28) on a synthetic street of 100 objects (tracker_bench.h).
+  urban_detection::tools::benchTracker(100, 300, [&](const std::function<void()>& update) {
+    StageTimer t;
+    update();
+    t.stop("tracker_100_objects", &stage, &cpu_stage);
+  });
 
   struct rusage ru {};
   getrusage(RUSAGE_SELF, &ru);
@@ -415,7 +422,7 @@ int main(int argc, char** argv) {
   const char* order[] = {"packet_decode", "segmentation", "hough_refinement",
                          "foreground_extraction", "hierarchical_detection", "object_filter",
                          "classification",
-                         "markers",
+                         "markers", "tracker_100_objects",
                          "kdtree_detection", "kdtree_detection_pcl_default"};
   std::printf("%s: %zu revolutions (%ld pass%s over", label.c_str(), frames, repeat,
               repeat > 1 ? "es" : "");
@@ -432,6 +439,8 @@ int main(int argc, char** argv) {
                 percentile(it->second, 0.95), median(cpu_stage[name]),
                 std::string(name) == "hough_refinement" ? "  (inside segmentation)"
                 : std::string(name) == "markers"        ? "  (rviz output, lazy, not in pipeline)"
+                : std::string(name) == "tracker_100_objects"
+                    ? "  (synthetic street, 100 objects, not in pipeline)"
                 : std::string(name) == "kdtree_detection" ? "  (baseline, not in pipeline)"
                 : std::string(name) == "kdtree_detection_pcl_default"
                     ? "  (baseline with PCL's default sorted search)"

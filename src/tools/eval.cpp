@@ -4,6 +4,8 @@
 //   urban_detection_eval (--kitti-object DIR | --semantic-kitti DIR | --sim GTFILE --pcap PCAP)
 //                        [--detector hierarchical|kdtree|both] [--config FILE]...
 //                        [--json FILE] [--max-frames N] [--min-gt-points N] [--details]
+//   urban_detection_eval --tracking --sim GTFILE --pcap PCAP | --kitti-tracking DIR  (CLEAR-MOT
+//                        of the tracker after the pipeline; rules in tracking_eval.h)
 //
 // The ground-truth rules of each dataset (KITTI object, SemanticKITTI, simulated drive) are
 // documented in eval_datasets.h.
@@ -37,6 +39,7 @@
 
 #include "datasets.h"
 #include "tool_common.h"
+#include "tracking_eval.h"
 
 namespace core = urban_detection::core;
 namespace fs = std::filesystem;
@@ -441,7 +444,12 @@ void usage() {
       "  --details       print every missed object and false detection with its cause\n"
       "  --png DIR       write a top view per frame (first detector): ground truth left,\n"
       "                  detections right; yellow boxes missed objects, red false detections\n"
-      "  --png-view CX,CY,HALF_M   the square shown [m] (default 0,0,30)\n");
+      "  --png-view CX,CY,HALF_M   the square shown [m] (default 0,0,30)\n"
+      "  --tracking      with --sim: the tracker after the pipeline, scored with CLEAR-MOT\n"
+      "  --tracker-config FILE  the tracker's parameters (config/object_tracker.yaml's\n"
+      "                  tracker: map; default: the in-class defaults it mirrors)\n"
+      "  --kitti-tracking DIR  the same on the KITTI tracking layout (velodyne/<seq>/, label_02/,\n"
+      "                  calib/); rules in src/tools/tracking_eval.h, docs/tracking.md\n");
 }
 
 }  // namespace
@@ -456,6 +464,8 @@ int main(int argc, char** argv) {
   bool details = false;
   std::string png_dir, features_path, filter_arg, classifier_arg, detections_dir;
   PngView png_view;
+  bool tracking = false;
+  std::string kitti_tracking_dir, tracker_config;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* what) { return urban_detection::tools::optionValue(argc, argv, &i, what); };
@@ -486,6 +496,9 @@ int main(int argc, char** argv) {
     else if (a == "--classifier") classifier_arg = value("--classifier");
     else if (a == "--detections") detections_dir = value("--detections");
     else if (a == "--png") png_dir = value("--png");
+    else if (a == "--tracking") tracking = true;
+    else if (a == "--kitti-tracking") kitti_tracking_dir = value("--kitti-tracking");
+    else if (a == "--tracker-config") tracker_config = value("--tracker-config");
     else if (a == "--png-view") {
       const std::string v = value("--png-view");
       if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &png_view.cx, &png_view.cy, &png_view.half_m) !=
@@ -504,7 +517,9 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if ((!kitti_dir.empty() + !skitti_dir.empty() + !sim_gt.empty()) != 1) {
+  if ((!kitti_dir.empty() + !skitti_dir.empty() + !sim_gt.empty() +
+       !kitti_tracking_dir.empty()) != 1 ||
+      (tracking && sim_gt.empty())) {
     std::fprintf(stderr, "error: give exactly one dataset\n");
     usage();
     return 2;
@@ -603,6 +618,32 @@ int main(int argc, char** argv) {
     return 2;
   }
   core::GridSegmenter segmenter(params.segmentation);
+  if (tracking || !kitti_tracking_dir.empty()) {
+    urban_detection::tools::TrackingPipeline tp;
+    tp.segmenter = &segmenter;
+    tp.detector = detectors[0].get();
+    tp.object_filter = object_filter.get();
+    tp.classifier = classifier.get();
+    tp.min_gt_points = static_cast<std::size_t>(min_gt_points);
+    if (max_frames >= 0) tp.max_frames = static_cast<std::size_t>(max_frames);
+    std::string tracker_error;
+    if (!tracker_config.empty() &&
+        !core::loadTrackerParamsYaml(tracker_config, &tp.tracker, &tracker_error)) {
+      std::fprintf(stderr, "error: %s\n", tracker_error.c_str());
+      return 2;
+    }
+    if (!kitti_tracking_dir.empty()) {
+      return urban_detection::tools::runKittiTracking(tp, kitti_tracking_dir, json_path);
+    }
+    try {
+      return urban_detection::tools::runSimTracking(tp, sim_gt, sim_pcap,
+                                                    core::loadCalibration(calibration_path),
+                                                    cut_angle_deg, json_path);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 1;
+    }
+  }
 
   std::unique_ptr<Dataset> dataset;
   std::string dataset_path;

@@ -9,6 +9,7 @@
 
 #include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/ros/object_markers.h"
+#include "urban_detection/ros/object_tracking.h"
 
 using namespace urban_detection;
 
@@ -58,5 +59,12 @@ int main(int argc, char** argv) {
   section<ros_conv::ObjectMarkerParams>(
       "Markers (ObjectMarkers)",
       "`config/markers.yaml`, map `markers:`; nodelet parameters `~markers/<name>`; tunable.");
+  section<core::TrackerParams>(
+      "Tracker (ObjectTracker)",
+      "`config/object_tracker.yaml`, map `tracker:`; nodelet parameters `~tracker/<name>`; "
+      "tunable (the fields `cfg/ObjectTracker.cfg` lists).");
+  section<ros_conv::TrackMarkerParams>(
+      "Track markers (ObjectTracker)",
+      "`config/object_tracker.yaml`, map `markers:`; nodelet parameters `~markers/<name>`.");
   return 0;
 }

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/tracking/tracker.h"
 
 namespace urban_detection {
 namespace core {
@@ -24,7 +25,7 @@ class FieldTable : public ::testing::Test {};
 using Structs =
     ::testing::Types<GridSegmenterParams, HoughWallRefinerParams, HierarchicalGridDetectorParams,
                      DistanceWeightParams, FarObjectMergerParams, KdTreeDetectorParams,
-                     ObjectFilterParams, ObjectClassifierParams>;
+                     ObjectFilterParams, ObjectClassifierParams, TrackerParams>;
 TYPED_TEST_SUITE(FieldTable, Structs);
 
 // Unique names, a description each, finite ordered ranges around the in-class default.

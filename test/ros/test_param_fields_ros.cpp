@@ -17,11 +17,14 @@
 #include "urban_detection/KdTreeDetectorConfig.h"
 #include "urban_detection/ObjectClassifierConfig.h"
 #include "urban_detection/ObjectMarkersConfig.h"
+#include "urban_detection/ObjectTrackerConfig.h"
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/tracking/tracker.h"
 #include "urban_detection/ros/object_markers.h"
+#include "urban_detection/ros/object_tracking.h"
 #include "urban_detection/ros/tunable_fields.h"
 
 namespace urban_detection {
@@ -41,7 +44,8 @@ using Pairs = ::testing::Types<
     Pair<urban_detection::HierarchicalGridDetectorConfig, core::HierarchicalGridDetectorParams>,
     Pair<urban_detection::KdTreeDetectorConfig, core::KdTreeDetectorParams>,
     Pair<urban_detection::ObjectClassifierConfig, core::ObjectClassifierParams>,
-    Pair<urban_detection::ObjectMarkersConfig, ros_conv::ObjectMarkerParams>>;
+    Pair<urban_detection::ObjectMarkersConfig, ros_conv::ObjectMarkerParams>,
+    Pair<urban_detection::ObjectTrackerConfig, core::TrackerParams>>;
 TYPED_TEST_SUITE(ConfigFields, Pairs);
 
 // Every entry of a Config message, by name, as text (bools, ints, doubles and strings).
@@ -107,18 +111,26 @@ TYPED_TEST(ConfigFields, RoundTripThroughAConfigKeepsEveryListedField) {
   });
 }
 
-// config/markers.yaml binds exactly the marker table (the core YAML files are covered by
-// test_core's params_yaml tests).
-TEST(ConfigFiles, MarkersYamlKeysAreTableFields) {
-  const YAML::Node node = YAML::LoadFile(std::string(UD_SOURCE_DIR) + "/config/markers.yaml");
-  ASSERT_TRUE(node["markers"].IsMap());
+// The keys of map `section` in config/`file`, in order, against the table of Params: the ROS
+// layer's YAML files bind exactly their tables (the core ones are covered by test_core's
+// params_yaml tests).
+template <class Params>
+void expectYamlKeysAreTheTable(const std::string& file, const std::string& section) {
+  const YAML::Node node = YAML::LoadFile(std::string(UD_SOURCE_DIR) + "/config/" + file);
+  ASSERT_TRUE(node[section].IsMap()) << file << ": " << section;
   std::vector<std::string> table;
-  const ros_conv::ObjectMarkerParams defaults;
+  const Params defaults;
   core::forEachField(defaults,
                      [&](const core::FieldInfo& info, const auto&) { table.push_back(info.name); });
   std::vector<std::string> keys;
-  for (const auto& kv : node["markers"]) keys.push_back(kv.first.as<std::string>());
-  EXPECT_EQ(keys, table);
+  for (const auto& kv : node[section]) keys.push_back(kv.first.as<std::string>());
+  EXPECT_EQ(keys, table) << file << ": " << section;
+}
+
+TEST(ConfigFiles, RosLayerYamlKeysAreTableFields) {
+  expectYamlKeysAreTheTable<ros_conv::ObjectMarkerParams>("markers.yaml", "markers");
+  expectYamlKeysAreTheTable<core::TrackerParams>("object_tracker.yaml", "tracker");
+  expectYamlKeysAreTheTable<ros_conv::TrackMarkerParams>("object_tracker.yaml", "markers");
 }
 
 }  // namespace

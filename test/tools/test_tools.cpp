@@ -15,6 +15,8 @@
 #include <boost/property_tree/ptree.hpp>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 namespace fs = std::filesystem;
@@ -232,3 +234,41 @@ TEST_F(ToolsTest, SegEvalRejectsBadArgumentsAndMissingFiles) {
 }
 
 }  // namespace
+
+// Tracking (issue 28): eval --tracking writes the CLEAR-MOT keys, with counts that add up; the
+// tracker on the ground-truth boxes does at least as well as on the detections; the bench times
+// the tracker at 100 objects; a bad tracker config is refused with its reason.
+TEST_F(ToolsTest, EvalTrackingWritesClearMotAndBenchTimesTheTracker) {
+  const std::string path = dir_ + "/tracking.json";
+  ASSERT_EQ(0, run(kTools + "/urban_detection_eval --tracking --sim " + dir_ + "/drive.gt --pcap " +
+                       dir_ + "/drive.pcap" + configs() + " --tracker-config " + kConfig +
+                       "object_tracker.yaml --json " + path,
+                   dir_ + "/tracking.log"))
+      << "see " << dir_ << "/tracking.log";
+  const pt::ptree j = readJson(path);
+  EXPECT_EQ(j.get<std::string>("dataset"), "sim");
+  for (const char* who : {"tracker", "detector_alone", "tracker_on_ground_truth_boxes"}) {
+    const pt::ptree& r = j.get_child(who);
+    const double gt = r.get<double>("gt");
+    EXPECT_GT(gt, 0.0) << who;
+    EXPECT_EQ(r.get<double>("matches") + r.get<double>("misses"), gt) << who;
+    const double mota = 1.0 - (r.get<double>("misses") + r.get<double>("false_positives") +
+                               r.get<double>("id_switches")) / gt;
+    EXPECT_NEAR(r.get<double>("mota"), mota, 1e-4) << who;
+    EXPECT_LE(r.get<double>("mota"), r.get<double>("recall") + 1e-9) << who;
+  }
+  EXPECT_GE(j.get<double>("tracker_on_ground_truth_boxes.mota"), j.get<double>("tracker.mota"));
+
+  pt::ptree b;
+  bench("bench_tracker", "--no-kdtree", &b);
+  EXPECT_GT(b.get<double>("stages.tracker_100_objects.median_ms"), 0.0);
+
+  const std::string bad = dir_ + "/bad_tracker.yaml";
+  { std::ofstream(bad) << "tracker:\n  birth_hits: 0\n"; }
+  EXPECT_EQ(2, run(kTools + "/urban_detection_eval --tracking --sim " + dir_ + "/drive.gt --pcap " +
+                       dir_ + "/drive.pcap --tracker-config " + bad,
+                   dir_ + "/bad_tracker.log"));
+  std::ifstream log(dir_ + "/bad_tracker.log");
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("birth_hits"), std::string::npos) << text;
+}

@@ -172,5 +172,13 @@ bool loadPipelineParamsYaml(const std::string& path, GridSegmenterParams* segmen
   return !segmentation || applyFields(root, where, segmentation, error);
 }
 
+bool loadTrackerParamsYaml(const std::string& path, TrackerParams* params, std::string* error) {
+  YAML::Node root;
+  if (!loadRoot(path, "", &root, error)) return false;
+  const bool section = root.IsMap() && root["tracker"];
+  return applyFields(section ? root["tracker"] : root, path + ": " + (section ? "tracker/" : ""),
+                     params, error);
+}
+
 }  // namespace core
 }  // namespace urban_detection

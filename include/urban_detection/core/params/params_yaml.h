@@ -11,6 +11,7 @@
 #include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/tracking/tracker.h"
 
 namespace urban_detection {
 namespace core {
@@ -50,6 +51,10 @@ bool loadObjectFilterParamsYaml(const std::string& path, ObjectFilterParams* par
 /// folder of that file. A file without the map changes nothing.
 bool loadObjectClassifierParamsYaml(const std::string& path, ObjectClassifierParams* params,
                                     std::string* error);
+
+/// Overrides the fields of `params` from the `tracker:` map of a file (config/object_tracker.yaml),
+/// or from its root when it has no such map.
+bool loadTrackerParamsYaml(const std::string& path, TrackerParams* params, std::string* error);
 
 }  // namespace core
 }  // namespace urban_detection

@@ -1,0 +1,178 @@
+// urban_detection/ObjectTracker (issue 28): objects -> objects/tracked (TrackedObjectArray:
+// stable ids, velocities, tentative/confirmed/lost) and objects/tracked/markers. Tracks live
+// in ~fixed_frame (default odom) when tf gives fixed_frame <- the objects' frame at their stamp,
+// else in the objects' own frame (throttled warning; a change of frame restarts the tracks).
+// Lazy. Parameters: ~tracker/*, ~markers/*, ~fixed_frame, ~queue_size
+// (config/object_tracker.yaml); tunable in ~tracker (cfg/ObjectTracker.cfg).
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+
+#include <boost/make_shared.hpp>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "urban_detection/DetectedObjectArray.h"
+#include "urban_detection/ObjectTrackerConfig.h"
+#include "urban_detection/TrackedObjectArray.h"
+#include "urban_detection/ros/lazy_outputs.h"
+#include "urban_detection/ros/object_tracking.h"
+#include "urban_detection/ros/param_loading.h"
+#include "urban_detection/ros/stage_diagnostics.h"
+#include "urban_detection/ros/tunable_fields.h"
+#include "urban_detection/ros/validated_reconfigure.h"
+
+namespace urban_detection {
+
+class ObjectTrackerNodelet : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    const ros::NodeHandle tnh(pnh, "tracker");
+    core::TrackerParams params;
+    try {
+      loadFields(tnh, &params);
+      loadFields(ros::NodeHandle(pnh, "markers"), &marker_params_);
+      loadParam(pnh, "fixed_frame", &fixed_frame_);
+      loadParam(pnh, "queue_size", &queue_size_, 1, 100, "messages");
+    } catch (const ParamError& e) {
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), pnh, getName(),
+          "ObjectTracker: " + std::string(e.what()) + "; the nodelet stays idle");
+      return;
+    }
+    tracker_ = std::make_unique<core::Tracker>(params);
+    const auto initial = ros_conv::toConfig<ObjectTrackerConfig>(params);
+    auto apply = [this, tnh](const ObjectTrackerConfig& c) {
+      std::lock_guard<std::mutex> lock(mutex_);  // applied from the next message on
+      const core::TrackerParams p = ros_conv::fromConfig(c, tracker_->params());
+      const std::string error = checkFields(tnh, p);
+      if (error.empty()) tracker_->setParams(p);
+      return error;
+    };
+    reconfigure_ = std::make_unique<Reconfigure>(tnh, initial, apply);
+    if (!fixed_frame_.empty()) {
+      tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+      tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_);
+    }
+    diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(getNodeHandle(), pnh, getName(),
+                                                                "tracker");
+    diagnostics_->setActive(false);
+    lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
+      diagnostics_->setActive(wanted);
+      if (!wanted) return sub_.shutdown();
+      sub_ = getNodeHandle().subscribe("objects", queue_size_, &ObjectTrackerNodelet::objectsCb, this);
+    });
+    ros::NodeHandle& nh = getNodeHandle();
+    tracks_pub_ = lazy_->advertise<TrackedObjectArray>(nh, "objects/tracked", 2);
+    markers_pub_ = lazy_->advertise<visualization_msgs::MarkerArray>(nh, "objects/tracked/markers", 2);
+  }
+
+  // odom_T_sensor at the objects' stamp, or identity in the sensor frame when tf cannot say.
+  std::string fixedFrame(const std_msgs::Header& header, Eigen::Isometry3d* pose) {
+    *pose = Eigen::Isometry3d::Identity();
+    if (!tf_buffer_ || fixed_frame_ == header.frame_id) return header.frame_id;
+    try {
+      // Waits up to 50 ms for a transform that is late, not for a frame nobody publishes.
+      const bool known = tf_buffer_->_frameExists(fixed_frame_) &&
+                         tf_buffer_->_frameExists(header.frame_id);
+      *pose = tf2::transformToEigen(tf_buffer_->lookupTransform(
+          fixed_frame_, header.frame_id, header.stamp, ros::Duration(known ? 0.05 : 0.0)));
+      return fixed_frame_;
+    } catch (const tf2::TransformException& e) {
+      diagnostics_->count("tf_failures");
+      NODELET_WARN_THROTTLE(10, "no transform %s <- %s at the objects' stamp (%s): tracking in "
+                            "the sensor frame %s, velocities include the sensor's own motion",
+                            fixed_frame_.c_str(), header.frame_id.c_str(), e.what(),
+                            header.frame_id.c_str());
+      return header.frame_id;
+    }
+  }
+
+  void objectsCb(const DetectedObjectArray::ConstPtr& msg) {
+    const ros::WallTime start = ros::WallTime::now();
+    diagnostics_->input(msg->header.seq);
+    Eigen::Isometry3d pose;
+    const std::string frame = fixedFrame(msg->header, &pose);
+    auto tracked = boost::make_shared<TrackedObjectArray>();
+    auto markers = boost::make_shared<visualization_msgs::MarkerArray>();
+    const bool want_markers = markers_pub_.getNumSubscribers() > 0;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      objects_.resize(msg->objects.size());
+      for (std::size_t k = 0; k < objects_.size(); ++k) ros_conv::fromMsg(msg->objects[k], &objects_[k]);
+      if (frame != frame_) {  // a new frame: positions are not comparable, start over
+        if (!frame_.empty()) {
+          NODELET_INFO("tracking in frame %s (was %s): tracks restarted", frame.c_str(), frame_.c_str());
+        }
+        tracker_->reset();
+        frame_ = frame;
+      }
+      const ros::WallTime t0 = ros::WallTime::now();
+      const core::TrackerStats& s = tracker_->update(objects_, pose, msg->header.stamp.toSec());
+      const double association_s = (ros::WallTime::now() - t0).toSec();
+      if (s.invalid_detections > 0) {
+        diagnostics_->count("invalid_objects", s.invalid_detections);
+        NODELET_ERROR_THROTTLE(5, "skipped %zu of %zu objects with a non-finite box or pose",
+                               s.invalid_detections, s.detections);
+      }
+      if (s.restarted) {
+        NODELET_WARN_THROTTLE(5, "objects' stamp went back or jumped: tracks restarted");
+      }
+      diagnostics_->setTotal("confirmed_tracks", s.confirmed, false);
+      diagnostics_->setTotal("tentative_tracks", s.tentative, false);
+      diagnostics_->setTotal("lost_tracks", s.lost, false);
+      diagnostics_->setTotal("tracker_update_us", static_cast<std::uint64_t>(association_s * 1e6),
+                             false);
+      tracked->header = msg->header;
+      tracked->header.frame_id = frame;
+      tracked->detector = msg->detector;
+      tracked->objects.resize(tracker_->tracks().size());
+      for (std::size_t k = 0; k < tracked->objects.size(); ++k) {
+        const core::Track& t = tracker_->tracks()[k];
+        ros_conv::toMsg(t, &tracked->objects[k]);
+        if (t.detection >= 0) {
+          tracked->objects[k].detection_id = static_cast<std::int32_t>(msg->objects[t.detection].id);
+        }
+      }
+      if (want_markers) {
+        ros_conv::buildTrackMarkers(*tracked, tracker_->died(), marker_params_,
+                                    tracker_->params().moving_speed_mps, &arrows_, markers.get());
+      }
+    }
+    if (tracks_pub_.getNumSubscribers() > 0) {
+      tracks_pub_.publish(boost::shared_ptr<const TrackedObjectArray>(tracked));
+    }
+    if (want_markers) markers_pub_.publish(boost::shared_ptr<const visualization_msgs::MarkerArray>(markers));
+    diagnostics_->latency(msg->header.stamp, ros::Time::now());
+    diagnostics_->frame((ros::WallTime::now() - start).toSec());
+    diagnostics_->output();
+  }
+
+  using Reconfigure = ros_conv::ValidatedReconfigure<ObjectTrackerConfig>;
+  std::mutex mutex_;  // tracker_ between messages and reconfigure
+  std::unique_ptr<core::Tracker> tracker_;
+  std::vector<core::DetectedObject> objects_;  // converted input, reused
+  ros_conv::TrackMarkerParams marker_params_;
+  std::string fixed_frame_ = "odom";
+  std::string frame_;  // the frame the current tracks live in
+  std::set<std::uint32_t> arrows_;  // tracks whose velocity arrow is shown
+  int queue_size_ = 2;
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::unique_ptr<Reconfigure> reconfigure_;
+  std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
+  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;
+  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
+  ros::Publisher tracks_pub_, markers_pub_;
+  ros::Subscriber sub_;
+};
+
+}  // namespace urban_detection
+
+PLUGINLIB_EXPORT_CLASS(urban_detection::ObjectTrackerNodelet, nodelet::Nodelet)
