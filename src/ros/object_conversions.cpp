@@ -12,24 +12,10 @@ void toMsg(const core::DetectedObject& o, DetectedObject* m) {
   m->centroid.y = o.centroid.y();
   m->centroid.z = o.centroid.z();
   const Eigen::Vector3f c = 0.5f * (o.min_pt + o.max_pt), d = o.max_pt - o.min_pt;
-  m->aabb_pose.position.x = c.x();
-  m->aabb_pose.position.y = c.y();
-  m->aabb_pose.position.z = c.z();
-  m->aabb_pose.orientation.x = m->aabb_pose.orientation.y = m->aabb_pose.orientation.z = 0.0;
-  m->aabb_pose.orientation.w = 1.0;
-  m->aabb_dimensions.x = d.x();
-  m->aabb_dimensions.y = d.y();
-  m->aabb_dimensions.z = d.z();
-  m->obb_pose.position.x = o.obb_center.x();
-  m->obb_pose.position.y = o.obb_center.y();
-  m->obb_pose.position.z = o.obb_center.z();
-  // Rotation about z by yaw: q = (0, 0, sin(yaw/2), cos(yaw/2)).
-  m->obb_pose.orientation.x = m->obb_pose.orientation.y = 0.0;
-  m->obb_pose.orientation.z = std::sin(0.5 * o.obb_yaw_rad);
-  m->obb_pose.orientation.w = std::cos(0.5 * o.obb_yaw_rad);
-  m->obb_dimensions.x = o.obb_size.x();
-  m->obb_dimensions.y = o.obb_size.y();
-  m->obb_dimensions.z = o.obb_size.z();
+  m->aabb_pose = yawPose(c, 0.0);
+  m->aabb_dimensions = toVector3(d);
+  m->obb_pose = yawPose(o.obb_center, o.obb_yaw_rad);
+  m->obb_dimensions = toVector3(o.obb_size);
   m->indices.assign(o.indices.begin(), o.indices.end());
   if (o.category == core::ObjectCategory::kUnknown) {
     m->class_label = kUnknownClass;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/param_loading.h"
 
@@ -51,15 +52,8 @@ void toMsg(const core::Track& t, TrackedObject* msg) {
   msg->hits = t.hits;
   msg->misses = t.misses;
   msg->detection_id = -1;
-  msg->pose.position.x = t.center.x();
-  msg->pose.position.y = t.center.y();
-  msg->pose.position.z = t.center.z();
-  msg->pose.orientation.x = msg->pose.orientation.y = 0.0;
-  msg->pose.orientation.z = std::sin(0.5 * t.yaw_rad);
-  msg->pose.orientation.w = std::cos(0.5 * t.yaw_rad);
-  msg->dimensions.x = t.size.x();
-  msg->dimensions.y = t.size.y();
-  msg->dimensions.z = t.size.z();
+  msg->pose = yawPose(t.center, t.yaw_rad);
+  msg->dimensions = toVector3(t.size);
   msg->velocity.x = t.velocity.x();
   msg->velocity.y = t.velocity.y();
   msg->velocity.z = 0.0;

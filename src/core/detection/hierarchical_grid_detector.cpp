@@ -83,14 +83,14 @@ HierarchicalGridDetector::HierarchicalGridDetector(const HierarchicalGridDetecto
   nc_ = 2 * half;
   nd_ = nc_ * params_.xi;
   origin_m_ = -half * params_.coarse_cell_m;
-  coarse_of_.resize(nd_);
-  for (int i = 0; i < nd_; ++i) coarse_of_[i] = i / params_.xi;
-  coarse_slot_.assign(static_cast<std::size_t>(nc_) * nc_, -1);
+  coarse_.of.resize(nd_);
+  for (int i = 0; i < nd_; ++i) coarse_.of[i] = i / params_.xi;
+  coarse_.slot.assign(static_cast<std::size_t>(nc_) * nc_, -1);
   // The bridge tables give the probe margin, which sizes the padded sub-cell maps.
   buildBridgeTables();
   const std::size_t padded = static_cast<std::size_t>(stride_) * stride_;
-  dense_slot_.assign(padded, -1);
-  dense_bits_.assign((padded + 63) / 64, 0);
+  dense_.slot.assign(padded, -1);
+  dense_.bits.assign((padded + 63) / 64, 0);
 }
 
 inline int HierarchicalGridDetector::directionBin(float x, float y) {
@@ -176,17 +176,17 @@ void HierarchicalGridDetector::buildBridgeTables() {
 }
 
 inline bool HierarchicalGridDetector::linked(std::int32_t a, std::int32_t b) const {
-  return a == b || std::fabs(coarse_zmax_[a] - coarse_zmax_[b]) <= psi_max_f_;
+  return a == b || std::fabs(coarse_.zmax[a] - coarse_.zmax[b]) <= psi_max_f_;
 }
 
 void HierarchicalGridDetector::resetGrid() {
-  for (const std::int32_t cell : dense_cell_) {
-    dense_slot_[cell] = -1;
-    dense_bits_[cell >> 6] = 0;  // only the last frame's sub-cells have bits set
+  for (const std::int32_t cell : dense_.cell) {
+    dense_.slot[cell] = -1;
+    dense_.bits[cell >> 6] = 0;  // only the last frame's sub-cells have bits set
   }
-  for (const std::int32_t cell : coarse_cell_) coarse_slot_[cell] = -1;
-  dense_cell_.clear();
-  coarse_cell_.clear();
+  for (const std::int32_t cell : coarse_.cell) coarse_.slot[cell] = -1;
+  dense_.cell.clear();
+  coarse_.cell.clear();
 }
 
 void HierarchicalGridDetector::roofBridges() {
@@ -195,20 +195,20 @@ void HierarchicalGridDetector::roofBridges() {
   // is made, so a ring joined to a car does not make the car a candidate, and a car or a
   // pedestrian behind another car (not flat) is never one. Union-find roots are the smallest
   // slot of their component, so one ascending pass meets each root before its members.
-  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
-  root_zmin_.resize(nds);
-  root_zmax_.resize(nds);
-  flattenRoots(dense_parent_.data(), nds);
+  const std::int32_t nds = static_cast<std::int32_t>(dense_.cell.size());
+  dense_.root_zmin.resize(nds);
+  dense_.root_zmax.resize(nds);
+  flattenRoots(dense_.parent.data(), nds);
   // Without a branch per sub-cell (whether it is dense and a root is data-dependent): a root
   // starts its range from its own, every sub-cell folds into its root's. A sub-cell that is
   // not dense is never linked, so it is its own root and only writes its own entry, which no
   // dense sub-cell reads.
   const float inf = std::numeric_limits<float>::infinity();
   for (std::int32_t s = 0; s < nds; ++s) {
-    const std::int32_t root = dense_parent_[s];
+    const std::int32_t root = dense_.parent[s];
     const bool own = root == s;
-    root_zmin_[root] = std::min(own ? inf : root_zmin_[root], dense_zmin_[s]);
-    root_zmax_[root] = std::max(own ? -inf : root_zmax_[root], dense_zmax_[s]);
+    dense_.root_zmin[root] = std::min(own ? inf : dense_.root_zmin[root], dense_.zmin[s]);
+    dense_.root_zmax[root] = std::max(own ? -inf : dense_.root_zmax[root], dense_.zmax[s]);
   }
   const float step = static_cast<float>(params_.roof_max_step_m);
   const float range2 =
@@ -217,48 +217,48 @@ void HierarchicalGridDetector::roofBridges() {
   const float origin = static_cast<float>(origin_m_);
   const float dcell = static_cast<float>(dense_cell_m_);
   // The flat dense sub-cells of flat components, listed without a branch per sub-cell.
-  dense_flat_.resize(nds);
+  dense_.flat.resize(nds);
   std::int32_t nflat = 0;
   for (std::int32_t s = 0; s < nds; ++s) {
-    const std::int32_t root = dense_parent_[s];
-    dense_flat_[nflat] = s;
-    nflat += (dense_occupied_[s] != 0) & (dense_zmax_[s] - dense_zmin_[s] <= step) &
-             (root_zmax_[root] - root_zmin_[root] <= step);
+    const std::int32_t root = dense_.parent[s];
+    dense_.flat[nflat] = s;
+    nflat += (dense_.occupied[s] != 0) & (dense_.zmax[s] - dense_.zmin[s] <= step) &
+             (dense_.root_zmax[root] - dense_.root_zmin[root] <= step);
   }
-  dense_flat_.resize(nflat);
+  dense_.flat.resize(nflat);
   // The rings b are few: from each, look back towards the sensor along its line of sight for
   // the sub-cells a it may join (the offsets of b's direction bin, negated).
-  for (const std::int32_t b : dense_flat_) {
-    const int ix = dense_xy_[b].x, iy = dense_xy_[b].y;
+  for (const std::int32_t b : dense_.flat) {
+    const int ix = dense_.xy[b].x, iy = dense_.xy[b].y;
     const float cx = (ix + 0.5f) * dcell + origin, cy = (iy + 0.5f) * dcell + origin;
     const float db2 = cx * cx + cy * cy;
     if (db2 < dcell * dcell) continue;
-    const float zb = dense_zmax_[b];
-    const std::int32_t cb = dense_coarse_[b];
-    if (coarse_zmax_[cb] - zb > step) continue;
+    const float zb = dense_.zmax[b];
+    const std::int32_t cb = dense_.coarse[b];
+    if (coarse_.zmax[cb] - zb > step) continue;
     const float h = -zb;  // the sensor is at z = 0
     const float inv_d = 1.0f / std::sqrt(db2);
     const std::int32_t* begin =
         &bridge_begin_[kRoofTable * (kDirectionBins + 1) + directionBin(cx, cy)];
-    const std::int32_t cell = dense_cell_[b];
+    const std::int32_t cell = dense_.cell[b];
     for (std::int32_t k = begin[0]; k < begin[1]; ++k) {
       const int ox = bridge_offsets_[k].x, oy = bridge_offsets_[k].y;
       const std::int32_t a_cell = cell - bridge_flat_[k];
       // Dense sub-cells only (the bit map of detect()), then their slot.
-      if (!((dense_bits_[a_cell >> 6] >> (a_cell & 63)) & 1u)) continue;
-      const std::int32_t a = dense_slot_[a_cell];
-      const std::int32_t ca = dense_coarse_[a];
-      if (std::fabs(zb - coarse_zmax_[ca]) > step || !linked(ca, cb)) continue;
+      if (!((dense_.bits[a_cell >> 6] >> (a_cell & 63)) & 1u)) continue;
+      const std::int32_t a = dense_.slot[a_cell];
+      const std::int32_t ca = dense_.coarse[a];
+      if (std::fabs(zb - coarse_.zmax[ca]) > step || !linked(ca, cb)) continue;
       // Two rings land d^2 * dtheta / h apart on a horizontal surface h below the sensor at
       // distance d (small angles).
       const float ax = cx - ox * dcell, ay = cy - oy * dcell;
       const float da2 = ax * ax + ay * ay;
       const float along = (ox * cx + oy * cy) * inv_d * dcell;
       if (da2 > range2 || (h > 0.0f && along * h > dtheta * da2 + dcell * h)) continue;
-      const std::int32_t ra = findRoot(dense_parent_.data(), a),
-                         rb = findRoot(dense_parent_.data(), b);
+      const std::int32_t ra = findRoot(dense_.parent.data(), a),
+                         rb = findRoot(dense_.parent.data(), b);
       if (ra == rb) continue;
-      dense_parent_[std::max(ra, rb)] = std::min(ra, rb);
+      dense_.parent[std::max(ra, rb)] = std::min(ra, rb);
       ++stats_.roof_bridges;
     }
   }
@@ -268,14 +268,14 @@ void HierarchicalGridDetector::linkCoarse() {
   // As at the dense level: the root of the super-cell whose links are made is kept, the psi
   // tests of its forward neighbours are a bit mask (an empty cell, slot -1, has a NaN Z_max),
   // then the links in the same order.
-  const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
-  coarse_parent_.resize(ncs);
-  for (std::int32_t s = 0; s < ncs; ++s) coarse_parent_[s] = s;
-  coarse_key_.resize(ncs + 1);
-  coarse_key_[0] = std::numeric_limits<float>::quiet_NaN();
-  std::copy(coarse_zmax_.begin(), coarse_zmax_.end(), coarse_key_.begin() + 1);
-  const float* ckey = coarse_key_.data() + 1;
-  std::int32_t* cparent = coarse_parent_.data();
+  const std::int32_t ncs = static_cast<std::int32_t>(coarse_.cell.size());
+  coarse_.parent.resize(ncs);
+  for (std::int32_t s = 0; s < ncs; ++s) coarse_.parent[s] = s;
+  coarse_.key.resize(ncs + 1);
+  coarse_.key[0] = std::numeric_limits<float>::quiet_NaN();
+  std::copy(coarse_.zmax.begin(), coarse_.zmax.end(), coarse_.key.begin() + 1);
+  const float* ckey = coarse_.key.data() + 1;
+  std::int32_t* cparent = coarse_.parent.data();
   const float psi_max = psi_max_f_;
   std::int32_t croot = 0;
   auto uniteCoarse = [cparent, &croot](std::int32_t r) {
@@ -291,11 +291,11 @@ void HierarchicalGridDetector::linkCoarse() {
   std::int32_t forward_flat[4];
   for (int f = 0; f < 4; ++f) forward_flat[f] = kForward[f][1] * nc_ + kForward[f][0];
   for (std::int32_t s = 0; s < ncs; ++s) {
-    const int cy = coarse_cell_[s] / nc_, cx = coarse_cell_[s] - cy * nc_;
+    const int cy = coarse_.cell[s] / nc_, cx = coarse_.cell[s] - cy * nc_;
     const float zs = ckey[s];
     croot = findRoot(cparent, s);
     if (cx >= 1 && cx < nc_ - 1 && cy < nc_ - 1) {
-      const std::int32_t* here = coarse_slot_.data() + coarse_cell_[s];
+      const std::int32_t* here = coarse_.slot.data() + coarse_.cell[s];
       unsigned linked_forward = 0;
       for (int f = 0; f < 4; ++f) {
         linked_forward |=
@@ -309,11 +309,11 @@ void HierarchicalGridDetector::linkCoarse() {
     for (const auto& o : kForward) {
       const int x = cx + o[0], y = cy + o[1];
       if (x < 0 || x >= nc_ || y >= nc_) continue;
-      const std::int32_t r = coarse_slot_[y * nc_ + x];
+      const std::int32_t r = coarse_.slot[y * nc_ + x];
       if (r >= 0 && linked(s, r)) uniteCoarse(r);
     }
   }
-  for (std::int32_t s = 0; s < ncs; ++s) stats_.coarse_blobs += coarse_parent_[s] == s;
+  for (std::int32_t s = 0; s < ncs; ++s) stats_.coarse_blobs += coarse_.parent[s] == s;
 }
 
 // Binning: every point goes to its sub-cell and, through it (buildCells()), to its super-cell.
@@ -330,7 +330,7 @@ std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground)
   // map is 2.6 MB and the entries come from the outer caches, many at a time instead of one
   // dependent load per point. The second turns the sub-cells into slots in point order.
   std::int32_t* const point_cell = point_slot_.data();
-  const std::int32_t* const slot_map_base = dense_slot_.data();
+  const std::int32_t* const slot_map_base = dense_.slot.data();
   // Sub-cell (0, 0) in the padded map.
   const std::int32_t pad_offset = probe_margin_ * stride_ + probe_margin_;
   std::size_t i = 0;
@@ -390,9 +390,9 @@ std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground)
   // point leaves a stale entry there that the next opening overwrites. Inside implies finite
   // (comparisons with NaN and inf fail), so the finiteness tests only run for the rejected
   // points.
-  if (dense_acc_.size() < n + 1) dense_acc_.resize(n + 1);
-  DenseAcc* const acc = dense_acc_.data();
-  std::int32_t* const slot_map_w = dense_slot_.data();
+  if (dense_.acc.size() < n + 1) dense_.acc.resize(n + 1);
+  DenseAcc* const acc = dense_.acc.data();
+  std::int32_t* const slot_map_w = dense_.slot.data();
   std::int32_t next_slot = 0;
   for (i = 0; i < n; ++i) {
     const std::int32_t cell = point_cell[i];
@@ -424,60 +424,60 @@ std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground)
 }
 
 void HierarchicalGridDetector::buildCells(std::int32_t nds) {
-  const DenseAcc* const acc = dense_acc_.data();
+  const DenseAcc* const acc = dense_.acc.data();
   // Per sub-cell, in slot order (the order of their first points): column and row, super-cell
   // (opened in the order of their first sub-cells), heights gathered to it. The column and row
   // come back from the flat index: (cell + 0.5) / stride_ in double is at least 0.5 / stride_ from
   // the next integer and exact to far better than that, so the truncation is the integer division.
   const double inv_stride = 1.0 / stride_;
-  dense_cell_.resize(nds);
-  dense_xy_.resize(nds);
-  dense_count_.resize(nds);
-  dense_zmax_.resize(nds);
-  dense_zmin_.resize(nds);
-  dense_coarse_.resize(nds);
+  dense_.cell.resize(nds);
+  dense_.xy.resize(nds);
+  dense_.count.resize(nds);
+  dense_.zmax.resize(nds);
+  dense_.zmin.resize(nds);
+  dense_.coarse.resize(nds);
   // A new super-cell is not a branch either (about one sub-cell in three opens one): every
   // sub-cell writes the next free super-cell's entries, which only advances when it opened it.
-  coarse_cell_.resize(nds);
-  coarse_zmax_.resize(nds);
+  coarse_.cell.resize(nds);
+  coarse_.zmax.resize(nds);
   std::int32_t next_coarse = 0;
   for (std::int32_t s = 0; s < nds; ++s) {
     const DenseAcc& e = acc[s];
     const std::int32_t cell = e.cell;
     const int row = static_cast<int>((cell + 0.5) * inv_stride);
     const int ix = cell - row * stride_ - probe_margin_, iy = row - probe_margin_;
-    dense_cell_[s] = cell;
-    dense_xy_[s] = CellXY{ix, iy};
-    dense_count_[s] = e.count;
-    dense_zmax_[s] = e.zmax;
-    dense_zmin_[s] = e.zmin;
-    const int cx = coarse_of_[ix], cy = coarse_of_[iy];
+    dense_.cell[s] = cell;
+    dense_.xy[s] = CellXY{ix, iy};
+    dense_.count[s] = e.count;
+    dense_.zmax[s] = e.zmax;
+    dense_.zmin[s] = e.zmin;
+    const int cx = coarse_.of[ix], cy = coarse_.of[iy];
     const std::int32_t ccell = cy * nc_ + cx;
-    const std::int32_t old_cslot = coarse_slot_[ccell];
+    const std::int32_t old_cslot = coarse_.slot[ccell];
     const bool fresh = old_cslot < 0;
     const std::int32_t cslot = fresh ? next_coarse : old_cslot;
     next_coarse += fresh;
-    coarse_slot_[ccell] = cslot;
-    coarse_cell_[cslot] = ccell;
-    const float zmax = coarse_zmax_[cslot];  // stale when fresh
-    coarse_zmax_[cslot] = fresh ? e.zmax : std::max(zmax, e.zmax);
-    dense_coarse_[s] = cslot;
+    coarse_.slot[ccell] = cslot;
+    coarse_.cell[cslot] = ccell;
+    const float zmax = coarse_.zmax[cslot];  // stale when fresh
+    coarse_.zmax[cslot] = fresh ? e.zmax : std::max(zmax, e.zmax);
+    dense_.coarse[s] = cslot;
   }
-  coarse_cell_.resize(next_coarse);
-  coarse_zmax_.resize(next_coarse);
+  coarse_.cell.resize(next_coarse);
+  coarse_.zmax.resize(next_coarse);
   stats_.dense_cells = nds;
   stats_.coarse_cells = next_coarse;
 }
 
 // Dense level: weighted densities; dense sub-cells are the nodes of the components.
 void HierarchicalGridDetector::weighDensities() {
-  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
+  const std::int32_t nds = static_cast<std::int32_t>(dense_.cell.size());
   const float origin = static_cast<float>(origin_m_);
-  dense_occupied_.assign(nds, 0);
-  dense_rho_.resize(nds + 1);  // [0]: slot -1 (no sub-cell), see the ring of step 4
-  dense_rho_[0] = 0.0f;
-  float* const rho = dense_rho_.data() + 1;
-  dense_parent_.resize(nds);
+  dense_.occupied.assign(nds, 0);
+  dense_.rho.resize(nds + 1);  // [0]: slot -1 (no sub-cell), see the ring of step 4
+  dense_.rho[0] = 0.0f;
+  float* const rho = dense_.rho.data() + 1;
+  dense_.parent.resize(nds);
   const float thr = static_cast<float>(params_.dense_min_weighted_points);
   const float dcell = static_cast<float>(dense_cell_m_);
   const float bridge_range2 = static_cast<float>(params_.bridge_range_m * params_.bridge_range_m);
@@ -486,23 +486,23 @@ void HierarchicalGridDetector::weighDensities() {
   // Step 3's probe row of each sub-cell (its bridge table by sensor distance, its direction
   // bin) is chosen here, where the sub-cell's centre and distance are computed anyway: the
   // links below then start from a load instead of a division and a chain of compares.
-  probe_of_.resize(nds);
+  dense_.probe_of.resize(nds);
   for (std::int32_t s = 0; s < nds; ++s) {
-    const int ix = dense_xy_[s].x, iy = dense_xy_[s].y;
+    const int ix = dense_.xy[s].x, iy = dense_.xy[s].y;
     const float x = (ix + 0.5f) * dcell + origin, y = (iy + 0.5f) * dcell + origin;
     const float d2 = x * x + y * y;
-    rho[s] = static_cast<float>(dense_count_[s]) * weight_(std::sqrt(d2));
-    dense_parent_[s] = s;
+    rho[s] = static_cast<float>(dense_.count[s]) * weight_(std::sqrt(d2));
+    dense_.parent[s] = s;
     const int table = d2 > gap_range2 ? 2 : d2 > bridge_range2 ? 1 : 0;
     const int bin = directionBin(x, y);
     const int len = probe_row_len_[table];
-    probe_of_[s] = ProbeRow{probe_row_begin_[table] + bin * len, len,
+    dense_.probe_of[s] = ProbeRow{probe_row_begin_[table] + bin * len, len,
                             d2 < dcell * dcell ? std::uint64_t{0xf}
                                                : probe_mask_[table * kDirectionBins + bin]};
     if (rho[s] >= thr) {
-      dense_occupied_[s] = 1;
-      const std::int32_t cell = dense_cell_[s];
-      dense_bits_[cell >> 6] |= std::uint64_t{1} << (cell & 63);
+      dense_.occupied[s] = 1;
+      const std::int32_t cell = dense_.cell[s];
+      dense_.bits[cell >> 6] |= std::uint64_t{1} << (cell & 63);
       ++stats_.dense_occupied;
     }
   }
@@ -511,10 +511,10 @@ void HierarchicalGridDetector::weighDensities() {
   // super-cell when the sub-cell is dense, NaN otherwise (every comparison with NaN fails).
   // |za - zb| <= psi_max is linked(): equal super-cells give 0 <= psi_max. Slot -1 (an empty
   // sub-cell) has a key too, NaN: a probe needs no test for it.
-  dense_key_.resize(nds + 1);
-  dense_key_[0] = std::numeric_limits<float>::quiet_NaN();
+  dense_.key.resize(nds + 1);
+  dense_.key[0] = std::numeric_limits<float>::quiet_NaN();
   for (std::int32_t s = 0; s < nds; ++s) {
-    dense_key_[s + 1] = dense_occupied_[s] ? coarse_zmax_[dense_coarse_[s]]
+    dense_.key[s + 1] = dense_.occupied[s] ? coarse_.zmax[dense_.coarse[s]]
                                            : std::numeric_limits<float>::quiet_NaN();
   }
 }
@@ -522,18 +522,18 @@ void HierarchicalGridDetector::weighDensities() {
 // Step 3: connected components of the dense sub-cells (8-neighbourhood) whose super-cells are
 // psi-linked, plus the radial bridges (header).
 void HierarchicalGridDetector::linkDense() {
-  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
+  const std::int32_t nds = static_cast<std::int32_t>(dense_.cell.size());
   const float psi_max = psi_max_f_;
-  const float* key = dense_key_.data() + 1;
-  const std::int32_t* slot_map = dense_slot_.data();
+  const float* key = dense_.key.data() + 1;
+  const std::int32_t* slot_map = dense_.slot.data();
   // Dense sub-cells as one bit per grid cell (80 kB for the default grid, mostly cached, where
   // the slot map is 2.6 MB): most probes land on empty or near-empty sub-cells and end at the
   // bit; only the dense ones read the slot map and the key.
-  const std::uint64_t* dense_bits = dense_bits_.data();
+  const std::uint64_t* dense_bits = dense_.bits.data();
   auto denseBit = [dense_bits](std::int32_t cell) {
     return static_cast<unsigned>(dense_bits[cell >> 6] >> (cell & 63)) & 1u;
   };
-  std::int32_t* parent = dense_parent_.data();
+  std::int32_t* parent = dense_.parent.data();
   // Root of the sub-cell whose links are being made: found once per sub-cell, not once per
   // link tried; a link can only replace it by a smaller root (roots stay the smallest slot).
   std::int32_t root = 0;
@@ -549,16 +549,16 @@ void HierarchicalGridDetector::linkDense() {
     return true;
   };
   for (std::int32_t s = 0; s < nds; ++s) {
-    if (!dense_occupied_[s]) continue;
+    if (!dense_.occupied[s]) continue;
     // One row of probes (the four forward neighbours, then the bridges of the sub-cell's table
     // and direction bin; only the forward ones for the sensor's own sub-cells), flat offsets
     // into the padded map: which of them are dense without branches, then the psi tests and
     // links of those in the row's order.
-    const std::int32_t cell = dense_cell_[s];
+    const std::int32_t cell = dense_.cell[s];
     const std::int32_t* here = slot_map + cell;
     const float ks = key[s];
     root = findRoot(parent, s);
-    const ProbeRow& probe = probe_of_[s];
+    const ProbeRow& probe = dense_.probe_of[s];
     const int len = probe.len;
     const std::int32_t* row = probe_flat_.data() + probe.begin;
     std::uint64_t dense_row = 0;
@@ -575,30 +575,30 @@ void HierarchicalGridDetector::linkDense() {
 
 // Component index per sub-cell (near-empty ones borrow a dense neighbour's).
 std::int32_t HierarchicalGridDetector::numberComponents() {
-  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
-  const std::int32_t ncs = static_cast<std::int32_t>(coarse_cell_.size());
+  const std::int32_t nds = static_cast<std::int32_t>(dense_.cell.size());
+  const std::int32_t ncs = static_cast<std::int32_t>(coarse_.cell.size());
   const float psi_max = psi_max_f_;
-  const float* rho = dense_rho_.data() + 1;
-  const float* key = dense_key_.data() + 1;
-  const std::int32_t* slot_map = dense_slot_.data();
+  const float* rho = dense_.rho.data() + 1;
+  const float* key = dense_.key.data() + 1;
+  const std::int32_t* slot_map = dense_.slot.data();
   // Components are numbered in the order of first appearance of their sub-cells, which is the
   // order of the first point in the input, so ids do not depend on the grid layout.
-  dense_object_.assign(nds, -1);
-  root_object_.assign(params_.dense_refinement ? nds : ncs, -1);
+  dense_.object.assign(nds, -1);
+  comps_.root_object.assign(params_.dense_refinement ? nds : ncs, -1);
   std::int32_t ncomp = 0;
   if (params_.dense_refinement) {
-    flattenRoots(dense_parent_.data(), nds);
+    flattenRoots(dense_.parent.data(), nds);
   } else {
-    flattenRoots(coarse_parent_.data(), ncs);
+    flattenRoots(coarse_.parent.data(), ncs);
   }
   auto componentOf = [&](std::int32_t s) -> std::int32_t {
     const std::int32_t root =
-        params_.dense_refinement ? dense_parent_[s] : coarse_parent_[dense_coarse_[s]];
+        params_.dense_refinement ? dense_.parent[s] : coarse_.parent[dense_.coarse[s]];
     // A new component's number without a branch (about one sub-cell in ten starts one).
-    const std::int32_t known = root_object_[root];
+    const std::int32_t known = comps_.root_object[root];
     const bool fresh = known < 0;
     const std::int32_t c = fresh ? ncomp : known;
-    root_object_[root] = c;
+    comps_.root_object[root] = c;
     ncomp += fresh;
     return c;
   };
@@ -610,12 +610,12 @@ std::int32_t HierarchicalGridDetector::numberComponents() {
     }
   }
   for (std::int32_t s = 0; s < nds; ++s) {
-    if (!params_.dense_refinement || dense_occupied_[s]) {
-      dense_object_[s] = componentOf(s);
+    if (!params_.dense_refinement || dense_.occupied[s]) {
+      dense_.object[s] = componentOf(s);
       continue;
     }
-    const float zs = coarse_zmax_[dense_coarse_[s]];
-    const std::int32_t* here = slot_map + dense_cell_[s];
+    const float zs = coarse_.zmax[dense_.coarse[s]];
+    const std::int32_t* here = slot_map + dense_.cell[s];
     // The first of the densest (rho >= 1 > -inf), by selects rather than branches.
     std::int32_t best = -1;
     float best_rho = -std::numeric_limits<float>::infinity();
@@ -626,7 +626,7 @@ std::int32_t HierarchicalGridDetector::numberComponents() {
       best = take ? r : best;
       best_rho = take ? rho_r : best_rho;
     }
-    if (best >= 0) dense_object_[s] = componentOf(best);
+    if (best >= 0) dense_.object[s] = componentOf(best);
   }
   stats_.components = ncomp;
   return ncomp;
@@ -634,43 +634,43 @@ std::int32_t HierarchicalGridDetector::numberComponents() {
 
 // Per component: size and extent (on the sub-cells it covers) for the filters.
 std::size_t HierarchicalGridDetector::filterComponents(std::int32_t ncomp) {
-  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
-  const float* rho = dense_rho_.data() + 1;
-  comp_count_.assign(ncomp, 0);
-  comp_rho_.assign(ncomp, 0.0f);
-  comp_box_.resize(4 * static_cast<std::size_t>(ncomp));
+  const std::int32_t nds = static_cast<std::int32_t>(dense_.cell.size());
+  const float* rho = dense_.rho.data() + 1;
+  comps_.count.assign(ncomp, 0);
+  comps_.rho.assign(ncomp, 0.0f);
+  comps_.box.resize(4 * static_cast<std::size_t>(ncomp));
   for (std::int32_t c = 0; c < ncomp; ++c) {
-    comp_box_[4 * c] = comp_box_[4 * c + 1] = std::numeric_limits<std::int32_t>::max();
-    comp_box_[4 * c + 2] = comp_box_[4 * c + 3] = -1;
+    comps_.box[4 * c] = comps_.box[4 * c + 1] = std::numeric_limits<std::int32_t>::max();
+    comps_.box[4 * c + 2] = comps_.box[4 * c + 3] = -1;
   }
   for (std::int32_t s = 0; s < nds; ++s) {
-    const std::int32_t c = dense_object_[s];
+    const std::int32_t c = dense_.object[s];
     if (c < 0) {
-      stats_.noise_points += dense_count_[s];
+      stats_.noise_points += dense_.count[s];
       continue;
     }
-    comp_count_[c] += dense_count_[s];
-    comp_rho_[c] += rho[s];
-    const std::int32_t ix = dense_xy_[s].x, iy = dense_xy_[s].y;
-    std::int32_t* box = &comp_box_[4 * static_cast<std::size_t>(c)];
+    comps_.count[c] += dense_.count[s];
+    comps_.rho[c] += rho[s];
+    const std::int32_t ix = dense_.xy[s].x, iy = dense_.xy[s].y;
+    std::int32_t* box = &comps_.box[4 * static_cast<std::size_t>(c)];
     box[0] = std::min(box[0], ix);
     box[1] = std::min(box[1], iy);
     box[2] = std::max(box[2], ix);
     box[3] = std::max(box[3], iy);
   }
-  comp_final_.assign(ncomp, -1);
+  comps_.output.assign(ncomp, -1);
   std::size_t nobj = 0;
   const double max_extent_cells = params_.max_extent_m / dense_cell_m_;
   const float min_rho = static_cast<float>(params_.min_weighted_points);
   for (std::int32_t c = 0; c < ncomp; ++c) {
-    const std::int32_t* box = &comp_box_[4 * static_cast<std::size_t>(c)];
-    if (comp_count_[c] < static_cast<std::uint32_t>(params_.min_points) ||
-        comp_rho_[c] < min_rho) {
+    const std::int32_t* box = &comps_.box[4 * static_cast<std::size_t>(c)];
+    if (comps_.count[c] < static_cast<std::uint32_t>(params_.min_points) ||
+        comps_.rho[c] < min_rho) {
       ++stats_.dropped_small;
     } else if (box[2] - box[0] + 1 > max_extent_cells || box[3] - box[1] + 1 > max_extent_cells) {
       ++stats_.dropped_large;
     } else {
-      comp_final_[c] = static_cast<std::int32_t>(nobj++);
+      comps_.output[c] = static_cast<std::int32_t>(nobj++);
     }
   }
   return nobj;
@@ -684,32 +684,32 @@ void HierarchicalGridDetector::emitObjects(const LabeledCloud& foreground, std::
                                            std::size_t nobj,
                                            std::vector<DetectedObject>* objects) {
   const std::size_t n = foreground.points.size();
-  const std::int32_t nds = static_cast<std::int32_t>(dense_cell_.size());
+  const std::int32_t nds = static_cast<std::int32_t>(dense_.cell.size());
   objects->resize(nobj);
-  object_begin_.assign(nobj + 1, 0);
+  objects_.begin.assign(nobj + 1, 0);
   for (std::int32_t c = 0; c < ncomp; ++c) {
-    if (comp_final_[c] >= 0) object_begin_[comp_final_[c] + 1] = comp_count_[c];
+    if (comps_.output[c] >= 0) objects_.begin[comps_.output[c] + 1] = comps_.count[c];
   }
-  index_out_.resize(nobj);
-  xy_out_.resize(nobj);
+  objects_.index_out.resize(nobj);
+  objects_.xy_out.resize(nobj);
   for (std::size_t k = 0; k < nobj; ++k) {
-    object_begin_[k + 1] += object_begin_[k];
-    (*objects)[k].indices.resize(object_begin_[k + 1] - object_begin_[k]);
-    index_out_[k] = (*objects)[k].indices.data();
+    objects_.begin[k + 1] += objects_.begin[k];
+    (*objects)[k].indices.resize(objects_.begin[k + 1] - objects_.begin[k]);
+    objects_.index_out[k] = (*objects)[k].indices.data();
   }
-  object_xy_.resize(object_begin_[nobj]);
-  for (std::size_t k = 0; k < nobj; ++k) xy_out_[k] = object_xy_.data() + object_begin_[k];
-  moments_.assign(nobj, ObjectMoments());
+  objects_.xy.resize(objects_.begin[nobj]);
+  for (std::size_t k = 0; k < nobj; ++k) objects_.xy_out[k] = objects_.xy.data() + objects_.begin[k];
+  objects_.moments.assign(nobj, ObjectMoments());
   // Output object per sub-cell slot + 1 (slot -1, a point in no sub-cell, gives -1).
-  slot_object_.resize(nds + 1);
-  slot_object_[0] = -1;
+  comps_.slot_object.resize(nds + 1);
+  comps_.slot_object[0] = -1;
   for (std::int32_t s = 0; s < nds; ++s) {
-    slot_object_[s + 1] = dense_object_[s] < 0 ? -1 : comp_final_[dense_object_[s]];
+    comps_.slot_object[s + 1] = dense_.object[s] < 0 ? -1 : comps_.output[dense_.object[s]];
   }
   // In scan order consecutive points mostly belong to the same object: a run of them is
   // accumulated in registers (the same additions in the same order), not through the object's
   // moments and cursors in memory, whose store-to-load latency would chain point to point.
-  const std::int32_t* object_of = slot_object_.data() + 1;
+  const std::int32_t* object_of = comps_.slot_object.data() + 1;
   const std::int32_t* point_slot = point_slot_.data();
   for (std::size_t i = 0; i < n;) {
     const std::int32_t k = object_of[point_slot[i]];
@@ -717,23 +717,23 @@ void HierarchicalGridDetector::emitObjects(const LabeledCloud& foreground, std::
       ++i;
       continue;
     }
-    ObjectMoments m = moments_[k];
-    Eigen::Vector2f* xy = xy_out_[k];
-    std::uint32_t* index = index_out_[k];
+    ObjectMoments m = objects_.moments[k];
+    Eigen::Vector2f* xy = objects_.xy_out[k];
+    std::uint32_t* index = objects_.index_out[k];
     do {
       const LabeledPoint& p = foreground.points[i];
       m.add(p.x, p.y, p.z);
       *xy++ = Eigen::Vector2f(p.x, p.y);
       *index++ = p.index;
     } while (++i < n && object_of[point_slot[i]] == k);
-    moments_[k] = m;
-    xy_out_[k] = xy;
-    index_out_[k] = index;
+    objects_.moments[k] = m;
+    objects_.xy_out[k] = xy;
+    objects_.index_out[k] = index;
   }
   for (std::size_t k = 0; k < nobj; ++k) {
     DetectedObject& obj = (*objects)[k];
     obj.id = static_cast<std::uint32_t>(k + 1);
-    geometry_.finish(moments_[k], object_xy_.data() + object_begin_[k], &obj);
+    geometry_.finish(objects_.moments[k], objects_.xy.data() + objects_.begin[k], &obj);
   }
 }
 

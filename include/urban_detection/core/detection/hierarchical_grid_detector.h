@@ -254,10 +254,6 @@ class HierarchicalGridDetector : public ObjectDetector {
   // 3, 3b and 4 is a flat offset from it, with no bounds check.
   int probe_margin_ = 1;  // [sub-cells] largest probe offset (the padding)
   int stride_ = 0;        // nd_ + 2 * probe_margin_: padded sub-cells per side
-  std::vector<std::int32_t> dense_slot_;   // stride_ * stride_
-  std::vector<std::uint64_t> dense_bits_;  // stride_ * stride_ bits: dense sub-cell
-  std::vector<std::int32_t> coarse_slot_;  // nc_ * nc_ (not padded)
-  std::vector<std::int32_t> coarse_of_;    // sub-cell column or row -> super-cell's (i / xi)
   // Bridge tables (built once).
   struct CellXY {
     std::int32_t x, y;
@@ -271,57 +267,76 @@ class HierarchicalGridDetector : public ObjectDetector {
   std::int32_t probe_row_begin_[3] = {0, 0, 0};
   int probe_row_len_[3] = {0, 0, 0};  // per table: the length of all its rows (<= 64)
 
-  // Dense level: per touched sub-cell (slot), in the order of their first points.
-  // Binning's per-slot accumulator (see detect()): grown to the largest cloud seen plus one,
-  // never shrunk, so the entry a point may open always exists.
+  // Binning's per-slot accumulator (see detect()).
   struct DenseAcc {
     float zmax, zmin;     // [m] highest and lowest point
     std::uint32_t count;  // points
     std::int32_t cell;    // flat padded-map index
   };
-  std::vector<DenseAcc> dense_acc_;
   // Step 3's probe row of a sub-cell: its flat offsets probe_flat_[begin, begin + len) and the
   // mask of the row's real entries (only the forward four for the sensor's own sub-cells).
   struct ProbeRow {
     std::int32_t begin, len;
     std::uint64_t mask;
   };
-  std::vector<ProbeRow> probe_of_;
-  std::vector<std::int32_t> dense_cell_;    // flat padded-map index
-  std::vector<CellXY> dense_xy_;            // grid column and row
-  std::vector<std::uint32_t> dense_count_;  // points
-  std::vector<std::int32_t> dense_coarse_;  // slot of its super-cell
-  std::vector<std::uint8_t> dense_occupied_;
-  std::vector<float> dense_rho_;            // weighted density
-  std::vector<float> dense_key_;            // [m] super-cell Z_max if dense, else NaN
-  std::vector<float> dense_zmax_;           // [m] highest point
-  std::vector<float> dense_zmin_;           // [m] lowest point
-  std::vector<std::int32_t> dense_parent_;  // union-find of the dense level
-  std::vector<std::int32_t> dense_object_;  // object index or -1
-  // Step 3b: z range [m] per component root, and the sub-cells whose component is flat.
-  std::vector<float> root_zmin_;
-  std::vector<float> root_zmax_;
-  std::vector<std::int32_t> dense_flat_;
-  // Coarse level: per touched super-cell (slot).
-  std::vector<std::int32_t> coarse_cell_;
-  std::vector<float> coarse_key_;  // [m] Z_max at slot + 1, NaN at 0 (slot -1: empty)
-  std::vector<float> coarse_zmax_;
-  std::vector<std::int32_t> coarse_parent_;  // union-find of the coarse level
+  // Scratch kept between revolutions (capacity reused), one struct per level.
+  // Dense level: the padded grid maps, then per touched sub-cell (slot), in the order of their
+  // first points.
+  struct DenseLevel {
+    std::vector<std::int32_t> slot;   // grid -> slot (-1 untouched), stride_ * stride_
+    std::vector<std::uint64_t> bits;  // stride_ * stride_ bits: dense sub-cell
+    // Grown to the largest cloud seen plus one, never shrunk, so the entry a point may open
+    // always exists.
+    std::vector<DenseAcc> acc;
+    std::vector<ProbeRow> probe_of;
+    std::vector<std::int32_t> cell;    // flat padded-map index
+    std::vector<CellXY> xy;            // grid column and row
+    std::vector<std::uint32_t> count;  // points
+    std::vector<std::int32_t> coarse;  // slot of its super-cell
+    std::vector<std::uint8_t> occupied;
+    std::vector<float> rho;            // weighted density
+    std::vector<float> key;            // [m] super-cell Z_max if dense, else NaN
+    std::vector<float> zmax;           // [m] highest point
+    std::vector<float> zmin;           // [m] lowest point
+    std::vector<std::int32_t> parent;  // union-find of the dense level
+    std::vector<std::int32_t> object;  // object index or -1
+    // Step 3b: z range [m] per component root, and the sub-cells whose component is flat.
+    std::vector<float> root_zmin;
+    std::vector<float> root_zmax;
+    std::vector<std::int32_t> flat;
+  };
+  // Coarse level: its grid map (not padded), then per touched super-cell (slot).
+  struct CoarseLevel {
+    std::vector<std::int32_t> slot;  // nc_ * nc_, -1 untouched
+    std::vector<std::int32_t> of;    // sub-cell column or row -> super-cell's (i / xi)
+    std::vector<std::int32_t> cell;
+    std::vector<float> key;  // [m] Z_max at slot + 1, NaN at 0 (slot -1: empty)
+    std::vector<float> zmax;
+    std::vector<std::int32_t> parent;  // union-find of the coarse level
+  };
+  // Per component.
+  struct Components {
+    std::vector<std::int32_t> root_object;  // union-find root -> component index
+    std::vector<std::uint32_t> count;
+    std::vector<float> rho;                 // distance-weighted point count
+    std::vector<std::int32_t> box;          // sub-cell min x, min y, max x, max y
+    std::vector<std::int32_t> output;       // component -> output object index or -1
+    std::vector<std::int32_t> slot_object;  // sub-cell slot + 1 -> output object index or -1
+  };
+  // Per output object.
+  struct ObjectScratch {
+    std::vector<std::uint32_t> begin;      // object k: xy[begin[k], begin[k + 1])
+    std::vector<Eigen::Vector2f> xy;       // [m] xy of the points, grouped by object
+    std::vector<ObjectMoments> moments;    // pass 1 of the object geometry
+    std::vector<std::uint32_t*> index_out; // scatter cursors into the objects' indices
+    std::vector<Eigen::Vector2f*> xy_out;  // scatter cursors into xy
+  };
+  DenseLevel dense_;
+  CoarseLevel coarse_;
+  Components comps_;
+  ObjectScratch objects_;
   // Per input point: its sub-cell slot, or -1.
   std::vector<std::int32_t> point_slot_;
-  // Per component.
-  std::vector<std::int32_t> root_object_;  // union-find root -> component index
-  std::vector<std::uint32_t> comp_count_;
-  std::vector<float> comp_rho_;            // distance-weighted point count per component
-  std::vector<std::int32_t> comp_box_;     // sub-cell min x, min y, max x, max y per component
-  std::vector<std::int32_t> comp_final_;   // component -> output object index or -1
-  std::vector<std::int32_t> slot_object_;  // sub-cell slot + 1 -> output object index or -1
-  // Per output object.
-  std::vector<std::uint32_t> object_begin_;  // object k: object_xy_[begin[k], begin[k + 1])
-  std::vector<Eigen::Vector2f> object_xy_;   // [m] xy of the points, grouped by object
-  std::vector<ObjectMoments> moments_;       // pass 1 of the object geometry
-  std::vector<std::uint32_t*> index_out_;    // scatter cursors into the objects' indices
-  std::vector<Eigen::Vector2f*> xy_out_;     // scatter cursors into object_xy_
 };
 
 }  // namespace core
