@@ -88,14 +88,19 @@ void SegmentationScores::reduceTo(SegmentationScores* out) const {
       }
       cv::divide(1.0, sum, conf);
     }
-    // Non-finite best scores have no class (as in classAt()).
-    cv::Mat bad;
-    cv::compare(best, best, bad, cv::CMP_NE);  // NaN
-    cv::Mat inf;
-    cv::compare(cv::abs(best), std::numeric_limits<float>::infinity(), inf, cv::CMP_EQ);
-    bad |= inf;
-    label_plane.setTo(-1.0f, bad);
-    conf.setTo(0.0f, bad);
+    // Non-finite best scores have no class (as in classAt()); OpenCV's vectorised compares do
+    // not see NaN reliably, so this pass is per pixel.
+    for (int y = 0; y < height_; ++y) {
+      const float* b = best.ptr<float>(y);
+      float* l = label_plane.ptr<float>(y);
+      float* c = conf.ptr<float>(y);
+      for (int x = 0; x < width_; ++x) {
+        if (!std::isfinite(b[x])) {
+          l[x] = -1.0f;
+          c[x] = 0.0f;
+        }
+      }
+    }
   }
   out->assign(labels, false);
   out->confidence_ = conf;
