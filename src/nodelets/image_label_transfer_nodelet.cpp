@@ -172,7 +172,8 @@ class ImageLabelTransfer : public nodelet::Nodelet {
         }
         scores.reduceTo(&mask->scores);
         const double ms = model_.stats().preprocess_ms + model_.stats().inference_ms;
-        history_.push(mask->header.stamp.toSec(), std::move(mask));
+        const double stamp_s = mask->header.stamp.toSec();
+        history_.push(stamp_s, std::move(mask));
         inferences_.fetch_add(1);
         NODELET_DEBUG_THROTTLE(5.0, "ImageLabelTransfer: network %.1f ms, %llu images dropped",
                                ms, static_cast<unsigned long long>(slot_.dropped()));
