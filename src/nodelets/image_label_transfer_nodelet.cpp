@@ -26,6 +26,10 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <thread>
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include "urban_detection/core/spark/camera_fusion.h"
 #include "urban_detection/core/spark/latest_slot.h"
 #include "urban_detection/ros/image_label_transfer_ros.h"
@@ -151,6 +155,11 @@ class ImageLabelTransfer : public nodelet::Nodelet {
 
   // The inference thread: newest image -> network -> owned mask in the history.
   void inferenceLoop() {
+    // Lower this thread's priority (Linux: nice is per thread) so the LiDAR chain's threads
+    // take the cores first; the network uses what is left.
+    if (params_.inference_nice > 0 &&
+        setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), params_.inference_nice) != 0)
+      NODELET_WARN_ONCE("ImageLabelTransfer: cannot lower the inference thread's priority");
     cv::Mat scratch, bgr;
     core::SegmentationScores scores;
     std::string error;
@@ -172,6 +181,10 @@ class ImageLabelTransfer : public nodelet::Nodelet {
         }
         scores.reduceTo(&mask->scores);
         const double ms = model_.stats().preprocess_ms + model_.stats().inference_ms;
+        {
+          std::lock_guard<std::mutex> lock(stats_mutex_);
+          inference_ms_sum_ += ms;
+        }
         const double stamp_s = mask->header.stamp.toSec();
         history_.push(stamp_s, std::move(mask));
         inferences_.fetch_add(1);
@@ -202,6 +215,24 @@ class ImageLabelTransfer : public nodelet::Nodelet {
                                                  &cam_from_lidar, &error)) {
       NODELET_WARN_THROTTLE(5.0, "ImageLabelTransfer: LiDAR classes kept: %s", error.c_str());
       mask.reset();
+    }
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      ++revolutions_;
+      if (mask) {
+        ++with_mask_;
+        mask_age_sum_s_ += objects->header.stamp.toSec() - mask->header.stamp.toSec();
+      }
+      const std::uint64_t n = inferences_.load();
+      NODELET_INFO_THROTTLE(30.0,
+                            "ImageLabelTransfer: %llu images segmented (mean %.0f ms), %llu "
+                            "dropped; %llu of %llu revolutions met a mask (mean cloud - image "
+                            "stamp %.3f s)",
+                            static_cast<unsigned long long>(n), n ? inference_ms_sum_ / n : 0.0,
+                            static_cast<unsigned long long>(slot_.dropped()),
+                            static_cast<unsigned long long>(with_mask_),
+                            static_cast<unsigned long long>(revolutions_),
+                            with_mask_ ? mask_age_sum_s_ / with_mask_ : 0.0);
     }
     if (!mask) {
       *out = *objects;  // LiDAR classes, unchanged
@@ -262,6 +293,9 @@ class ImageLabelTransfer : public nodelet::Nodelet {
   core::LatestSlot<Frame> slot_;
   core::MaskHistory<Mask> history_{4};
   std::atomic<std::uint64_t> inferences_{0};
+  std::mutex stats_mutex_;
+  double inference_ms_sum_ = 0.0, mask_age_sum_s_ = 0.0;
+  std::uint64_t revolutions_ = 0, with_mask_ = 0;
   std::thread worker_;
   std::mutex info_mutex_;
   sensor_msgs::CameraInfo::ConstPtr info_;

@@ -177,6 +177,7 @@ void loadImageLabelTransferParams(const ros::NodeHandle& pnh, ImageLabelTransfer
   p->other_object_classes = loadStringList(model, "other_object_classes");
   p->background_classes = loadStringList(model, "background_classes");
   loadParam(model, "inference_threads", &p->inference_threads, 0, 64);
+  loadParam(model, "inference_nice", &p->inference_nice, 0, 19);
   // Relative files are found in model/dir (the launch file's model_dir argument), so a preset
   // names the files of a network and the folder holding them is given where it is run.
   if (!p->model_dir.empty()) {
