@@ -215,16 +215,20 @@ core::CameraClassMap classMap(const ModelOptions& m) {
   return map;
 }
 
-// Colour of each class id: the colours file ("r g b" per line, line n = class n), else a fixed
+// Colour of each class id: the colours file ("r g b" or "r,g,b" per line, line n = class n), else a fixed
 // palette; 255 (no class) is black.
 std::vector<cv::Vec3b> classColours(const ModelOptions& m) {
   std::vector<cv::Vec3b> colours;
   if (!m.colours_file.empty()) {
     std::ifstream in(m.colours_file);
     if (!in) fail("cannot read colours file " + m.colours_file);
-    int r = 0, g = 0, b = 0;
-    while (in >> r >> g >> b)
+    std::string line;
+    while (std::getline(in, line)) {  // "r g b" or "r,g,b"
+      std::replace(line.begin(), line.end(), ',', ' ');
+      int r = 0, g = 0, b = 0;
+      if (std::sscanf(line.c_str(), "%d %d %d", &r, &g, &b) != 3) continue;
       colours.emplace_back(static_cast<uchar>(b), static_cast<uchar>(g), static_cast<uchar>(r));
+    }
   }
   for (int c = static_cast<int>(colours.size()); c < 256; ++c)
     colours.emplace_back(static_cast<uchar>((c * 67) % 256), static_cast<uchar>((c * 151) % 256),
