@@ -64,7 +64,10 @@ TEST(ImageLabelTransferNodelet, LaunchFileWithoutModelRefusesToStart) {
 }
 
 struct Scene {
-  ros::NodeHandle nh{"ilt"};
+  explicit Scene(const std::string& ns = "ilt") : nh(ns) {}
+  ros::NodeHandle nh;
+  std::string encoding = "rgb8", camera_frame = "camera_optical", lidar_class = "unknown";
+  float lidar_confidence = 0.0f;
   ros::Publisher image, info, objects, points;
   std::mutex mutex;
   std::vector<DetectedObjectArray::ConstPtr> received;
@@ -81,10 +84,10 @@ struct Scene {
   void publish(const ros::Time& stamp) {
     auto img = boost::make_shared<sensor_msgs::Image>();
     img->header.stamp = stamp;
-    img->header.frame_id = "camera_optical";
+    img->header.frame_id = camera_frame;
     img->width = 100;
     img->height = 80;
-    img->encoding = "rgb8";
+    img->encoding = encoding;
     img->step = 300;
     img->data.assign(300 * 80, 0);
     for (int y = 0; y < 80; ++y)
@@ -106,7 +109,8 @@ struct Scene {
     for (std::uint32_t id = 1; id <= 3; ++id) {
       DetectedObject o;
       o.id = id;
-      o.class_label = "unknown";
+      o.class_label = lidar_class;
+      o.class_confidence = lidar_confidence;
       for (int k = 0; k < 8; ++k) {
         o.indices.push_back(static_cast<std::uint32_t>(cloud->size()));
         cloud->push_back(makeLabeledPoint(xs[id - 1], ys[id - 1] + 0.05f * k, 0.1f * (k % 3),
@@ -206,6 +210,70 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
   EXPECT_EQ(out->objects[2].class_label, "unknown");  // behind the camera
   EXPECT_FLOAT_EQ(out->objects[2].class_confidence, 0.0f);
   EXPECT_EQ(out->objects[1].indices.size(), 8u);  // the rest of the message is kept
+  std::filesystem::remove_all(dir);
+}
+
+
+// Bad input never stops the stage or the manager: images in an unsupported encoding, then images
+// from a camera frame tf does not know. Every revolution still goes out, with its LiDAR classes.
+TEST(ImageLabelTransferNodelet, BadEncodingAndMissingTfKeepLidarClasses) {
+  if (std::system("/usr/bin/python3 -c 'import onnx' >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("ud_ilt_bad_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string model = (dir / "colour.onnx").string(), names = (dir / "classes.txt").string();
+  const std::string cmd =
+      "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " + model + " 100 80 " + names;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string ns = "/ilt_bad/image_label_transfer/";
+  ros::param::set(ns + "fusion", std::string("camera"));
+  ros::param::set(ns + "model/path", model);
+  ros::param::set(ns + "model/class_names_file", names);
+  ros::param::set(ns + "model/input_width_px", 100);
+  ros::param::set(ns + "model/input_height_px", 80);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(
+      manager.load("/ilt_bad/image_label_transfer", "urban_detection/ImageLabelTransfer", {}, {}));
+  Scene scene("ilt_bad");
+  scene.encoding = "yuv422";
+  scene.camera_frame = "camera_nowhere";
+  scene.lidar_class = "vehicle";
+  scene.lidar_confidence = 0.7f;
+  scene.advertise();
+  ros::Subscriber sub = scene.nh.subscribe<DetectedObjectArray>(
+      "objects/classified", 5,
+      boost::function<void(const DetectedObjectArray::ConstPtr&)>(
+          [&](const DetectedObjectArray::ConstPtr& m) {
+            std::lock_guard<std::mutex> lock(scene.mutex);
+            scene.received.push_back(m);
+          }));
+  ASSERT_TRUE(waitFor([&] { return scene.points.getNumSubscribers() > 0; }, 10.0));
+  for (const char* encoding : {"yuv422", "rgb8"}) {  // rgb8: a good image, but no tf
+    SCOPED_TRACE(encoding);
+    scene.encoding = encoding;
+    {
+      std::lock_guard<std::mutex> lock(scene.mutex);
+      scene.received.clear();
+    }
+    ASSERT_TRUE(waitFor(
+        [&] {
+          scene.publish(ros::Time::now());
+          std::lock_guard<std::mutex> lock(scene.mutex);
+          return scene.received.size() >= 5;
+        },
+        20.0));
+    std::lock_guard<std::mutex> lock(scene.mutex);
+    for (const auto& m : scene.received) {
+      ASSERT_EQ(m->objects.size(), 3u);
+      for (const auto& o : m->objects) {
+        EXPECT_EQ(o.class_label, "vehicle");
+        EXPECT_FLOAT_EQ(o.class_confidence, 0.7f);
+      }
+    }
+  }
+  // The nodelet is still there and working.
+  EXPECT_GT(scene.points.getNumSubscribers(), 0u);
   std::filesystem::remove_all(dir);
 }
 
