@@ -270,8 +270,6 @@ class ImageLabelTransfer : public nodelet::Nodelet {
       }
       fused_.push_back(
           core::fuseObjectClass(ros_conv::lidarCategory(o), o.class_confidence, e, fp));
-      // An object the LiDAR left unclassified and the camera did not classify stays unknown.
-      if (!fused_.back().camera_used) fused_.back().category = ros_conv::lidarCategory(o);
     }
     ros_conv::applyFusedClasses(objects, fused_, out);
   }

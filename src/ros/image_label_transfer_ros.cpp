@@ -113,9 +113,9 @@ void applyFusedClasses(const DetectedObjectArray& objects,
   out->objects.clear();
   out->objects.reserve(objects.objects.size());
   for (std::size_t k = 0; k < objects.objects.size(); ++k) {
-    if (k < fused.size() && fused[k].category == core::ObjectCategory::kNonObject) continue;
+    if (k < fused.size() && fused[k].vetoed) continue;
     out->objects.push_back(objects.objects[k]);
-    if (k >= fused.size()) continue;
+    if (k >= fused.size() || !fused[k].camera_used) continue;  // unseen: label kept verbatim
     DetectedObject& o = out->objects.back();
     o.class_label = core::toString(fused[k].category);
     o.class_confidence = fused[k].category == core::ObjectCategory::kUnknown ? 0.0f

@@ -138,17 +138,26 @@ TEST(ApplyFusedClasses, WritesCategoriesAndLeavesNonObjectsOut) {
   DetectedObject odd;
   odd.class_label = "Car";  // a camera class name is no LiDAR category
   EXPECT_EQ(ros_conv::lidarCategory(odd), core::ObjectCategory::kUnknown);
-  std::vector<core::FusedClass> fused(3);
+  in.objects.push_back(in.objects[0]);
+  in.objects.back().id = 4;
+  in.objects.back().class_label = "bin";  // not a category: kept verbatim when unseen
+  std::vector<core::FusedClass> fused(4);
+  for (auto& f : fused) f.camera_used = true;
   fused[0].category = core::ObjectCategory::kVehicle;
   fused[0].confidence = 0.8f;
-  fused[1].category = core::ObjectCategory::kNonObject;  // vetoed
+  fused[1].category = core::ObjectCategory::kNonObject;
+  fused[1].vetoed = true;
   fused[2].category = core::ObjectCategory::kUnknown;
   fused[2].confidence = 0.4f;
+  fused[3].camera_used = false;  // outside the image
+  fused[3].category = core::ObjectCategory::kUnknown;
   DetectedObjectArray out;
   ros_conv::applyFusedClasses(in, fused, &out);
   EXPECT_EQ(out.header.frame_id, "velodyne");
   EXPECT_EQ(out.detector, "hierarchical_grid");
-  ASSERT_EQ(out.objects.size(), 2u);
+  ASSERT_EQ(out.objects.size(), 3u);
+  EXPECT_EQ(out.objects[2].class_label, "bin");
+  EXPECT_FLOAT_EQ(out.objects[2].class_confidence, 0.6f);
   EXPECT_EQ(out.objects[0].id, 1u);
   EXPECT_EQ(out.objects[0].class_label, "vehicle");
   EXPECT_FLOAT_EQ(out.objects[0].class_confidence, 0.8f);

@@ -46,8 +46,9 @@ void applyVotes(const DetectedObjectArray& objects, const std::vector<core::Obje
                 const std::vector<std::string>& names, DetectedObjectArray* out);
 
 /// Writes the fused classes into `out` (a copy of `objects`): per object, `fused[k]` for
-/// `objects.objects[k]`; vetoed / non-object results are left out of `out` (their points stay in
+/// `objects.objects[k]`; objects the camera vetoed are left out of `out` (their points stay in
 /// objects/points under their id). Category names as the LiDAR classifier's ("vehicle", ...).
+/// Objects the camera did not see (camera_used false) keep their label and confidence verbatim.
 void applyFusedClasses(const DetectedObjectArray& objects,
                        const std::vector<core::FusedClass>& fused, DetectedObjectArray* out);
 
