@@ -3,6 +3,8 @@
 // config/image_label_transfer.yaml (loaded by the .test file) and the colour network of
 // test/spark_colour_model.py built here. A synthetic camera (static tf from the LiDAR frame)
 // sees a red and a green region; objects projecting there must come back as car / vegetation.
+// Then (issue 27) fusion: fused confirms, vetoes and keeps unseen objects; bad encodings and a
+// missing tf leave the LiDAR classes and the stage running.
 #include "urban_detection/core/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <gtest/gtest.h>
@@ -274,6 +276,82 @@ TEST(ImageLabelTransferNodelet, BadEncodingAndMissingTfKeepLidarClasses) {
   }
   // The nodelet is still there and working.
   EXPECT_GT(scene.points.getNumSubscribers(), 0u);
+  std::filesystem::remove_all(dir);
+}
+
+
+// fusion: fused through the nodelet. All three objects come with the LiDAR class vehicle (0.6):
+// the one on car pixels is confirmed (noisy-or confidence), the one on vegetation pixels is
+// vetoed (left out), the one behind the camera keeps its LiDAR class.
+TEST(ImageLabelTransferNodelet, FusedConfirmsVetoesAndKeepsUnseen) {
+  if (std::system("/usr/bin/python3 -c 'import onnx' >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("ud_ilt_fused_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string model = (dir / "colour.onnx").string(), names = (dir / "classes.txt").string();
+  const std::string cmd =
+      "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " + model + " 100 80 " + names;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string ns = "/ilt_fused/image_label_transfer/";
+  ros::param::set(ns + "fusion", std::string("fused"));
+  ros::param::set(ns + "model/path", model);
+  ros::param::set(ns + "model/class_names_file", names);
+  ros::param::set(ns + "model/input_width_px", 100);
+  ros::param::set(ns + "model/input_height_px", 80);
+  ros::param::set(ns + "model/mean", std::vector<double>{0.0, 0.0, 0.0});
+  ros::param::set(ns + "model/scale", std::vector<double>{1 / 255.0, 1 / 255.0, 1 / 255.0});
+  ros::param::set(ns + "model/vehicle_classes", std::vector<std::string>{"car"});
+  ros::param::set(ns + "model/background_classes", std::vector<std::string>{"vegetation"});
+
+  tf2_ros::StaticTransformBroadcaster tf;
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = ros::Time::now();
+  t.header.frame_id = "velodyne";
+  t.child_frame_id = "camera_fused";
+  Eigen::Matrix3d optical_from_lidar;
+  optical_from_lidar << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+  const Eigen::Quaterniond q(optical_from_lidar.transpose());
+  t.transform.rotation.x = q.x();
+  t.transform.rotation.y = q.y();
+  t.transform.rotation.z = q.z();
+  t.transform.rotation.w = q.w();
+  tf.sendTransform(t);
+
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/ilt_fused/image_label_transfer", "urban_detection/ImageLabelTransfer",
+                           {}, {}));
+  Scene scene("ilt_fused");
+  scene.camera_frame = "camera_fused";
+  scene.lidar_class = "vehicle";
+  scene.lidar_confidence = 0.6f;
+  scene.advertise();
+  ros::Subscriber sub = scene.nh.subscribe<DetectedObjectArray>(
+      "objects/classified", 5,
+      boost::function<void(const DetectedObjectArray::ConstPtr&)>(
+          [&](const DetectedObjectArray::ConstPtr& m) {
+            std::lock_guard<std::mutex> lock(scene.mutex);
+            scene.received.push_back(m);
+          }));
+  ASSERT_TRUE(waitFor([&] { return scene.points.getNumSubscribers() > 0; }, 10.0));
+  DetectedObjectArray::ConstPtr out;
+  ASSERT_TRUE(waitFor(
+      [&] {
+        scene.publish(ros::Time::now());
+        std::lock_guard<std::mutex> lock(scene.mutex);
+        for (const auto& m : scene.received)
+          if (m->objects.size() == 2u) out = m;  // a revolution that met a mask and tf
+        return out != nullptr;
+      },
+      20.0))
+      << "no fused objects/classified";
+  EXPECT_EQ(out->objects[0].id, 1u);
+  EXPECT_EQ(out->objects[0].class_label, "vehicle");
+  const double p_car = std::exp(8.0) / (std::exp(8.0) + std::exp(2.0) + 2.0);
+  EXPECT_NEAR(out->objects[0].class_confidence, 1.0 - 0.4 * (1.0 - p_car), 1e-3);
+  EXPECT_EQ(out->objects[1].id, 3u);  // object 2 (vegetation pixels) vetoed
+  EXPECT_EQ(out->objects[1].class_label, "vehicle");
+  EXPECT_FLOAT_EQ(out->objects[1].class_confidence, 0.6f);
   std::filesystem::remove_all(dir);
 }
 
