@@ -69,7 +69,7 @@ class ImageLabelTransfer : public nodelet::Nodelet {
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
         getNodeHandle(), getPrivateNodeHandle(), getName(), "image label transfer");
     sync_ = std::make_unique<message_filters::Synchronizer<Policy>>(Policy(p.queue_size),
-                                                                   objects_sub_, points_sub_);
+                                                                    objects_sub_, points_sub_);
     sync_->getPolicy()->setMaxIntervalDuration(ros::Duration(p.max_sync_interval_s));
     sync_->registerCallback(&ImageLabelTransfer::objectsCallback, this);
     worker_ = std::thread([this] { inferenceLoop(); });
@@ -158,7 +158,8 @@ class ImageLabelTransfer : public nodelet::Nodelet {
     // Lower this thread's priority (Linux: nice is per thread) so the LiDAR chain's threads
     // take the cores first; the network uses what is left.
     if (params_.inference_nice > 0 &&
-        setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), params_.inference_nice) != 0)
+        setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), params_.inference_nice) !=
+            0)
       NODELET_WARN_ONCE("ImageLabelTransfer: cannot lower the inference thread's priority");
     cv::Mat scratch, bgr;
     core::SegmentationScores scores;
@@ -188,8 +189,8 @@ class ImageLabelTransfer : public nodelet::Nodelet {
         const double stamp_s = mask->header.stamp.toSec();
         history_.push(stamp_s, std::move(mask));
         inferences_.fetch_add(1);
-        NODELET_DEBUG_THROTTLE(5.0, "ImageLabelTransfer: network %.1f ms, %llu images dropped",
-                               ms, static_cast<unsigned long long>(slot_.dropped()));
+        NODELET_DEBUG_THROTTLE(5.0, "ImageLabelTransfer: network %.1f ms, %llu images dropped", ms,
+                               static_cast<unsigned long long>(slot_.dropped()));
       } catch (const std::exception& e) {
         NODELET_ERROR_THROTTLE(5.0, "ImageLabelTransfer: image skipped: %s", e.what());
       }

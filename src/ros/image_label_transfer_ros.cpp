@@ -118,8 +118,8 @@ void applyFusedClasses(const DetectedObjectArray& objects,
     if (k >= fused.size() || !fused[k].camera_used) continue;  // unseen: label kept verbatim
     DetectedObject& o = out->objects.back();
     o.class_label = core::toString(fused[k].category);
-    o.class_confidence = fused[k].category == core::ObjectCategory::kUnknown ? 0.0f
-                                                                              : fused[k].confidence;
+    o.class_confidence =
+        fused[k].category == core::ObjectCategory::kUnknown ? 0.0f : fused[k].confidence;
   }
 }
 

@@ -132,15 +132,19 @@ void loadModelYaml(const std::string& path, ModelOptions* mo) {
     if (n["dir"] && !n["dir"].as<std::string>().empty() && mo->model_dir.empty())
       mo->model_dir = n["dir"].as<std::string>();
     const std::pair<const char*, std::vector<std::string>*> lists[] = {
-        {"vehicle_classes", &mo->vehicle},     {"pedestrian_classes", &mo->pedestrian},
-        {"cyclist_classes", &mo->cyclist},     {"other_object_classes", &mo->other_object},
+        {"vehicle_classes", &mo->vehicle},
+        {"pedestrian_classes", &mo->pedestrian},
+        {"cyclist_classes", &mo->cyclist},
+        {"other_object_classes", &mo->other_object},
         {"background_classes", &mo->background}};
     for (const auto& [key, dst] : lists)
       if (n[key]) *dst = n[key].as<std::vector<std::string>>();
-    if (root["fusion"] && !core::parseFusionMode(root["fusion"].as<std::string>(), &mo->fusion.mode))
+    if (root["fusion"] &&
+        !core::parseFusionMode(root["fusion"].as<std::string>(), &mo->fusion.mode))
       fail(path + ": fusion must be lidar, camera or fused");
     if (const YAML::Node r = root["fusion_rule"]) {
-      if (r["min_visible_points"]) mo->fusion.min_visible_points = r["min_visible_points"].as<int>();
+      if (r["min_visible_points"])
+        mo->fusion.min_visible_points = r["min_visible_points"].as<int>();
       if (r["veto_share"]) mo->fusion.veto_share = r["veto_share"].as<double>();
       if (r["min_camera_share"]) mo->fusion.min_camera_share = r["min_camera_share"].as<double>();
       if (r["relabel"]) mo->fusion.relabel = r["relabel"].as<bool>();
@@ -149,7 +153,6 @@ void loadModelYaml(const std::string& path, ModelOptions* mo) {
     fail(path + ": " + e.what());
   }
 }
-
 
 // Common model options; returns true when argv[*i] was one of them.
 bool modelOption(int argc, char** argv, int* i, ModelOptions* m) {
@@ -215,8 +218,8 @@ core::CameraClassMap classMap(const ModelOptions& m) {
   return map;
 }
 
-// Colour of each class id: the colours file ("r g b" or "r,g,b" per line, line n = class n), else a fixed
-// palette; 255 (no class) is black.
+// Colour of each class id: the colours file ("r g b" or "r,g,b" per line, line n = class n), else a
+// fixed palette; 255 (no class) is black.
 std::vector<cv::Vec3b> classColours(const ModelOptions& m) {
   std::vector<cv::Vec3b> colours;
   if (!m.colours_file.empty()) {
@@ -658,7 +661,8 @@ int runKitti(int argc, char** argv) {
   if (configs.empty()) {
     for (const char* f : {"segmentation.yaml", "hierarchical_grid.yaml", "classification.yaml"}) {
       const std::string path = config_dir + "/" + f;
-      if (!fs::exists(path)) fail(path + " not found: run from the package folder or give --config-dir");
+      if (!fs::exists(path))
+        fail(path + " not found: run from the package folder or give --config-dir");
       configs.push_back(path);
     }
   }
@@ -737,9 +741,8 @@ int runKitti(int argc, char** argv) {
       const auto& v = votes[s];
       const core::KittiLabel& l = f.labels[v.object_id - 1];
       const core::ObjectCategory truth = core::kittiTypeCategory(l.type);
-      const core::CameraEvidence e = core::cameraEvidence(transfer.classScores(s),
-                                                          transfer.classBound(), v.considered,
-                                                          class_map);
+      const core::CameraEvidence e = core::cameraEvidence(
+          transfer.classScores(s), transfer.classBound(), v.considered, class_map);
       const core::FusedClass cam =
           core::fuseObjectClass(core::ObjectCategory::kUnknown, 0.0f, e, camera_mode);
       const double range = core::kittiLabelRange(f, l);
@@ -759,15 +762,16 @@ int runKitti(int argc, char** argv) {
                   className(mo.names, best_class).c_str(), cam_name.c_str(), e.best_share,
                   e.background_share(), scored ? (ok ? "yes" : "NO") : "-");
       objects_json << (objects_json.tellp() > 0 ? ",\n  " : "  ") << "{\"frame\": \"" << id
-                   << "\", \"type\": \"" << l.type << "\", \"range_m\": "
-                   << ud::tools::jsonNumber(range) << ", \"points\": " << v.points
-                   << ", \"visible\": " << v.considered << ", \"camera_class\": \""
+                   << "\", \"type\": \"" << l.type
+                   << "\", \"range_m\": " << ud::tools::jsonNumber(range)
+                   << ", \"points\": " << v.points << ", \"visible\": " << v.considered
+                   << ", \"camera_class\": \""
                    << ud::tools::jsonEscape(className(mo.names, best_class))
-                   << "\", \"camera_category\": \"" << cam_name << "\", \"share\": "
-                   << ud::tools::jsonNumber(e.best_share) << ", \"background_share\": "
-                   << ud::tools::jsonNumber(e.background_share()) << ", \"scored\": "
-                   << (scored ? "true" : "false") << ", \"correct\": " << (ok ? "true" : "false")
-                   << "}";
+                   << "\", \"camera_category\": \"" << cam_name
+                   << "\", \"share\": " << ud::tools::jsonNumber(e.best_share)
+                   << ", \"background_share\": " << ud::tools::jsonNumber(e.background_share())
+                   << ", \"scored\": " << (scored ? "true" : "false")
+                   << ", \"correct\": " << (ok ? "true" : "false") << "}";
       if (!scored) continue;
       for (auto* counts : {&all_counts, &near_counts}) {
         if (counts == &near_counts && range > near_m) continue;
@@ -835,8 +839,9 @@ int runKitti(int argc, char** argv) {
           [](const core::ObjectClassVote& v, std::uint32_t i) { return v.object_id < i; });
       core::CameraEvidence e;
       if (vit != votes.end() && vit->object_id == o.id)
-        e = core::cameraEvidence(transfer.classScores(static_cast<std::size_t>(vit - votes.begin())),
-                                 transfer.classBound(), vit->considered, class_map);
+        e = core::cameraEvidence(
+            transfer.classScores(static_cast<std::size_t>(vit - votes.begin())),
+            transfer.classBound(), vit->considered, class_map);
       core::CameraFusionParams veto = mo.fusion, relabel = mo.fusion;
       veto.mode = relabel.mode = core::FusionMode::kFused;
       veto.relabel = false;
@@ -907,8 +912,9 @@ int runKitti(int argc, char** argv) {
   const double mean_pre = pre_ms.empty() ? 0.0 : ud::tools::median(pre_ms);
   const double mean_tr = ud::tools::median(transfer_ms);
   if (!oracle)
-    std::printf("\nnetwork: median preprocess %.1f ms + inference %.1f ms per image (%dx%d input)\n",
-                mean_pre, mean_net, mo.params.input_width_px, mo.params.input_height_px);
+    std::printf(
+        "\nnetwork: median preprocess %.1f ms + inference %.1f ms per image (%dx%d input)\n",
+        mean_pre, mean_net, mo.params.input_width_px, mo.params.input_height_px);
   std::printf("transfer on the detector's objects: median %.3f ms per revolution\n", mean_tr);
   if (!json_path.empty()) {
     std::ofstream out(json_path);
@@ -916,18 +922,19 @@ int runKitti(int argc, char** argv) {
     out << "{\n\"what\": \"urban_detection_spark kitti: camera classes of labelled KITTI objects "
            "in view, and precision of in-view detections with and without the camera\",\n"
         << "\"model\": \"" << ud::tools::jsonEscape(oracle ? "box oracle" : mo.params.model_path)
-        << "\",\n\"input_px\": [" << mo.params.input_width_px << ", "
-        << mo.params.input_height_px << "],\n\"frames\": " << frames
-        << ",\n\"near_m\": " << ud::tools::jsonNumber(near_m)
+        << "\",\n\"input_px\": [" << mo.params.input_width_px << ", " << mo.params.input_height_px
+        << "],\n\"frames\": " << frames << ",\n\"near_m\": " << ud::tools::jsonNumber(near_m)
         << ",\n\"veto_share\": " << ud::tools::jsonNumber(mo.fusion.veto_share)
         << ",\n\"min_camera_share\": " << ud::tools::jsonNumber(mo.fusion.min_camera_share)
         << ",\n\"inference_ms_median\": " << ud::tools::jsonNumber(mean_net)
         << ",\n\"preprocess_ms_median\": " << ud::tools::jsonNumber(mean_pre)
         << ",\n\"transfer_ms_median\": " << ud::tools::jsonNumber(mean_tr)
-        << ",\n\"by_category\": [\n" << by_type.str() << "\n],\n\"precision\": {\"lidar\": "
-        << lidar_p.json() << ",\n \"fused_veto\": " << veto_p.json()
-        << ",\n \"fused_relabel\": " << relabel_p.json() << "},\n\"objects\": [\n"
-        << objects_json.str() << "\n],\n\"detections\": [\n" << detections_json.str() << "\n]\n}\n";
+        << ",\n\"by_category\": [\n"
+        << by_type.str() << "\n],\n\"precision\": {\"lidar\": " << lidar_p.json()
+        << ",\n \"fused_veto\": " << veto_p.json() << ",\n \"fused_relabel\": " << relabel_p.json()
+        << "},\n\"objects\": [\n"
+        << objects_json.str() << "\n],\n\"detections\": [\n"
+        << detections_json.str() << "\n]\n}\n";
     std::printf("wrote %s\n", json_path.c_str());
   }
   return 0;

@@ -26,9 +26,9 @@ using core::FusionMode;
 using core::ObjectCategory;
 
 const std::vector<std::string> kEnetNames = {
-    "Unlabeled", "Road", "Sidewalk", "Building", "Wall", "Fence", "Pole",
-    "TrafficLight", "TrafficSign", "Vegetation", "Terrain", "Sky", "Person", "Rider",
-    "Car", "Truck", "Bus", "Train", "Motorcycle", "Bicycle"};
+    "Unlabeled",    "Road",        "Sidewalk",   "Building", "Wall",       "Fence",  "Pole",
+    "TrafficLight", "TrafficSign", "Vegetation", "Terrain",  "Sky",        "Person", "Rider",
+    "Car",          "Truck",       "Bus",        "Train",    "Motorcycle", "Bicycle"};
 
 core::CameraClassMap enetMap() {
   core::CameraClassMap map;
@@ -210,7 +210,7 @@ TEST(MaskHistory, NewestWithinTheGap) {
   double gap = 0;
   EXPECT_EQ(*h.newestWithin(10.2, 0.05, &gap), 2);
   EXPECT_NEAR(gap, 0.0, 1e-9);
-  EXPECT_EQ(*h.newestWithin(10.25, 0.2), 4);  // newest first
+  EXPECT_EQ(*h.newestWithin(10.25, 0.2), 4);       // newest first
   EXPECT_EQ(h.newestWithin(10.0, 0.05), nullptr);  // 10.0 and 10.1 fell out (capacity 3)
   EXPECT_EQ(h.newestWithin(11.0, 0.5), nullptr);
 }

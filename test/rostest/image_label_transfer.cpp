@@ -28,8 +28,8 @@
 #include <mutex>
 #include <thread>
 
-#include "urban_detection/DetectedObjectArray.h"
 #include "rostest_util.h"
+#include "urban_detection/DetectedObjectArray.h"
 
 namespace urban_detection {
 namespace {
@@ -115,8 +115,8 @@ struct Scene {
       o.class_confidence = lidar_confidence;
       for (int k = 0; k < 8; ++k) {
         o.indices.push_back(static_cast<std::uint32_t>(cloud->size()));
-        cloud->push_back(makeLabeledPoint(xs[id - 1], ys[id - 1] + 0.05f * k, 0.1f * (k % 3),
-                                          id, o.indices.back(), 10.0f));
+        cloud->push_back(makeLabeledPoint(xs[id - 1], ys[id - 1] + 0.05f * k, 0.1f * (k % 3), id,
+                                          o.indices.back(), 10.0f));
       }
       o.point_count = 8;
       objs->objects.push_back(o);
@@ -215,7 +215,6 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
   std::filesystem::remove_all(dir);
 }
 
-
 // Bad input never stops the stage or the manager: images in an unsupported encoding, then images
 // from a camera frame tf does not know. Every revolution still goes out, with its LiDAR classes.
 TEST(ImageLabelTransferNodelet, BadEncodingAndMissingTfKeepLidarClasses) {
@@ -278,7 +277,6 @@ TEST(ImageLabelTransferNodelet, BadEncodingAndMissingTfKeepLidarClasses) {
   EXPECT_GT(scene.points.getNumSubscribers(), 0u);
   std::filesystem::remove_all(dir);
 }
-
 
 // fusion: fused through the nodelet. All three objects come with the LiDAR class vehicle (0.6):
 // the one on car pixels is confirmed (noisy-or confidence), the one on vegetation pixels is

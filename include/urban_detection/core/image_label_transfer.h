@@ -91,8 +91,9 @@ class ImageLabelTransfer {
   /// of the last transfer(): every class counted, kept or not (the camera evidence the fusion
   /// of spark/camera_fusion.h reads). Null when that transfer had no usable camera or scores.
   const float* classScores(std::size_t slot) const {
-    return bound_ > 0 && (slot + 1) * bound_ <= all_scores_.size() ? all_scores_.data() + slot * bound_
-                                                                    : nullptr;
+    return bound_ > 0 && (slot + 1) * bound_ <= all_scores_.size()
+               ? all_scores_.data() + slot * bound_
+               : nullptr;
   }
 
  private:

@@ -69,15 +69,15 @@ struct ImageLabelTransferRosParams {
   /// object category (fusion and the veto); background = road, building, vegetation, ...
   std::vector<std::string> vehicle_classes, pedestrian_classes, cyclist_classes,
       other_object_classes, background_classes;
-  int inference_nice = 19;                  // [-] nice of the inference thread (0..19)
-  int inference_threads = 1;                // [-] OpenCV threads (process-wide); 0 = OpenCV's
-  double max_mask_gap_s = 0.15;             // [s] newest mask within this of the cloud stamp
-  int queue_size = 5;                       // [-] per input and for the synchroniser
-  double max_sync_interval_s = 0.06;        // [s] objects vs. objects/points stamps
-  std::string fixed_frame;                  // [-] non-empty: tf between the image and cloud
-                                            // stamps through this frame (moving platform)
-  double tf_timeout_s = 0.0;                // [s] wait for the camera <- LiDAR transform (0:
-                                            // use what tf has; the LiDAR side never waits)
+  int inference_nice = 19;            // [-] nice of the inference thread (0..19)
+  int inference_threads = 1;          // [-] OpenCV threads (process-wide); 0 = OpenCV's
+  double max_mask_gap_s = 0.15;       // [s] newest mask within this of the cloud stamp
+  int queue_size = 5;                 // [-] per input and for the synchroniser
+  double max_sync_interval_s = 0.06;  // [s] objects vs. objects/points stamps
+  std::string fixed_frame;            // [-] non-empty: tf between the image and cloud
+                                      // stamps through this frame (moving platform)
+  double tf_timeout_s = 0.0;          // [s] wait for the camera <- LiDAR transform (0:
+                                      // use what tf has; the LiDAR side never waits)
 };
 
 /// Loads the parameters from `pnh` (model/*, transfer/*); throws ParamError naming the

@@ -10,9 +10,12 @@ namespace core {
 
 const char* toString(FusionMode m) {
   switch (m) {
-    case FusionMode::kLidar: return "lidar";
-    case FusionMode::kCamera: return "camera";
-    case FusionMode::kFused: return "fused";
+    case FusionMode::kLidar:
+      return "lidar";
+    case FusionMode::kCamera:
+      return "camera";
+    case FusionMode::kFused:
+      return "fused";
   }
   return "fused";
 }
@@ -58,8 +61,10 @@ bool buildCameraClassMap(const std::vector<std::string>& names,
                          std::string* error) {
   map->category_of_class.assign(names.size(), ObjectCategory::kUnknown);
   const std::pair<const std::vector<std::string>*, ObjectCategory> lists[] = {
-      {&vehicle, ObjectCategory::kVehicle},         {&pedestrian, ObjectCategory::kPedestrian},
-      {&cyclist, ObjectCategory::kCyclist},         {&other_object, ObjectCategory::kOtherObject},
+      {&vehicle, ObjectCategory::kVehicle},
+      {&pedestrian, ObjectCategory::kPedestrian},
+      {&cyclist, ObjectCategory::kCyclist},
+      {&other_object, ObjectCategory::kOtherObject},
       {&background, ObjectCategory::kNonObject}};
   for (const auto& [list, category] : lists) {
     for (const std::string& entry : *list) {

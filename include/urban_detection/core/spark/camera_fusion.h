@@ -68,7 +68,7 @@ bool buildCameraClassMap(const std::vector<std::string>& names,
 /// Parameters of the fusion, mirrored in config/image_label_transfer.yaml (`fusion:`).
 struct CameraFusionParams {
   FusionMode mode = FusionMode::kCamera;  ///< which class the output carries
-  int min_visible_points = 5;     ///< [-] fewer visible points: the camera has no say
+  int min_visible_points = 5;             ///< [-] fewer visible points: the camera has no say
   double veto_share = 0.6;        ///< [0..1] background share that makes an object a non-object;
                                   ///< > 1 disables the veto
   double min_camera_share = 0.5;  ///< [0..1] camera category share needed to label (camera
@@ -100,7 +100,7 @@ CameraEvidence cameraEvidence(const float* class_scores, int class_bound, std::u
 /// Result of the fusion for one object.
 struct FusedClass {
   ObjectCategory category = ObjectCategory::kUnknown;
-  float confidence = 0.0f;  ///< [0..1]
+  float confidence = 0.0f;   ///< [0..1]
   bool camera_used = false;  ///< the camera saw the object (>= min_visible_points)
   bool vetoed = false;       ///< fused: turned into a non-object by the veto
 };

@@ -25,8 +25,8 @@ struct KittiSparkFrame {
   KittiCalibration calib;
   std::vector<KittiLabel> labels;
   CloudXYZIRT cloud;
-  cv::Mat image;          ///< BGR image_2 (empty when not loaded)
-  PinholeCamera camera;   ///< P2 and the image size
+  cv::Mat image;         ///< BGR image_2 (empty when not loaded)
+  PinholeCamera camera;  ///< P2 and the image size
   Eigen::Isometry3d camera_from_velo = Eigen::Isometry3d::Identity();  ///< R0_rect * Tr_velo_to_cam
 };
 
