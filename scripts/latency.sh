@@ -8,6 +8,10 @@
 # results/latency[_<detector>].json: the probe's figures, the replay's pacing and the machine.
 #   scripts/run latency                    60 s, detector:=hierarchical
 #   scripts/run latency 60 --detector both the hierarchical chain beside the kd-tree baseline
+#   scripts/run latency 60 --camera        the same with the camera stage (issue 27) in the
+#                                          manager: ENet (config/spark_enet_cityscapes.yaml) on a
+#                                          KITTI image at 10 Hz (urban_detection_camera_replay);
+#                                          also measures objects/classified
 # Further options: --warmup S (default 10), --launch-arg NAME:=VALUE (repeatable).
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -20,17 +24,20 @@ SECONDS_TO_MEASURE="${1:-60}"
 WARMUP=10
 DETECTOR=hierarchical
 EXTRA=()
+CAMERA=false
 while [ $# -gt 0 ]; do
   case "$1" in
     --warmup) WARMUP="$2"; shift 2 ;;
     --detector) DETECTOR="$2"; shift 2 ;;
     --launch-arg) EXTRA+=("$2"); shift 2 ;;
+    --camera) CAMERA=true; shift ;;
     *) echo "latency: unknown option $1" >&2; exit 2 ;;
   esac
 done
 mkdir -p "$OUT"
 SUFFIX=""
 [ "$DETECTOR" != hierarchical ] && SUFFIX="_$DETECTOR"
+[ "$CAMERA" = true ] && SUFFIX="${SUFFIX}_camera"
 JSON="$OUT/latency$SUFFIX.json"
 LOG="$OUT/latency${SUFFIX}_roslaunch.log"
 PCAP="$OUT/soak_drive.pcap"  # shared with scripts/soak.sh
@@ -51,8 +58,10 @@ export ROS_MASTER_URI="http://127.0.0.1:$MASTER_PORT"
 export ROS_HOME="${ROS_HOME:-$OUT/ros_home}"
 LAUNCH_PID=""
 REPLAY_PID=""
+CAMERA_PIDS=()
 cleanup() {
   [ -n "$REPLAY_PID" ] && kill "$REPLAY_PID" 2>/dev/null || true
+  for p in "${CAMERA_PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
   if [ -n "$LAUNCH_PID" ] && kill -0 "$LAUNCH_PID" 2>/dev/null; then
     kill -INT "$LAUNCH_PID" 2>/dev/null || true
     for _ in $(seq 1 20); do kill -0 "$LAUNCH_PID" 2>/dev/null || break; sleep 0.5; done
@@ -70,7 +79,20 @@ for _ in $(seq 1 60); do
       2>/dev/null && break
   sleep 0.5
 done
+if [ "$CAMERA" = true ]; then
+  DATA="${UD_SHARED_DATA:-$REPO/../shared/data}"
+  [ -f "$DATA/models/enet-cityscapes/enet-model.net" ] && [ -d "$DATA/kitti_object/image_2" ] || {
+    echo "latency: --camera needs $DATA/models/enet-cityscapes and $DATA/kitti_object" >&2; exit 1; }
+  "$BIN/urban_detection_camera_replay" --kitti "$DATA/kitti_object" --rate 10 \
+      >"$OUT/latency${SUFFIX}_camera_replay.log" 2>&1 &
+  CAMERA_PIDS+=($!)
+  roslaunch urban_detection image_label_transfer.launch markers:=false \
+      "config:=$REPO/config/spark_enet_cityscapes.yaml" \
+      "model_dir:=$DATA/models/enet-cityscapes" >"$OUT/latency${SUFFIX}_camera.log" 2>&1 &
+  CAMERA_PIDS+=($!)
+fi
 TOPICS=(--objects objects --markers objects/markers)
+[ "$CAMERA" = true ] && TOPICS+=(--objects objects/classified)
 if [ "$DETECTOR" = both ]; then
   TOPICS+=(--objects kdtree/objects --markers kdtree/objects/markers)
 elif [ "$DETECTOR" = kdtree ]; then

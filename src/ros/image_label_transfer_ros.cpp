@@ -106,7 +106,39 @@ void applyVotes(const DetectedObjectArray& objects, const std::vector<core::Obje
   }
 }
 
+void applyFusedClasses(const DetectedObjectArray& objects,
+                       const std::vector<core::FusedClass>& fused, DetectedObjectArray* out) {
+  out->header = objects.header;
+  out->detector = objects.detector;
+  out->objects.clear();
+  out->objects.reserve(objects.objects.size());
+  for (std::size_t k = 0; k < objects.objects.size(); ++k) {
+    if (k < fused.size() && fused[k].vetoed) continue;
+    out->objects.push_back(objects.objects[k]);
+    if (k >= fused.size() || !fused[k].camera_used) continue;  // unseen: label kept verbatim
+    DetectedObject& o = out->objects.back();
+    o.class_label = core::toString(fused[k].category);
+    o.class_confidence =
+        fused[k].category == core::ObjectCategory::kUnknown ? 0.0f : fused[k].confidence;
+  }
+}
+
+core::ObjectCategory lidarCategory(const DetectedObject& o) {
+  core::ObjectCategory c = core::ObjectCategory::kUnknown;
+  if (!core::parseObjectCategory(o.class_label, &c)) return core::ObjectCategory::kUnknown;
+  return c;
+}
+
 namespace {
+
+std::vector<std::string> loadStringList(const ros::NodeHandle& nh, const std::string& name) {
+  std::vector<std::string> list;
+  if (nh.hasParam(name) && !nh.getParam(name, list)) {
+    throw ParamError("parameter '" + nh.resolveName(name) +
+                     "' must be a list of class names (strings)");
+  }
+  return list;
+}
 
 void loadTriple(const ros::NodeHandle& nh, const std::string& name, std::array<double, 3>* v,
                 bool nonzero) {
@@ -135,15 +167,34 @@ void loadImageLabelTransferParams(const ros::NodeHandle& pnh, ImageLabelTransfer
   loadTriple(model, "mean", &p->model.mean, false);
   loadTriple(model, "scale", &p->model.scale, true);
   loadParam(model, "output_softmax", &p->model.output_softmax);
+  loadParam(model, "config_file", &p->model.config_path);
+  loadParam(model, "dir", &p->model_dir);
   loadParam(model, "class_names_file", &p->class_names_file);
-  if (model.hasParam("keep_classes")) {
-    std::vector<std::string> keep;
-    if (!model.getParam("keep_classes", keep)) {
-      throw ParamError("parameter '" + model.resolveName("keep_classes") +
-                       "' must be a list of class names (strings)");
-    }
-    p->keep_classes = keep;
+  if (model.hasParam("keep_classes")) p->keep_classes = loadStringList(model, "keep_classes");
+  p->vehicle_classes = loadStringList(model, "vehicle_classes");
+  p->pedestrian_classes = loadStringList(model, "pedestrian_classes");
+  p->cyclist_classes = loadStringList(model, "cyclist_classes");
+  p->other_object_classes = loadStringList(model, "other_object_classes");
+  p->background_classes = loadStringList(model, "background_classes");
+  loadParam(model, "inference_threads", &p->inference_threads, 0, 64);
+  loadParam(model, "inference_nice", &p->inference_nice, 0, 19);
+  // Relative files are found in model/dir (the launch file's model_dir argument), so a preset
+  // names the files of a network and the folder holding them is given where it is run.
+  if (!p->model_dir.empty()) {
+    for (std::string* f : {&p->model.model_path, &p->model.config_path, &p->class_names_file})
+      if (!f->empty() && (*f)[0] != '/') *f = p->model_dir + "/" + *f;
   }
+  std::string mode = core::toString(p->fusion.mode);
+  loadParam(pnh, "fusion", &mode);
+  if (!core::parseFusionMode(mode, &p->fusion.mode)) {
+    throw ParamError("parameter '" + pnh.resolveName("fusion") + "' is '" + mode +
+                     "'; accepted: lidar, camera, fused");
+  }
+  const ros::NodeHandle rule(pnh, "fusion_rule");
+  loadParam(rule, "min_visible_points", &p->fusion.min_visible_points, 1, 1000000);
+  loadParam(rule, "veto_share", &p->fusion.veto_share, 0.01, 1.01);
+  loadParam(rule, "min_camera_share", &p->fusion.min_camera_share, 0.0, 1.0);
+  loadParam(rule, "relabel", &p->fusion.relabel);
   const ros::NodeHandle t(pnh, "transfer");
   loadParam(t, "min_depth_m", &p->transfer.min_depth_m, 0.0, 100.0, "m");
   loadParam(t, "min_points", &p->transfer.min_points, 1, 1000000);
@@ -152,6 +203,7 @@ void loadImageLabelTransferParams(const ros::NodeHandle& pnh, ImageLabelTransfer
   loadParam(t, "occlusion_cell_px", &p->transfer.occlusion_cell_px, 1, 256, "px");
   loadParam(t, "queue_size", &p->queue_size, 1, 100);
   loadParam(t, "max_sync_interval_s", &p->max_sync_interval_s, 0.0, 1.0, "s");
+  loadParam(t, "max_mask_gap_s", &p->max_mask_gap_s, 0.0, 10.0, "s");
   loadParam(t, "fixed_frame", &p->fixed_frame);
   loadParam(t, "tf_timeout_s", &p->tf_timeout_s, 0.0, 1.0, "s");
 }

@@ -13,13 +13,17 @@
 //   urban_detection_spark synthetic --out DIR
 //       Writes the coloured synthetic street (scene.pcd, x y z rgb) and a path (path.json) to try
 //       `run` with the colour network of test/spark_colour_model.py.
-//   urban_detection_spark kitti --data DIR (--model NET.onnx | --box-oracle) [options]
-//       Live transfer evaluated on KITTI object frames (image_2, calib, velodyne, label_2): the
-//       points of each labelled 3-D box form an object; its voted class is compared with the
-//       label. --box-oracle paints the label_2 2-D boxes as the "segmentation" (no network): it
-//       measures what projection, occlusion handling and voting lose with a perfect 2-D input.
-//       Also times the transfer on all objects the hierarchical grid detector finds in the
-//       revolution (the added cost per revolution beyond the network).
+//   urban_detection_spark kitti --kitti DIR (--model NET | --model-config YAML | --box-oracle)
+//       Issue 27: the network on KITTI object frames (image_2, calib, velodyne, label_2). Per
+//       labelled object in the camera view: its camera category vs. the KITTI type (Car, Van,
+//       Truck -> vehicle; Pedestrian, Person_sitting -> pedestrian; Cyclist -> cyclist) by range;
+//       then the precision of the in-view detections (hierarchical grid + LiDAR classifier) with
+//       LiDAR classes only and fused (veto only, veto + relabel). Table + --json FILE.
+//       --box-oracle paints the label_2 2-D boxes as the "segmentation" (no network): what
+//       projection, occlusion handling and voting lose with a perfect 2-D input.
+//   Model options of all modes: --model NET (any cv::dnn::readNet file), --model-config YAML
+//   (the nodelet's config, e.g. config/spark_enet_cityscapes.yaml) with --model-dir DIR for its
+//   relative files, --classes, --colours, --input-size WxH, --mean, --scale, --bgr.
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <pcl/io/pcd_io.h>
@@ -29,8 +33,10 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
 #include <string>
@@ -42,6 +48,9 @@
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/spark/image_label_transfer.h"
+#include "urban_detection/core/classification/object_classifier.h"
+#include "urban_detection/core/spark/camera_fusion.h"
+#include "urban_detection/core/spark/kitti_spark_eval.h"
 #include "urban_detection/core/spark/spark_capture.h"
 #include "urban_detection/core/spark/spark_instances.h"
 #include "urban_detection/core/spark/spark_scene.h"
@@ -77,8 +86,22 @@ std::vector<std::string> splitList(const std::string& s) {
 
 // The `model:` map of config/image_label_transfer.yaml (the nodelet's file), so one tuned file
 // serves both. Only the keys present override the defaults.
-void loadModelYaml(const std::string& path, core::SegmentationModelParams* m,
-                   std::vector<std::string>* keep, std::string* names_file) {
+struct ModelOptions {
+  core::SegmentationModelParams params;
+  std::vector<std::string> keep;
+  std::string names_file;
+  std::vector<std::string> names;
+  std::string model_dir;  // relative model / names files start here (--model-dir, model/dir)
+  // Camera classes of each object category (model/*_classes of the nodelet's YAML).
+  std::vector<std::string> vehicle, pedestrian, cyclist, other_object, background;
+  core::CameraFusionParams fusion;
+  std::string colours_file;  // one "r g b" line per class (masks as colour PNGs)
+};
+
+void loadModelYaml(const std::string& path, ModelOptions* mo) {
+  core::SegmentationModelParams* m = &mo->params;
+  std::vector<std::string>* keep = &mo->keep;
+  std::string* names_file = &mo->names_file;
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
@@ -104,17 +127,32 @@ void loadModelYaml(const std::string& path, core::SegmentationModelParams* m,
     if (n["keep_classes"]) *keep = n["keep_classes"].as<std::vector<std::string>>();
     if (n["class_names_file"] && !n["class_names_file"].as<std::string>().empty())
       *names_file = n["class_names_file"].as<std::string>();
+    if (n["config_file"] && !n["config_file"].as<std::string>().empty())
+      m->config_path = n["config_file"].as<std::string>();
+    if (n["dir"] && !n["dir"].as<std::string>().empty() && mo->model_dir.empty())
+      mo->model_dir = n["dir"].as<std::string>();
+    const std::pair<const char*, std::vector<std::string>*> lists[] = {
+        {"vehicle_classes", &mo->vehicle},
+        {"pedestrian_classes", &mo->pedestrian},
+        {"cyclist_classes", &mo->cyclist},
+        {"other_object_classes", &mo->other_object},
+        {"background_classes", &mo->background}};
+    for (const auto& [key, dst] : lists)
+      if (n[key]) *dst = n[key].as<std::vector<std::string>>();
+    if (root["fusion"] &&
+        !core::parseFusionMode(root["fusion"].as<std::string>(), &mo->fusion.mode))
+      fail(path + ": fusion must be lidar, camera or fused");
+    if (const YAML::Node r = root["fusion_rule"]) {
+      if (r["min_visible_points"])
+        mo->fusion.min_visible_points = r["min_visible_points"].as<int>();
+      if (r["veto_share"]) mo->fusion.veto_share = r["veto_share"].as<double>();
+      if (r["min_camera_share"]) mo->fusion.min_camera_share = r["min_camera_share"].as<double>();
+      if (r["relabel"]) mo->fusion.relabel = r["relabel"].as<bool>();
+    }
   } catch (const YAML::Exception& e) {
     fail(path + ": " + e.what());
   }
 }
-
-struct ModelOptions {
-  core::SegmentationModelParams params;
-  std::vector<std::string> keep;
-  std::string names_file;
-  std::vector<std::string> names;
-};
 
 // Common model options; returns true when argv[*i] was one of them.
 bool modelOption(int argc, char** argv, int* i, ModelOptions* m) {
@@ -128,7 +166,11 @@ bool modelOption(int argc, char** argv, int* i, ModelOptions* m) {
   if (a == "--model")
     m->params.model_path = value("--model");
   else if (a == "--model-config")
-    loadModelYaml(value("--model-config"), &m->params, &m->keep, &m->names_file);
+    loadModelYaml(value("--model-config"), m);
+  else if (a == "--model-dir")
+    m->model_dir = value("--model-dir");
+  else if (a == "--colours")
+    m->colours_file = value("--colours");
   else if (a == "--classes")
     m->names_file = value("--classes");
   else if (a == "--keep")
@@ -151,11 +193,59 @@ bool modelOption(int argc, char** argv, int* i, ModelOptions* m) {
   return true;
 }
 
+// Relative model, config, names and colours files are found in --model-dir / model/dir.
+void resolveModelFiles(ModelOptions* m) {
+  if (m->model_dir.empty()) return;
+  for (std::string* f :
+       {&m->params.model_path, &m->params.config_path, &m->names_file, &m->colours_file})
+    if (!f->empty() && (*f)[0] != '/') *f = m->model_dir + "/" + *f;
+}
+
 void loadModel(ModelOptions* m, core::SegmentationModel* model) {
   std::string error;
+  resolveModelFiles(m);
   if (!model->load(m->params, &error)) fail(error);
   if (!m->names_file.empty() && !core::readClassNames(m->names_file, &m->names, &error))
     fail(error);
+}
+
+core::CameraClassMap classMap(const ModelOptions& m) {
+  core::CameraClassMap map;
+  std::string error;
+  if (!core::buildCameraClassMap(m.names, m.vehicle, m.pedestrian, m.cyclist, m.other_object,
+                                 m.background, &map, &error))
+    fail(error);
+  return map;
+}
+
+// Colour of each class id: the colours file ("r g b" or "r,g,b" per line, line n = class n), else a
+// fixed palette; 255 (no class) is black.
+std::vector<cv::Vec3b> classColours(const ModelOptions& m) {
+  std::vector<cv::Vec3b> colours;
+  if (!m.colours_file.empty()) {
+    std::ifstream in(m.colours_file);
+    if (!in) fail("cannot read colours file " + m.colours_file);
+    std::string line;
+    while (std::getline(in, line)) {  // "r g b" or "r,g,b"
+      std::replace(line.begin(), line.end(), ',', ' ');
+      int r = 0, g = 0, b = 0;
+      if (std::sscanf(line.c_str(), "%d %d %d", &r, &g, &b) != 3) continue;
+      colours.emplace_back(static_cast<uchar>(b), static_cast<uchar>(g), static_cast<uchar>(r));
+    }
+  }
+  for (int c = static_cast<int>(colours.size()); c < 256; ++c)
+    colours.emplace_back(static_cast<uchar>((c * 67) % 256), static_cast<uchar>((c * 151) % 256),
+                         static_cast<uchar>((c * 37 + 80) % 256));
+  colours[255] = cv::Vec3b(0, 0, 0);
+  return colours;
+}
+
+// A label image (8-bit class ids) as colours a person can look at.
+cv::Mat colourMask(const cv::Mat& labels, const std::vector<cv::Vec3b>& colours) {
+  cv::Mat out(labels.size(), CV_8UC3);
+  for (int y = 0; y < labels.rows; ++y)
+    for (int x = 0; x < labels.cols; ++x) out.at<cv::Vec3b>(y, x) = colours[labels.at<uchar>(y, x)];
+  return out;
 }
 
 std::string className(const std::vector<std::string>& names, int id) {
@@ -284,9 +374,10 @@ int runOffline(int argc, char** argv) {
   std::string error_names;
   if (!mo.params.model_path.empty()) {
     loadModel(&mo, &model);
-  } else if (!mo.names_file.empty() &&
-             !core::readClassNames(mo.names_file, &mo.names, &error_names)) {
-    fail(error_names);
+  } else {
+    resolveModelFiles(&mo);
+    if (!mo.names_file.empty() && !core::readClassNames(mo.names_file, &mo.names, &error_names))
+      fail(error_names);
   }
   ud::CloudXYZIRT cloud;
   std::vector<cv::Vec3b> rgb, colours;
@@ -298,7 +389,11 @@ int runOffline(int argc, char** argv) {
                  cloud_path.c_str());
   core::pointColours(cloud, rgb, cp, &colours);
   fs::create_directories(out_dir + "/images");
-  if (write_masks) fs::create_directories(out_dir + "/masks");
+  if (write_masks) {
+    fs::create_directories(out_dir + "/masks");
+    fs::create_directories(out_dir + "/masks_colour");
+  }
+  const std::vector<cv::Vec3b> palette = classColours(mo);
 
   // Classes: names file, or class_<id> up to the network's class count (after the first run).
   const auto poses = core::capturePoses(cp);
@@ -348,7 +443,16 @@ int runOffline(int argc, char** argv) {
       if (mo.keep.empty()) sp.kept_classes.clear();
       kept_resolved = true;
     }
-    if (write_masks) cv::imwrite(out_dir + "/masks/" + name + ".png", scores.labelImage());
+    if (write_masks) {
+      const cv::Mat labels = scores.labelImage();
+      cv::imwrite(out_dir + "/masks/" + name + ".png", labels);
+      // For a person: the class colours, and the image with them blended in.
+      cv::Mat colour = colourMask(labels, palette), resized, blend;
+      cv::imwrite(out_dir + "/masks_colour/" + name + ".png", colour);
+      cv::resize(colour, resized, image.size(), 0, 0, cv::INTER_NEAREST);
+      cv::addWeighted(image, 0.5, resized, 0.5, 0.0, blend);
+      cv::imwrite(out_dir + "/masks_colour/" + name + "_overlay.png", blend);
+    }
     const auto t4 = Clock::now();
     cast_votes += votes.castBack(renderer, scores, sp.mask_stride_px, sp.kept_classes);
     const auto t5 = Clock::now();
@@ -470,127 +574,153 @@ int runSynthetic(int argc, char** argv) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// KITTI types and the segmentation class names that count as correct for them.
-bool kittiMatch(const std::string& type, std::string voted) {
-  std::transform(voted.begin(), voted.end(), voted.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  static const std::map<std::string, std::set<std::string>> ok = {
-      {"Car", {"car"}},
-      {"Van", {"car", "van", "truck"}},
-      {"Truck", {"truck", "bus"}},
-      {"Pedestrian", {"person", "pedestrian"}},
-      {"Person_sitting", {"person", "pedestrian", "person_sitting"}},
-      {"Cyclist", {"rider", "bicycle", "cyclist", "motorcycle"}},
-      {"Tram", {"train", "tram", "bus"}}};
-  const auto it = ok.find(type);
-  return it != ok.end() && it->second.count(voted) > 0;
-}
+// KITTI object frames, real network (issue 27). Two questions:
+// 1. What class does the camera give the labelled objects it sees? The points of each labelled
+//    3-D box form an object; its camera category (fuseObjectClass in camera mode over the
+//    class map) is compared with the KITTI type's category, split by range.
+// 2. What does the fusion do to the precision of the in-view detections? The hierarchical grid
+//    detector and the LiDAR classifier run on the cloud; each kept detection made mostly of
+//    points in the camera's view is true when most of its points lie in one labelled box (10 cm
+//    margin) and class-correct when its class is the box type's category. Detections made
+//    mostly of DontCare-rectangle points are left out. Precision: LiDAR classes only, fused
+//    veto-only (the shipped rule) and fused with relabelling.
+struct RangeCounts {
+  int n = 0, correct = 0, unknown = 0;
+  std::map<std::string, int> got;  // camera category -> count
+};
+
+struct PrecisionCounts {
+  int kept = 0, true_objects = 0, class_correct = 0, vetoed = 0, vetoed_true = 0;
+  std::string json() const {
+    std::ostringstream o;
+    o << "{\"kept\": " << kept << ", \"true\": " << true_objects
+      << ", \"class_correct\": " << class_correct << ", \"vetoed\": " << vetoed
+      << ", \"vetoed_true\": " << vetoed_true << ", \"precision\": "
+      << ud::tools::jsonNumber(kept ? static_cast<double>(true_objects) / kept : 0.0)
+      << ", \"class_precision\": "
+      << ud::tools::jsonNumber(kept ? static_cast<double>(class_correct) / kept : 0.0) << "}";
+    return o.str();
+  }
+};
 
 int runKitti(int argc, char** argv) {
-  std::string data = std::string("../shared/data/kitti_object");
+  std::string data = "../shared/data/kitti_object", json_path, config_dir = "config";
+  std::string classifier_model;
+  std::vector<std::string> configs;
   ModelOptions mo;
   bool oracle = false;
   core::ImageLabelTransferParams tp;
-  int repeat = 20;
+  double near_m = 30.0;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
+    auto value = [&](const char* o) { return ud::tools::optionValue(argc, argv, &i, o); };
     if (modelOption(argc, argv, &i, &mo)) continue;
-    if (a == "--data")
-      data = ud::tools::optionValue(argc, argv, &i, "--data");
+    if (a == "--data" || a == "--kitti")
+      data = value(a.c_str());
     else if (a == "--box-oracle")
       oracle = true;
+    else if (a == "--json")
+      json_path = value("--json");
+    else if (a == "--config")
+      configs.push_back(value("--config"));
+    else if (a == "--config-dir")
+      config_dir = value("--config-dir");
+    else if (a == "--classifier")
+      classifier_model = value("--classifier");
+    else if (a == "--near")
+      near_m = std::stod(value("--near"));
     else if (a == "--min-confidence")
-      tp.min_confidence = std::stod(ud::tools::optionValue(argc, argv, &i, a.c_str()));
+      tp.min_confidence = std::stod(value(a.c_str()));
     else if (a == "--occlusion-margin")
-      tp.occlusion_margin_m = std::stod(ud::tools::optionValue(argc, argv, &i, a.c_str()));
-    else if (a == "--repeat")
-      repeat = static_cast<int>(ud::tools::optionCount(argc, argv, &i, "--repeat"));
+      tp.occlusion_margin_m = std::stod(value(a.c_str()));
+    else if (a == "--veto-share")
+      mo.fusion.veto_share = std::stod(value(a.c_str()));
     else
       fail("unknown option " + a);
   }
   if (oracle == !mo.params.model_path.empty())
-    fail("kitti needs exactly one of --model NET.onnx and --box-oracle");
+    fail("kitti needs exactly one of --model NET (or --model-config) and --box-oracle");
+  const std::string fusion_error = core::validate(mo.fusion);
+  if (!fusion_error.empty()) fail(fusion_error);
   core::SegmentationModel model;
   if (oracle) {
     mo.names = {"background",     "Car",     "Van",  "Truck", "Pedestrian",
                 "Person_sitting", "Cyclist", "Tram", "Misc"};
+    mo.vehicle = {"Car", "Van", "Truck", "Tram"};
+    mo.pedestrian = {"Pedestrian", "Person_sitting"};
+    mo.cyclist = {"Cyclist"};
+    mo.other_object = {"Misc"};
+    mo.background = {};
   } else {
     loadModel(&mo, &model);
   }
+  if (mo.names.empty()) fail("kitti needs the class names (--classes or model/class_names_file)");
+  const core::CameraClassMap class_map = classMap(mo);
+
+  // The LiDAR chain: segmentation, hierarchical grid detector, classifier.
+  if (configs.empty()) {
+    for (const char* f : {"segmentation.yaml", "hierarchical_grid.yaml", "classification.yaml"}) {
+      const std::string path = config_dir + "/" + f;
+      if (!fs::exists(path))
+        fail(path + " not found: run from the package folder or give --config-dir");
+      configs.push_back(path);
+    }
+  }
+  ud::tools::PipelineParams pp;
+  if (!ud::tools::loadConfigs(configs, &pp)) return 2;
+  if (!classifier_model.empty()) {
+    pp.classifier.enabled = true;
+    pp.classifier.model_path = classifier_model;
+  }
+  std::unique_ptr<core::ObjectClassifier> classifier;
+  try {
+    classifier = std::make_unique<core::ObjectClassifier>(pp.classifier);
+  } catch (const std::exception& e) {
+    fail(std::string("classifier: ") + e.what());
+  }
+  core::GridSegmenter segmenter(pp.segmentation);
+  core::HierarchicalGridDetector detector(pp.hierarchical);
+
   const auto ids = core::listFiles(data + "/label_2", ".txt");
   if (ids.empty()) fail("no label_2/*.txt under " + data);
   std::string error;
-  core::GridSegmenter segmenter;
-  core::HierarchicalGridDetector detector;
-  std::printf("%-7s %-15s %7s %6s %-16s %6s %s\n", "frame", "label", "points", "seen", "voted",
-              "conf", "ok");
-  int scored = 0, correct = 0, unknown = 0;
-  double net_ms = 0, pre_ms = 0, transfer_gt_ms = 0, transfer_det_ms = 0;
-  std::size_t det_objects = 0, det_points = 0;
+  std::map<std::string, RangeCounts> near_counts, all_counts;  // by KITTI category
+  PrecisionCounts lidar_p, veto_p, relabel_p;
+  std::vector<double> net_ms, pre_ms, transfer_ms;
+  std::ostringstream objects_json, detections_json;
   int frames = 0;
+  std::printf("%-7s %-15s %6s %7s %7s %-13s %-12s %6s %6s %s\n", "frame", "KITTI type", "range",
+              "points", "visible", "camera class", "category", "share", "bg", "ok");
   for (const std::string& label_file : ids) {
     const std::string id = fs::path(label_file).stem().string();
-    core::KittiCalibration calib;
-    std::vector<core::KittiLabel> labels;
-    ud::CloudXYZIRT cloud;
-    if (!core::readKittiCalibration(data + "/calib/" + id + ".txt", &calib, &error) ||
-        !core::readKittiLabels(label_file, &labels, &error) ||
-        !core::readKittiBin(data + "/velodyne/" + id + ".bin", &cloud, &error)) {
+    core::KittiSparkFrame f;
+    if (!core::loadKittiSparkFrame(data, id, true, &f, &error)) {
       std::fprintf(stderr, "warning: skipping %s: %s\n", id.c_str(), error.c_str());
       continue;
     }
-    const cv::Mat image = cv::imread(data + "/image_2/" + id + ".png", cv::IMREAD_COLOR);
-    if (image.empty()) {
-      std::fprintf(stderr, "warning: skipping %s: no image_2/%s.png\n", id.c_str(), id.c_str());
-      continue;
-    }
     ++frames;
-    core::PinholeCamera camera;
-    camera.projection = calib.p2;
-    camera.width_px = image.cols;
-    camera.height_px = image.rows;
-    Eigen::Isometry3d cam_from_velo = Eigen::Isometry3d::Identity();
-    cam_from_velo.linear() = calib.r0_rect * calib.tr_velo_to_cam.leftCols<3>();
-    cam_from_velo.translation() = calib.r0_rect * calib.tr_velo_to_cam.col(3);
-
-    // Objects: the points of each labelled box (20 cm above its bottom: no road).
-    ud::LabeledCloud pts;
-    for (std::size_t k = 0; k < labels.size(); ++k) {
-      const auto& l = labels[k];
-      if (l.type == "DontCare") continue;
-      for (std::size_t i = 0; i < cloud.size(); ++i) {
-        const auto& p = cloud[i];
-        const Eigen::Vector3d b =
-            core::kittiBoxLocal(l, calib.veloToRect(Eigen::Vector3d(p.x, p.y, p.z)));
-        if (std::fabs(b.x()) > 0.5 * l.length_m || b.y() < 0.2 || b.y() > l.height_m ||
-            std::fabs(b.z()) > 0.5 * l.width_m)
-          continue;
-        pts.push_back(ud::makeLabeledPoint(p.x, p.y, p.z, static_cast<std::uint32_t>(k + 1),
-                                           static_cast<std::uint32_t>(i), p.intensity));
-      }
-    }
     core::SegmentationScores scores;
     if (oracle) {
-      std::vector<std::size_t> order;
-      for (std::size_t k = 0; k < labels.size(); ++k) order.push_back(k);
+      std::vector<std::size_t> order(f.labels.size());
+      for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
       std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        return labels[a].location.z() > labels[b].location.z();
+        return f.labels[a].location.z() > f.labels[b].location.z();
       });
-      cv::Mat mask(image.rows, image.cols, CV_8U, cv::Scalar(0));
+      cv::Mat mask(f.image.rows, f.image.cols, CV_8U, cv::Scalar(0));
       for (const std::size_t k : order) {
-        const auto it = std::find(mo.names.begin(), mo.names.end(), labels[k].type);
+        const auto it = std::find(mo.names.begin(), mo.names.end(), f.labels[k].type);
         if (it == mo.names.end()) continue;
-        const auto& b = labels[k].bbox;
+        const auto& b = f.labels[k].bbox;
         mask(cv::Rect(cv::Point(static_cast<int>(b[0]), static_cast<int>(b[1])),
                       cv::Point(static_cast<int>(b[2]) + 1, static_cast<int>(b[3]) + 1)) &
              cv::Rect(0, 0, mask.cols, mask.rows))
             .setTo(static_cast<int>(it - mo.names.begin()));
       }
-      scores.assignLabels(mask, 0);
+      scores.assignLabels(mask, -1);
     } else {
-      if (!model.run(image, &scores, &error)) fail(error);
-      net_ms += model.stats().inference_ms;
-      pre_ms += model.stats().preprocess_ms;
+      if (!model.run(f.image, &scores, &error)) fail(error);
+      net_ms.push_back(model.stats().inference_ms);
+      pre_ms.push_back(model.stats().preprocess_ms);
     }
     if (tp.kept_classes.empty() && !mo.keep.empty()) {
       const int bound =
@@ -599,61 +729,214 @@ int runKitti(int argc, char** argv) {
         fail(error);
     }
     core::ImageLabelTransfer transfer(tp);
+    core::CameraFusionParams camera_mode = mo.fusion;
+    camera_mode.mode = core::FusionMode::kCamera;
+
+    // 1. Labelled objects.
+    ud::LabeledCloud pts;
+    core::kittiLabelObjects(f, &pts);
     std::vector<core::ObjectClassVote> votes;
-    auto t0 = Clock::now();
-    for (int r = 0; r < repeat; ++r) transfer.transfer(pts, cam_from_velo, camera, scores, &votes);
-    transfer_gt_ms += msBetween(t0, Clock::now()) / std::max(1, repeat);
-    for (const auto& v : votes) {
-      const auto& l = labels[v.object_id - 1];
-      const std::string voted = className(mo.names, v.class_id);
-      const bool score = l.type != "Misc" && v.points >= 10;
-      const bool ok = kittiMatch(l.type, voted);
-      if (score) {
-        ++scored;
-        correct += ok;
-        unknown += v.class_id < 0;
+    transfer.transfer(pts, f.camera_from_velo, f.camera, scores, &votes);
+    for (std::size_t s = 0; s < votes.size(); ++s) {
+      const auto& v = votes[s];
+      const core::KittiLabel& l = f.labels[v.object_id - 1];
+      const core::ObjectCategory truth = core::kittiTypeCategory(l.type);
+      const core::CameraEvidence e = core::cameraEvidence(
+          transfer.classScores(s), transfer.classBound(), v.considered, class_map);
+      const core::FusedClass cam =
+          core::fuseObjectClass(core::ObjectCategory::kUnknown, 0.0f, e, camera_mode);
+      const double range = core::kittiLabelRange(f, l);
+      const bool in_view = cam.camera_used;
+      const bool scored = in_view && truth != core::ObjectCategory::kUnknown;
+      const bool ok = cam.category == truth;
+      const std::string cam_name = cam.camera_used ? core::toString(cam.category) : "-";
+      // The single network class with the most votes (among all classes).
+      int best_class = -1;
+      if (const float* cs = transfer.classScores(s)) {
+        float best = 0.0f;
+        for (int c = 0; c < transfer.classBound(); ++c)
+          if (cs[c] > best) best = cs[c], best_class = c;
       }
-      std::printf("%-7s %-15s %7u %6u %-16s %6.2f %s\n", id.c_str(), l.type.c_str(), v.points,
-                  v.considered, voted.c_str(), v.confidence, score ? (ok ? "yes" : "NO") : "-");
+      std::printf("%-7s %-15s %6.1f %7u %7u %-13s %-12s %6.2f %6.2f %s\n", id.c_str(),
+                  l.type.c_str(), range, v.points, v.considered,
+                  className(mo.names, best_class).c_str(), cam_name.c_str(), e.best_share,
+                  e.background_share(), scored ? (ok ? "yes" : "NO") : "-");
+      objects_json << (objects_json.tellp() > 0 ? ",\n  " : "  ") << "{\"frame\": \"" << id
+                   << "\", \"type\": \"" << l.type
+                   << "\", \"range_m\": " << ud::tools::jsonNumber(range)
+                   << ", \"points\": " << v.points << ", \"visible\": " << v.considered
+                   << ", \"camera_class\": \""
+                   << ud::tools::jsonEscape(className(mo.names, best_class))
+                   << "\", \"camera_category\": \"" << cam_name
+                   << "\", \"share\": " << ud::tools::jsonNumber(e.best_share)
+                   << ", \"background_share\": " << ud::tools::jsonNumber(e.background_share())
+                   << ", \"scored\": " << (scored ? "true" : "false")
+                   << ", \"correct\": " << (ok ? "true" : "false") << "}";
+      if (!scored) continue;
+      for (auto* counts : {&all_counts, &near_counts}) {
+        if (counts == &near_counts && range > near_m) continue;
+        RangeCounts& c = (*counts)[core::toString(truth)];
+        ++c.n;
+        c.correct += ok;
+        c.unknown += cam.category == core::ObjectCategory::kUnknown;
+        ++c.got[cam_name];
+      }
     }
 
-    // Added cost per revolution: all the detector's objects of this revolution, as the nodelet
-    // gets them (objects/points and the DetectedObjectArray), transfer + filling the message.
+    // 2. Detections: LiDAR chain, then the fusion on the in-view ones.
     std::vector<core::SegmentClass> seg;
     ud::LabeledCloud foreground, object_points;
     std::vector<core::DetectedObject> objects;
-    segmenter.segment(cloud, &seg);
-    core::extractForeground(cloud, seg, &foreground);
+    segmenter.segment(f.cloud, &seg);
+    core::extractForeground(f.cloud, seg, &foreground);
     detector.detect(foreground, &objects);
+    classifier->apply(foreground, &objects);
     std::unordered_map<std::uint32_t, std::uint32_t> scratch;
     ud::ros_conv::buildObjectPoints(foreground, objects, &object_points, &scratch);
-    ud::DetectedObjectArray msg, out;
-    ud::ros_conv::toMsg(objects, detector.name(), std_msgs::Header(), &msg);
-    t0 = Clock::now();
-    for (int r = 0; r < repeat; ++r) {
-      transfer.transfer(object_points, cam_from_velo, camera, scores, &votes);
-      ud::ros_conv::applyVotes(msg, votes, mo.names, &out);
+    const auto t0 = Clock::now();
+    transfer.transfer(object_points, f.camera_from_velo, f.camera, scores, &votes);
+    transfer_ms.push_back(msBetween(t0, Clock::now()));
+    // Per cloud point: the label whose box (10 cm margin, no ground band) holds it.
+    std::vector<int> owner(f.cloud.size(), -1);
+    for (std::size_t k = 0; k < f.labels.size(); ++k) {
+      if (f.labels[k].type == "DontCare") continue;
+      core::KittiLabel big = f.labels[k];
+      big.length_m += 0.2;
+      big.width_m += 0.2;
+      big.height_m += 0.1;
+      for (const std::size_t i : core::kittiBoxPoints(f, big, 0.0)) owner[i] = static_cast<int>(k);
     }
-    transfer_det_ms += msBetween(t0, Clock::now()) / std::max(1, repeat);
-    det_objects += objects.size();
-    det_points += object_points.size();
+    for (const core::DetectedObject& o : objects) {
+      int in_view = 0, in_dontcare = 0;
+      std::map<int, int> hits;
+      for (const std::uint32_t i : o.indices) {
+        const auto& p = f.cloud[i];
+        const Eigen::Vector3d pv(p.x, p.y, p.z);
+        double u = 0, v = 0;
+        if (!f.camera.project(f.camera_from_velo * pv, 0.5, &u, &v) || u < 0 || v < 0 ||
+            u >= f.camera.width_px || v >= f.camera.height_px)
+          continue;
+        ++in_view;
+        for (const auto& l : f.labels)
+          if (l.type == "DontCare" && u >= l.bbox[0] && u <= l.bbox[2] && v >= l.bbox[1] &&
+              v <= l.bbox[3]) {
+            ++in_dontcare;
+            break;
+          }
+        ++hits[owner[i]];
+      }
+      if (2 * in_view < static_cast<int>(o.indices.size())) continue;  // not in the camera view
+      int label = -1, best_hits = 0;
+      for (const auto& [k, n] : hits)
+        if (k >= 0 && n > best_hits) best_hits = n, label = k;
+      const bool is_true = label >= 0 && 2 * best_hits >= in_view;
+      if (!is_true && 2 * in_dontcare > in_view) continue;  // DontCare region
+      const core::ObjectCategory truth =
+          is_true ? core::kittiTypeCategory(f.labels[static_cast<std::size_t>(label)].type)
+                  : core::ObjectCategory::kNonObject;
+      const auto vit = std::lower_bound(
+          votes.begin(), votes.end(), o.id,
+          [](const core::ObjectClassVote& v, std::uint32_t i) { return v.object_id < i; });
+      core::CameraEvidence e;
+      if (vit != votes.end() && vit->object_id == o.id)
+        e = core::cameraEvidence(
+            transfer.classScores(static_cast<std::size_t>(vit - votes.begin())),
+            transfer.classBound(), vit->considered, class_map);
+      core::CameraFusionParams veto = mo.fusion, relabel = mo.fusion;
+      veto.mode = relabel.mode = core::FusionMode::kFused;
+      veto.relabel = false;
+      relabel.relabel = true;
+      const core::FusedClass fv = core::fuseObjectClass(o.category, o.class_confidence, e, veto);
+      const core::FusedClass fr = core::fuseObjectClass(o.category, o.class_confidence, e, relabel);
+      auto count = [&](PrecisionCounts* c, core::ObjectCategory cat) {
+        if (cat == core::ObjectCategory::kNonObject) {
+          ++c->vetoed;
+          c->vetoed_true += is_true;
+          return;
+        }
+        ++c->kept;
+        c->true_objects += is_true;
+        c->class_correct += is_true && cat == truth;
+      };
+      count(&lidar_p, o.category);
+      count(&veto_p, fv.category);
+      count(&relabel_p, fr.category);
+      detections_json << (detections_json.tellp() > 0 ? ",\n  " : "  ") << "{\"frame\": \"" << id
+                      << "\", \"points\": " << o.indices.size() << ", \"range_m\": "
+                      << ud::tools::jsonNumber(std::hypot(o.centroid.x(), o.centroid.y()))
+                      << ", \"truth\": \""
+                      << (is_true ? f.labels[static_cast<std::size_t>(label)].type : "none")
+                      << "\", \"lidar\": \"" << core::toString(o.category)
+                      << "\", \"camera_best\": \"" << core::toString(e.best)
+                      << "\", \"camera_share\": " << ud::tools::jsonNumber(e.best_share)
+                      << ", \"background_share\": " << ud::tools::jsonNumber(e.background_share())
+                      << ", \"visible\": " << e.visible << ", \"fused_veto\": \""
+                      << core::toString(fv.category) << "\", \"fused_relabel\": \""
+                      << core::toString(fr.category) << "\"}";
+    }
   }
   if (frames == 0) fail("no usable frames under " + data);
-  std::printf(
-      "\n%s on %d KITTI frames: %d/%d labelled objects (>= 10 points, not Misc) voted "
-      "correctly (%.1f%%), %d unknown\n",
-      oracle ? "box oracle" : mo.params.model_path.c_str(), frames, correct, scored,
-      scored ? 100.0 * correct / scored : 0.0, unknown);
+
+  // Tables.
+  auto pct = [](int a, int b) { return b ? 100.0 * a / b : 0.0; };
+  std::printf("\ncamera class of labelled objects in the camera view (%s, %d frames)\n",
+              oracle ? "box oracle" : mo.params.model_path.c_str(), frames);
+  std::printf("%-11s %-8s %5s %8s %7s  %s\n", "KITTI", "range", "n", "correct", "%", "got");
+  std::ostringstream by_type;
+  for (const char* cat : {"vehicle", "pedestrian", "cyclist"}) {
+    for (int r = 0; r < 2; ++r) {
+      const auto& counts = r == 0 ? near_counts : all_counts;
+      const auto it = counts.find(cat);
+      const RangeCounts c = it == counts.end() ? RangeCounts() : it->second;
+      std::string got;
+      for (const auto& [k, n] : c.got) got += k + "=" + std::to_string(n) + " ";
+      char range[16];
+      std::snprintf(range, sizeof range, r == 0 ? "<=%.0f m" : "all", near_m);
+      std::printf("%-11s %-8s %5d %8d %6.1f%%  %s\n", cat, range, c.n, c.correct,
+                  pct(c.correct, c.n), got.c_str());
+      by_type << (by_type.tellp() > 0 ? ",\n  " : "  ") << "{\"category\": \"" << cat
+              << "\", \"range\": \"" << (r == 0 ? "near" : "all") << "\", \"n\": " << c.n
+              << ", \"correct\": " << c.correct << ", \"unknown\": " << c.unknown << "}";
+    }
+  }
+  std::printf("\nin-view detections (hierarchical grid + LiDAR classifier), precision\n");
+  std::printf("%-22s %5s %5s %7s %9s %7s %11s\n", "classes", "kept", "true", "P", "class ok",
+              "P_class", "vetoed(true)");
+  const std::pair<const char*, const PrecisionCounts*> rows[] = {
+      {"lidar", &lidar_p}, {"fused (veto only)", &veto_p}, {"fused (veto+relabel)", &relabel_p}};
+  for (const auto& [name, c] : rows)
+    std::printf("%-22s %5d %5d %6.1f%% %9d %6.1f%% %7d(%d)\n", name, c->kept, c->true_objects,
+                pct(c->true_objects, c->kept), c->class_correct, pct(c->class_correct, c->kept),
+                c->vetoed, c->vetoed_true);
+  const double mean_net = net_ms.empty() ? 0.0 : ud::tools::median(net_ms);
+  const double mean_pre = pre_ms.empty() ? 0.0 : ud::tools::median(pre_ms);
+  const double mean_tr = ud::tools::median(transfer_ms);
   if (!oracle)
-    std::printf("network: preprocess %.1f ms + inference %.1f ms per image (%dx%d input)\n",
-                pre_ms / frames, net_ms / frames, mo.params.input_width_px,
-                mo.params.input_height_px);
-  std::printf(
-      "transfer (beyond the network): %.3f ms per frame on the labelled objects; %.3f ms "
-      "per revolution on the detector's objects (%.0f objects, %.0f points per "
-      "revolution, transfer + message fill, mean of %d runs)\n",
-      transfer_gt_ms / frames, transfer_det_ms / frames, static_cast<double>(det_objects) / frames,
-      static_cast<double>(det_points) / frames, repeat);
+    std::printf(
+        "\nnetwork: median preprocess %.1f ms + inference %.1f ms per image (%dx%d input)\n",
+        mean_pre, mean_net, mo.params.input_width_px, mo.params.input_height_px);
+  std::printf("transfer on the detector's objects: median %.3f ms per revolution\n", mean_tr);
+  if (!json_path.empty()) {
+    std::ofstream out(json_path);
+    if (!out) fail("cannot write " + json_path);
+    out << "{\n\"what\": \"urban_detection_spark kitti: camera classes of labelled KITTI objects "
+           "in view, and precision of in-view detections with and without the camera\",\n"
+        << "\"model\": \"" << ud::tools::jsonEscape(oracle ? "box oracle" : mo.params.model_path)
+        << "\",\n\"input_px\": [" << mo.params.input_width_px << ", " << mo.params.input_height_px
+        << "],\n\"frames\": " << frames << ",\n\"near_m\": " << ud::tools::jsonNumber(near_m)
+        << ",\n\"veto_share\": " << ud::tools::jsonNumber(mo.fusion.veto_share)
+        << ",\n\"min_camera_share\": " << ud::tools::jsonNumber(mo.fusion.min_camera_share)
+        << ",\n\"inference_ms_median\": " << ud::tools::jsonNumber(mean_net)
+        << ",\n\"preprocess_ms_median\": " << ud::tools::jsonNumber(mean_pre)
+        << ",\n\"transfer_ms_median\": " << ud::tools::jsonNumber(mean_tr)
+        << ",\n\"by_category\": [\n"
+        << by_type.str() << "\n],\n\"precision\": {\"lidar\": " << lidar_p.json()
+        << ",\n \"fused_veto\": " << veto_p.json() << ",\n \"fused_relabel\": " << relabel_p.json()
+        << "},\n\"objects\": [\n"
+        << objects_json.str() << "\n],\n\"detections\": [\n"
+        << detections_json.str() << "\n]\n}\n";
+    std::printf("wrote %s\n", json_path.c_str());
+  }
   return 0;
 }
 
@@ -674,8 +957,10 @@ int main(int argc, char** argv) {
       "[--min-instance-points N]\n"
       "         [--box-margin M] [--instance-pcd] [--cut a,b] [--no-images] [--write-masks]\n"
       "       urban_detection_spark synthetic --out DIR [--step M]\n"
-      "       urban_detection_spark kitti [--data DIR] (--model NET.onnx | --box-oracle) "
-      "[--classes NAMES.txt] [--keep a,b]\n"
-      "         [--min-confidence C] [--occlusion-margin M] [--repeat N]\n");
+      "       urban_detection_spark kitti [--kitti DIR] (--model NET | --model-config YAML | "
+      "--box-oracle)\n"
+      "         [--model-dir DIR] [--classes NAMES.txt] [--keep a,b] [--json FILE] [--near M]\n"
+      "         [--config-dir DIR | --config YAML...] [--classifier MODEL] [--veto-share S]\n"
+      "         [--min-confidence C] [--occlusion-margin M]\n");
   return 2;
 }

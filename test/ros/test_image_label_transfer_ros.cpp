@@ -122,6 +122,51 @@ TEST(ApplyVotes, FillsClassByObjectId) {
   EXPECT_EQ(out.objects[3].indices, (std::vector<std::uint32_t>{4, 14}));
 }
 
+TEST(ApplyFusedClasses, WritesCategoriesAndLeavesNonObjectsOut) {
+  DetectedObjectArray in;
+  in.header.frame_id = "velodyne";
+  in.detector = "hierarchical_grid";
+  for (std::uint32_t id = 1; id <= 3; ++id) {
+    DetectedObject o;
+    o.id = id;
+    o.class_label = "vehicle";
+    o.class_confidence = 0.6f;
+    o.indices = {id, id + 10};
+    in.objects.push_back(o);
+  }
+  EXPECT_EQ(ros_conv::lidarCategory(in.objects[0]), core::ObjectCategory::kVehicle);
+  DetectedObject odd;
+  odd.class_label = "Car";  // a camera class name is no LiDAR category
+  EXPECT_EQ(ros_conv::lidarCategory(odd), core::ObjectCategory::kUnknown);
+  in.objects.push_back(in.objects[0]);
+  in.objects.back().id = 4;
+  in.objects.back().class_label = "bin";  // not a category: kept verbatim when unseen
+  std::vector<core::FusedClass> fused(4);
+  for (auto& f : fused) f.camera_used = true;
+  fused[0].category = core::ObjectCategory::kVehicle;
+  fused[0].confidence = 0.8f;
+  fused[1].category = core::ObjectCategory::kNonObject;
+  fused[1].vetoed = true;
+  fused[2].category = core::ObjectCategory::kUnknown;
+  fused[2].confidence = 0.4f;
+  fused[3].camera_used = false;  // outside the image
+  fused[3].category = core::ObjectCategory::kUnknown;
+  DetectedObjectArray out;
+  ros_conv::applyFusedClasses(in, fused, &out);
+  EXPECT_EQ(out.header.frame_id, "velodyne");
+  EXPECT_EQ(out.detector, "hierarchical_grid");
+  ASSERT_EQ(out.objects.size(), 3u);
+  EXPECT_EQ(out.objects[2].class_label, "bin");
+  EXPECT_FLOAT_EQ(out.objects[2].class_confidence, 0.6f);
+  EXPECT_EQ(out.objects[0].id, 1u);
+  EXPECT_EQ(out.objects[0].class_label, "vehicle");
+  EXPECT_FLOAT_EQ(out.objects[0].class_confidence, 0.8f);
+  EXPECT_EQ(out.objects[1].id, 3u);  // ids kept: objects/points still refer to them
+  EXPECT_EQ(out.objects[1].class_label, "unknown");
+  EXPECT_FLOAT_EQ(out.objects[1].class_confidence, 0.0f);
+  EXPECT_EQ(out.objects[1].indices, (std::vector<std::uint32_t>{3, 13}));
+}
+
 TEST(ObjectMarkersClasses, ClassNameConfidenceAndColour) {
   DetectedObjectArray objects;
   DetectedObject a;

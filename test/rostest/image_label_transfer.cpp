@@ -3,6 +3,8 @@
 // config/image_label_transfer.yaml (loaded by the .test file) and the colour network of
 // test/spark_colour_model.py built here. A synthetic camera (static tf from the LiDAR frame)
 // sees a red and a green region; objects projecting there must come back as car / vegetation.
+// Then (issue 27) fusion: fused confirms, vetoes and keeps unseen objects; bad encodings and a
+// missing tf leave the LiDAR classes and the stage running.
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <gtest/gtest.h>
@@ -26,8 +28,8 @@
 #include <mutex>
 #include <thread>
 
-#include "urban_detection/DetectedObjectArray.h"
 #include "rostest_util.h"
+#include "urban_detection/DetectedObjectArray.h"
 
 namespace urban_detection {
 namespace {
@@ -64,7 +66,10 @@ TEST(ImageLabelTransferNodelet, LaunchFileWithoutModelRefusesToStart) {
 }
 
 struct Scene {
-  ros::NodeHandle nh{"ilt"};
+  explicit Scene(const std::string& ns = "ilt") : nh(ns) {}
+  ros::NodeHandle nh;
+  std::string encoding = "rgb8", camera_frame = "camera_optical", lidar_class = "unknown";
+  float lidar_confidence = 0.0f;
   ros::Publisher image, info, objects, points;
   std::mutex mutex;
   std::vector<DetectedObjectArray::ConstPtr> received;
@@ -81,10 +86,10 @@ struct Scene {
   void publish(const ros::Time& stamp) {
     auto img = boost::make_shared<sensor_msgs::Image>();
     img->header.stamp = stamp;
-    img->header.frame_id = "camera_optical";
+    img->header.frame_id = camera_frame;
     img->width = 100;
     img->height = 80;
-    img->encoding = "rgb8";
+    img->encoding = encoding;
     img->step = 300;
     img->data.assign(300 * 80, 0);
     for (int y = 0; y < 80; ++y)
@@ -106,11 +111,12 @@ struct Scene {
     for (std::uint32_t id = 1; id <= 3; ++id) {
       DetectedObject o;
       o.id = id;
-      o.class_label = "unknown";
+      o.class_label = lidar_class;
+      o.class_confidence = lidar_confidence;
       for (int k = 0; k < 8; ++k) {
         o.indices.push_back(static_cast<std::uint32_t>(cloud->size()));
-        cloud->push_back(makeLabeledPoint(xs[id - 1], ys[id - 1] + 0.05f * k, 0.1f * (k % 3),
-                                          id, o.indices.back(), 10.0f));
+        cloud->push_back(makeLabeledPoint(xs[id - 1], ys[id - 1] + 0.05f * k, 0.1f * (k % 3), id,
+                                          o.indices.back(), 10.0f));
       }
       o.point_count = 8;
       objs->objects.push_back(o);
@@ -175,18 +181,26 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
   ASSERT_TRUE(waitFor(
       [&] { return scene.points.getNumSubscribers() > 0 && scene.image.getNumSubscribers() > 0; },
       10.0));
+  // The network runs on its own thread and the objects never wait for it: revolutions that
+  // arrive before the first mask (or before tf) pass with their LiDAR classes ("unknown" here).
   const bool got = waitFor(
       [&] {
         scene.publish(ros::Time::now());
         std::lock_guard<std::mutex> lock(scene.mutex);
-        return !scene.received.empty();
+        for (const auto& m : scene.received)
+          if (!m->objects.empty() && m->objects[0].class_label != "unknown") return true;
+        return false;
       },
       20.0);
-  ASSERT_TRUE(got) << "no objects/classified";
+  ASSERT_TRUE(got) << "no objects/classified with camera classes";
   DetectedObjectArray::ConstPtr out;
   {
     std::lock_guard<std::mutex> lock(scene.mutex);
-    out = scene.received.front();
+    ASSERT_FALSE(scene.received.empty());
+    for (const auto& m : scene.received) {
+      EXPECT_EQ(m->objects.size(), 3u);  // every revolution is published, mask or not
+      if (!out && !m->objects.empty() && m->objects[0].class_label != "unknown") out = m;
+    }
   }
   ASSERT_EQ(out->objects.size(), 3u);
   EXPECT_EQ(out->header.frame_id, "velodyne");
@@ -198,6 +212,144 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
   EXPECT_EQ(out->objects[2].class_label, "unknown");  // behind the camera
   EXPECT_FLOAT_EQ(out->objects[2].class_confidence, 0.0f);
   EXPECT_EQ(out->objects[1].indices.size(), 8u);  // the rest of the message is kept
+  std::filesystem::remove_all(dir);
+}
+
+// Bad input never stops the stage or the manager: images in an unsupported encoding, then images
+// from a camera frame tf does not know. Every revolution still goes out, with its LiDAR classes.
+TEST(ImageLabelTransferNodelet, BadEncodingAndMissingTfKeepLidarClasses) {
+  if (std::system("/usr/bin/python3 -c 'import onnx' >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("ud_ilt_bad_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string model = (dir / "colour.onnx").string(), names = (dir / "classes.txt").string();
+  const std::string cmd =
+      "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " + model + " 100 80 " + names;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string ns = "/ilt_bad/image_label_transfer/";
+  ros::param::set(ns + "fusion", std::string("camera"));
+  ros::param::set(ns + "model/path", model);
+  ros::param::set(ns + "model/class_names_file", names);
+  ros::param::set(ns + "model/input_width_px", 100);
+  ros::param::set(ns + "model/input_height_px", 80);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(
+      manager.load("/ilt_bad/image_label_transfer", "urban_detection/ImageLabelTransfer", {}, {}));
+  Scene scene("ilt_bad");
+  scene.encoding = "yuv422";
+  scene.camera_frame = "camera_nowhere";
+  scene.lidar_class = "vehicle";
+  scene.lidar_confidence = 0.7f;
+  scene.advertise();
+  ros::Subscriber sub = scene.nh.subscribe<DetectedObjectArray>(
+      "objects/classified", 5,
+      boost::function<void(const DetectedObjectArray::ConstPtr&)>(
+          [&](const DetectedObjectArray::ConstPtr& m) {
+            std::lock_guard<std::mutex> lock(scene.mutex);
+            scene.received.push_back(m);
+          }));
+  ASSERT_TRUE(waitFor([&] { return scene.points.getNumSubscribers() > 0; }, 10.0));
+  for (const char* encoding : {"yuv422", "rgb8"}) {  // rgb8: a good image, but no tf
+    SCOPED_TRACE(encoding);
+    scene.encoding = encoding;
+    {
+      std::lock_guard<std::mutex> lock(scene.mutex);
+      scene.received.clear();
+    }
+    ASSERT_TRUE(waitFor(
+        [&] {
+          scene.publish(ros::Time::now());
+          std::lock_guard<std::mutex> lock(scene.mutex);
+          return scene.received.size() >= 5;
+        },
+        20.0));
+    std::lock_guard<std::mutex> lock(scene.mutex);
+    for (const auto& m : scene.received) {
+      ASSERT_EQ(m->objects.size(), 3u);
+      for (const auto& o : m->objects) {
+        EXPECT_EQ(o.class_label, "vehicle");
+        EXPECT_FLOAT_EQ(o.class_confidence, 0.7f);
+      }
+    }
+  }
+  // The nodelet is still there and working.
+  EXPECT_GT(scene.points.getNumSubscribers(), 0u);
+  std::filesystem::remove_all(dir);
+}
+
+// fusion: fused through the nodelet. All three objects come with the LiDAR class vehicle (0.6):
+// the one on car pixels is confirmed (noisy-or confidence), the one on vegetation pixels is
+// vetoed (left out), the one behind the camera keeps its LiDAR class.
+TEST(ImageLabelTransferNodelet, FusedConfirmsVetoesAndKeepsUnseen) {
+  if (std::system("/usr/bin/python3 -c 'import onnx' >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("ud_ilt_fused_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string model = (dir / "colour.onnx").string(), names = (dir / "classes.txt").string();
+  const std::string cmd =
+      "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " + model + " 100 80 " + names;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string ns = "/ilt_fused/image_label_transfer/";
+  ros::param::set(ns + "fusion", std::string("fused"));
+  ros::param::set(ns + "model/path", model);
+  ros::param::set(ns + "model/class_names_file", names);
+  ros::param::set(ns + "model/input_width_px", 100);
+  ros::param::set(ns + "model/input_height_px", 80);
+  ros::param::set(ns + "model/mean", std::vector<double>{0.0, 0.0, 0.0});
+  ros::param::set(ns + "model/scale", std::vector<double>{1 / 255.0, 1 / 255.0, 1 / 255.0});
+  ros::param::set(ns + "model/vehicle_classes", std::vector<std::string>{"car"});
+  ros::param::set(ns + "model/background_classes", std::vector<std::string>{"vegetation"});
+
+  tf2_ros::StaticTransformBroadcaster tf;
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = ros::Time::now();
+  t.header.frame_id = "velodyne";
+  t.child_frame_id = "camera_fused";
+  Eigen::Matrix3d optical_from_lidar;
+  optical_from_lidar << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+  const Eigen::Quaterniond q(optical_from_lidar.transpose());
+  t.transform.rotation.x = q.x();
+  t.transform.rotation.y = q.y();
+  t.transform.rotation.z = q.z();
+  t.transform.rotation.w = q.w();
+  tf.sendTransform(t);
+
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/ilt_fused/image_label_transfer", "urban_detection/ImageLabelTransfer",
+                           {}, {}));
+  Scene scene("ilt_fused");
+  scene.camera_frame = "camera_fused";
+  scene.lidar_class = "vehicle";
+  scene.lidar_confidence = 0.6f;
+  scene.advertise();
+  ros::Subscriber sub = scene.nh.subscribe<DetectedObjectArray>(
+      "objects/classified", 5,
+      boost::function<void(const DetectedObjectArray::ConstPtr&)>(
+          [&](const DetectedObjectArray::ConstPtr& m) {
+            std::lock_guard<std::mutex> lock(scene.mutex);
+            scene.received.push_back(m);
+          }));
+  ASSERT_TRUE(waitFor([&] { return scene.points.getNumSubscribers() > 0; }, 10.0));
+  DetectedObjectArray::ConstPtr out;
+  ASSERT_TRUE(waitFor(
+      [&] {
+        scene.publish(ros::Time::now());
+        std::lock_guard<std::mutex> lock(scene.mutex);
+        for (const auto& m : scene.received)
+          if (m->objects.size() == 2u) out = m;  // a revolution that met a mask and tf
+        return out != nullptr;
+      },
+      20.0))
+      << "no fused objects/classified";
+  EXPECT_EQ(out->objects[0].id, 1u);
+  EXPECT_EQ(out->objects[0].class_label, "vehicle");
+  const double p_car = std::exp(8.0) / (std::exp(8.0) + std::exp(2.0) + 2.0);
+  EXPECT_NEAR(out->objects[0].class_confidence, 1.0 - 0.4 * (1.0 - p_car), 1e-3);
+  EXPECT_EQ(out->objects[1].id, 3u);  // object 2 (vegetation pixels) vetoed
+  EXPECT_EQ(out->objects[1].class_label, "vehicle");
+  EXPECT_FLOAT_EQ(out->objects[1].class_confidence, 0.6f);
   std::filesystem::remove_all(dir);
 }
 

@@ -29,6 +29,7 @@ void ImageLabelTransfer::transfer(const LabeledCloud& object_points,
   stats_ = ImageLabelTransferStats{};
   stats_.points = static_cast<std::uint32_t>(object_points.size());
   votes->clear();
+  bound_ = 0;
 
   // Object id -> vote slot. Detector ids are 1..N, so a direct table is the common case (linear
   // time); arbitrary large ids fall back to a sorted id list and binary search.
@@ -103,7 +104,9 @@ void ImageLabelTransfer::transfer(const LabeledCloud& object_points,
 
   // Pass 2: visible points vote with their pixel's confidence.
   const int bound = scores.classIdBound();
+  bound_ = bound;
   scores_.assign(ids_.size() * static_cast<std::size_t>(bound), 0.0f);
+  all_scores_.assign(scores_.size(), 0.0f);
   const auto& kept = params_.kept_classes;
   const float margin = static_cast<float>(params_.occlusion_margin_m);
   for (const Projected& pr : projected_) {
@@ -116,6 +119,7 @@ void ImageLabelTransfer::transfer(const LabeledCloud& object_points,
     float conf = 0.0f;
     const int c = scores.classAt(pr.sx, pr.sy, &conf);
     if (c < 0 || c >= bound) continue;
+    all_scores_[static_cast<std::size_t>(pr.slot) * bound + c] += conf;
     if (!kept.empty() && (static_cast<std::size_t>(c) >= kept.size() || !kept[c])) continue;
     scores_[static_cast<std::size_t>(pr.slot) * bound + c] += conf;
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
@@ -19,6 +20,7 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 
 bool SegmentationScores::assign(const cv::Mat& blob, bool softmax) {
   blob_.release();
+  confidence_.release();
   data_ = nullptr;
   classes_ = width_ = height_ = 0;
   if (blob.type() != CV_32F || blob.dims != 4 || blob.size[0] != 1 || blob.size[1] < 1 ||
@@ -44,12 +46,73 @@ void SegmentationScores::assignLabels(const cv::Mat& labels, int ignore_id) {
   ignore_id_ = ignore_id;
 }
 
+void SegmentationScores::reduceTo(SegmentationScores* out) const {
+  if (empty()) {
+    *out = SegmentationScores();
+    return;
+  }
+  const int sizes[4] = {1, 1, height_, width_};
+  cv::Mat labels(4, sizes, CV_32F);
+  cv::Mat label_plane(height_, width_, CV_32F, labels.ptr<float>());
+  cv::Mat conf(height_, width_, CV_32F);
+  if (classes_ == 1) {
+    cv::Mat(height_, width_, CV_32F, const_cast<float*>(data_)).copyTo(label_plane);
+    if (confidence_.empty())
+      conf.setTo(1.0f);
+    else
+      confidence_.copyTo(conf);
+  } else {
+    // Whole-plane operations (vectorised by OpenCV) rather than classAt() per pixel: the argmax
+    // over C planes, then the softmax denominator sum_c exp(s_c - s_best).
+    const std::size_t plane = static_cast<std::size_t>(width_) * height_;
+    auto planeAt = [&](int c) {
+      return cv::Mat(height_, width_, CV_32F, const_cast<float*>(data_) + c * plane);
+    };
+    cv::Mat best = planeAt(0).clone(), greater, diff;
+    label_plane.setTo(0.0f);
+    for (int c = 1; c < classes_; ++c) {
+      const cv::Mat s = planeAt(c);
+      cv::compare(s, best, greater, cv::CMP_GT);  // strictly greater, as classAt()
+      label_plane.setTo(static_cast<float>(c), greater);
+      s.copyTo(best, greater);
+    }
+    if (!softmax_) {
+      cv::max(best, 0.0, conf);
+      cv::min(conf, 1.0, conf);
+    } else {
+      cv::Mat sum(height_, width_, CV_32F, cv::Scalar(0.0f));
+      for (int c = 0; c < classes_; ++c) {
+        cv::subtract(planeAt(c), best, diff);
+        cv::exp(diff, diff);
+        sum += diff;
+      }
+      cv::divide(1.0, sum, conf);
+    }
+    // Non-finite best scores have no class (as in classAt()); OpenCV's vectorised compares do
+    // not see NaN reliably, so this pass is per pixel.
+    for (int y = 0; y < height_; ++y) {
+      const float* b = best.ptr<float>(y);
+      float* l = label_plane.ptr<float>(y);
+      float* c = conf.ptr<float>(y);
+      for (int x = 0; x < width_; ++x) {
+        if (!std::isfinite(b[x])) {
+          l[x] = -1.0f;
+          c[x] = 0.0f;
+        }
+      }
+    }
+  }
+  out->assign(labels, false);
+  out->confidence_ = conf;
+  out->ignore_id_ = ignore_id_;
+}
+
 int SegmentationScores::classAt(int x, int y, float* confidence) const {
   const std::size_t plane = static_cast<std::size_t>(width_) * height_;
   const float* p = data_ + static_cast<std::size_t>(y) * width_ + x;
   if (classes_ == 1) {
     const float v = *p;
-    *confidence = 1.0f;
+    *confidence = confidence_.empty() ? 1.0f : confidence_.at<float>(y, x);
     if (!(v >= 0.0f && v <= 255.0f)) return -1;  // also NaN
     const int id = static_cast<int>(std::lround(v));
     return id == ignore_id_ ? -1 : id;
@@ -111,25 +174,46 @@ bool SegmentationModel::load(const SegmentationModelParams& params, std::string*
       return false;
     }
   }
-  std::ifstream probe(params.model_path, std::ios::binary);
-  if (!probe) {
-    *error = "cannot open model file '" + params.model_path + "'";
-    return false;
+  for (const std::string* f : {&params.model_path, &params.config_path}) {
+    if (f->empty()) continue;
+    std::ifstream probe(*f, std::ios::binary);
+    if (!probe) {
+      *error = "cannot open model file '" + *f + "'";
+      return false;
+    }
   }
+  return readNet(error);
+}
+
+bool SegmentationModel::readNet(std::string* error) {
+  loaded_ = false;
+  net_ = cv::dnn::Net();
   try {
-    net_ = cv::dnn::readNetFromONNX(params.model_path);
+    net_ = cv::dnn::readNet(params_.model_path, params_.config_path);
     net_.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
     net_.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
   } catch (const cv::Exception& e) {
-    *error = "OpenCV cannot import '" + params.model_path + "': " + e.what();
+    *error = "OpenCV cannot import '" + params_.model_path + "': " + e.what();
     return false;
   }
   if (net_.empty()) {
-    *error = "OpenCV imported an empty network from '" + params.model_path + "'";
+    *error = "OpenCV imported an empty network from '" + params_.model_path + "'";
     return false;
   }
   loaded_ = true;
   return true;
+}
+
+bool SegmentationModel::setInputSize(int width_px, int height_px, std::string* error) {
+  if (width_px == params_.input_width_px && height_px == params_.input_height_px && loaded_)
+    return true;
+  if (width_px < 8 || width_px > 8192 || height_px < 8 || height_px > 8192) {
+    *error = "input size must be within [8, 8192] px";
+    return false;
+  }
+  params_.input_width_px = width_px;
+  params_.input_height_px = height_px;
+  return readNet(error);
 }
 
 bool SegmentationModel::run(const cv::Mat& image, SegmentationScores* scores, std::string* error) {
@@ -172,6 +256,9 @@ bool SegmentationModel::run(const cv::Mat& image, SegmentationScores* scores, st
     net_.setInput(blob_);
     output_ = net_.forward();
   } catch (const cv::Exception& e) {
+    *error = std::string("inference failed: ") + e.what();
+    return false;
+  } catch (const std::exception& e) {
     *error = std::string("inference failed: ") + e.what();
     return false;
   }

@@ -85,6 +85,16 @@ class ImageLabelTransfer {
                 const PinholeCamera& camera, const SegmentationScores& scores,
                 std::vector<ObjectClassVote>* votes);
   const ImageLabelTransferStats& stats() const { return stats_; }
+  /// Number of class ids of the last transfer() (the scores' classIdBound()).
+  int classBound() const { return bound_; }
+  /// Summed pixel confidence per class id (classBound() entries) of the object in `votes[slot]`
+  /// of the last transfer(): every class counted, kept or not (the camera evidence the fusion
+  /// of spark/camera_fusion.h reads). Null when that transfer had no usable camera or scores.
+  const float* classScores(std::size_t slot) const {
+    return bound_ > 0 && (slot + 1) * bound_ <= all_scores_.size()
+               ? all_scores_.data() + slot * bound_
+               : nullptr;
+  }
 
  private:
   struct Projected {
@@ -100,7 +110,9 @@ class ImageLabelTransfer {
   std::vector<Projected> projected_;
   std::vector<float> cell_depth_;        // per occlusion cell: nearest depth
   std::vector<std::int32_t> cell_slot_;  // ... and the object slot it belongs to
-  std::vector<float> scores_;            // [slot][class] summed confidences
+  std::vector<float> scores_;            // [slot][class] summed confidences of kept classes
+  std::vector<float> all_scores_;        // [slot][class] summed confidences of every class
+  int bound_ = 0;
 };
 
 }  // namespace core

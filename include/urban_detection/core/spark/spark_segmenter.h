@@ -1,6 +1,7 @@
 /// \file spark_segmenter.h
-/// A 2-D semantic segmentation network run through OpenCV's DNN module (an ONNX file, e.g. a
-/// DeepLabv3 trained on Cityscapes and exported by the user), and the class scores it returns.
+/// A 2-D semantic segmentation network run through OpenCV's DNN module (any file
+/// cv::dnn::readNet reads: ONNX, Torch7 `.t7`/`.net`, Caffe, TensorFlow, Darknet; e.g. ENet
+/// trained on Cityscapes), and the class scores it returns.
 /// This is the "image segmentation" step of the SPARK workflow (second seed paper, Sec. 3.3),
 /// used by the live image-to-object label transfer and by the offline SPARK tool. ROS-free; it
 /// never prints: failures return false and say why in `error`.
@@ -34,6 +35,10 @@ class SegmentationScores {
   /// A label map (CV_8U or CV_32S, class id per pixel, confidence 1). Copied into the blob.
   /// Pixels with id `ignore_id` (if >= 0) have no class.
   void assignLabels(const cv::Mat& labels, int ignore_id = -1);
+  /// Reduces these scores to a label map that owns its memory (the argmax per pixel) with the
+  /// confidence classAt() would give each pixel, so it outlives the network's next run (the
+  /// live transfer hands it to another thread). A label map is copied as is.
+  void reduceTo(SegmentationScores* out) const;
 
   bool empty() const { return data_ == nullptr; }
   int classes() const { return classes_; }  ///< number of score channels (1 for a label map)
@@ -53,6 +58,7 @@ class SegmentationScores {
 
  private:
   cv::Mat blob_;
+  cv::Mat confidence_;  // CV_32F [h][w] of a reduced label map; empty: confidence 1
   const float* data_ = nullptr;
   int classes_ = 0, width_ = 0, height_ = 0;
   int ignore_id_ = -1;
@@ -61,7 +67,8 @@ class SegmentationScores {
 
 /// Network input geometry and normalisation, mirrored in config/image_label_transfer.yaml.
 struct SegmentationModelParams {
-  std::string model_path;     ///< ONNX file; mandatory
+  std::string model_path;     ///< any file cv::dnn::readNet reads (format from the extension)
+  std::string config_path;    ///< second file of some formats (Caffe .prototxt, TF .pbtxt)
   int input_width_px = 1024;  ///< [px] the image is resized to this before inference
   int input_height_px = 512;  ///< [px]
   bool input_rgb = true;      ///< network expects RGB channel order (images come BGR)
@@ -78,12 +85,17 @@ struct SegmentationModelStats {
   double inference_ms = 0.0;   ///< cv::dnn::Net::forward
 };
 
-/// Loads an ONNX segmentation network and runs it on BGR images.
+/// Loads a segmentation network and runs it on BGR images. One cv::dnn::Net per input size:
+/// changing the size reads the file again, because reshaping an imported network (Torch7 ENet
+/// in OpenCV 4.6 at least) silently corrupts its output.
 class SegmentationModel {
  public:
   /// Checks the parameters and reads the network (CPU backend). Returns false with `error`
   /// naming the problem (missing file, unsupported operator, bad input size).
   bool load(const SegmentationModelParams& params, std::string* error);
+  /// Another network input size: a fresh network is read from the same file (no-op when the
+  /// size is unchanged). Returns false with `error` (and stays unloaded) on failure.
+  bool setInputSize(int width_px, int height_px, std::string* error);
   bool loaded() const { return loaded_; }
   const SegmentationModelParams& params() const { return params_; }
 
@@ -95,6 +107,8 @@ class SegmentationModel {
 
  private:
   SegmentationModelParams params_;
+  bool readNet(std::string* error);
+
   cv::dnn::Net net_;
   bool loaded_ = false;
   cv::Mat resized_, colour_, float_, blob_, output_;  // scratch reused between images

@@ -1,0 +1,56 @@
+/// \file kitti_spark_eval.h
+/// KITTI object frames for the camera stage (issue 27): one frame's cloud, labels, calibration
+/// and image as the live transfer sees them (a pinhole camera and the camera <- LiDAR
+/// transform), the objects made of the points of each labelled 3-D box, and the KITTI type ->
+/// object category rule of the evaluation. Used by `urban_detection_spark kitti` and the tests.
+/// ROS-free.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/spark/image_label_transfer.h"
+#include "urban_detection/core/detection/object_detector.h"
+#include "urban_detection/core/common/point_types.h"
+
+namespace urban_detection {
+namespace core {
+
+/// One KITTI object frame `id` ("000003") of `dir` (calib/, label_2/, velodyne/, image_2/).
+struct KittiSparkFrame {
+  std::string id;
+  KittiCalibration calib;
+  std::vector<KittiLabel> labels;
+  CloudXYZIRT cloud;
+  cv::Mat image;         ///< BGR image_2 (empty when not loaded)
+  PinholeCamera camera;  ///< P2 and the image size
+  Eigen::Isometry3d camera_from_velo = Eigen::Isometry3d::Identity();  ///< R0_rect * Tr_velo_to_cam
+};
+
+/// Reads the frame; `with_image` false reads only the PNG's size. False with `error`.
+bool loadKittiSparkFrame(const std::string& dir, const std::string& id, bool with_image,
+                         KittiSparkFrame* frame, std::string* error);
+
+/// The evaluation's category of a KITTI type: Car, Van, Truck -> vehicle; Pedestrian,
+/// Person_sitting -> pedestrian; Cyclist -> cyclist; anything else (Tram, Misc, DontCare)
+/// kUnknown (not scored).
+ObjectCategory kittiTypeCategory(const std::string& type);
+
+/// The points strictly inside labelled box `label` (not DontCare), excluding the bottom
+/// `ground_band_m` (the road under it), as indices into frame.cloud.
+std::vector<std::size_t> kittiBoxPoints(const KittiSparkFrame& frame, const KittiLabel& label,
+                                        double ground_band_m = 0.2);
+
+/// The labelled objects as the transfer's input: the points of label k get object id k + 1
+/// (DontCare labels get none).
+void kittiLabelObjects(const KittiSparkFrame& frame, LabeledCloud* points,
+                       double ground_band_m = 0.2);
+
+/// [m] horizontal distance of a label from the LiDAR (its box centre).
+double kittiLabelRange(const KittiSparkFrame& frame, const KittiLabel& label);
+
+}  // namespace core
+}  // namespace urban_detection
