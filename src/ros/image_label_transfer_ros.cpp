@@ -191,16 +191,9 @@ void loadImageLabelTransferParams(const ros::NodeHandle& pnh, ImageLabelTransfer
                      "'; accepted: lidar, camera, fused");
   }
   const ros::NodeHandle rule(pnh, "fusion_rule");
-  loadParam(rule, "min_visible_points", &p->fusion.min_visible_points, 1, 1000000);
-  loadParam(rule, "veto_share", &p->fusion.veto_share, 0.01, 1.01);
-  loadParam(rule, "min_camera_share", &p->fusion.min_camera_share, 0.0, 1.0);
-  loadParam(rule, "relabel", &p->fusion.relabel);
+  loadFields(rule, &p->fusion);
   const ros::NodeHandle t(pnh, "transfer");
-  loadParam(t, "min_depth_m", &p->transfer.min_depth_m, 0.0, 100.0, "m");
-  loadParam(t, "min_points", &p->transfer.min_points, 1, 1000000);
-  loadParam(t, "min_confidence", &p->transfer.min_confidence, 0.0, 1.0);
-  loadParam(t, "occlusion_margin_m", &p->transfer.occlusion_margin_m, 0.0, 100.0, "m");
-  loadParam(t, "occlusion_cell_px", &p->transfer.occlusion_cell_px, 1, 256, "px");
+  loadFields(t, &p->transfer);
   loadParam(t, "queue_size", &p->queue_size, 1, 100);
   loadParam(t, "max_sync_interval_s", &p->max_sync_interval_s, 0.0, 1.0, "s");
   loadParam(t, "max_mask_gap_s", &p->max_mask_gap_s, 0.0, 10.0, "s");

@@ -11,6 +11,8 @@
 #include <string>
 
 #include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/spark/camera_fusion.h"
+#include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/tracking/tracker.h"
 
 namespace urban_detection {
@@ -25,7 +27,8 @@ class FieldTable : public ::testing::Test {};
 using Structs =
     ::testing::Types<GridSegmenterParams, HoughWallRefinerParams, HierarchicalGridDetectorParams,
                      DistanceWeightParams, FarObjectMergerParams, KdTreeDetectorParams,
-                     ObjectFilterParams, ObjectClassifierParams, TrackerParams>;
+                     ObjectFilterParams, ObjectClassifierParams, TrackerParams,
+                     CameraFusionParams, ImageLabelTransferParams>;
 TYPED_TEST_SUITE(FieldTable, Structs);
 
 // Unique names, a description each, finite ordered ranges around the in-class default.

@@ -87,15 +87,7 @@ bool buildCameraClassMap(const std::vector<std::string>& names,
   return true;
 }
 
-std::string validate(const CameraFusionParams& p) {
-  if (p.min_visible_points < 1 || p.min_visible_points > 1000000)
-    return "fusion/min_visible_points must be in [1, 1000000]";
-  if (!(p.veto_share > 0.0 && p.veto_share <= 1.01))
-    return "fusion/veto_share must be in (0, 1.01] (above 1: no veto)";
-  if (!(p.min_camera_share >= 0.0 && p.min_camera_share <= 1.0))
-    return "fusion/min_camera_share must be in [0, 1]";
-  return "";
-}
+std::string validate(const CameraFusionParams& p) { return checkFieldRanges(p); }
 
 CameraEvidence cameraEvidence(const float* class_scores, int class_bound, std::uint32_t visible,
                               const CameraClassMap& map) {

@@ -7,6 +7,8 @@
 namespace urban_detection {
 namespace core {
 
+std::string validate(const ImageLabelTransferParams& params) { return checkFieldRanges(params); }
+
 bool PinholeCamera::valid() const {
   return width_px > 0 && height_px > 0 && projection.allFinite() && projection(0, 0) > 0.0 &&
          projection(1, 1) > 0.0;

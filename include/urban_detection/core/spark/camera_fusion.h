@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "urban_detection/core/classification/object_classifier.h"
+#include "urban_detection/core/common/param_fields.h"
 #include "urban_detection/core/detection/object_detector.h"
 
 namespace urban_detection {
@@ -78,6 +79,24 @@ struct CameraFusionParams {
 
 /// Empty when valid, else a message naming the first out-of-range field and its range.
 std::string validate(const CameraFusionParams& p);
+
+/// CameraFusionParams' field table (core/common/param_fields.h); the mode is the nodelet's
+/// `fusion` parameter (lidar | camera | fused), the rest `fusion_rule/<name>`.
+template <>
+struct ParamFields<CameraFusionParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f({"min_visible_points", "points", 1, 1000000, "fewer visible points: the camera has no say"},
+      p.min_visible_points);
+    f({"veto_share", "", 0.01, 1.01,
+       "background share that makes an object a non-object (above 1: no veto)"},
+      p.veto_share);
+    f({"min_camera_share", "", 0.0, 1.0,
+       "camera category share needed to label (camera mode) or relabel (fused with relabel)"},
+      p.min_camera_share);
+    f({"relabel", "fused: a confident disagreeing camera class wins"}, p.relabel);
+  }
+};
 
 /// What the camera says about one object.
 struct CameraEvidence {

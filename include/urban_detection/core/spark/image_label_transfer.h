@@ -9,8 +9,10 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <string>
 #include <vector>
 
+#include "urban_detection/core/common/param_fields.h"
 #include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/spark/spark_segmenter.h"
 
@@ -44,6 +46,30 @@ struct ImageLabelTransferParams {
   /// Classes that vote, indexed by class id (true = votes); empty = every class votes. Pixels
   /// of other classes (road, sky, building, ...) count as considered but vote for nothing.
   std::vector<bool> kept_classes;
+};
+
+/// "" when every field is in its table range (ParamFields<ImageLabelTransferParams> below).
+std::string validate(const ImageLabelTransferParams& params);
+
+/// ImageLabelTransferParams' field table (core/common/param_fields.h); kept_classes comes from
+/// the model's class names (the nodelet's model/keep_classes).
+template <>
+struct ParamFields<ImageLabelTransferParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f({"min_depth_m", "m", 0.0, 100.0, "points closer to (or behind) the camera are ignored"},
+      p.min_depth_m);
+    f({"min_points", "points", 1, 1000000, "objects with fewer considered points stay unknown"},
+      p.min_points);
+    f({"min_confidence", "", 0.0, 1.0, "objects whose best confidence is lower stay unknown"},
+      p.min_confidence);
+    f({"occlusion_margin_m", "m", 0.0, 100.0,
+       "a point is occluded when a point of another object in its image cell is closer by more "
+       "than this (0: no occlusion test)"},
+      p.occlusion_margin_m);
+    f({"occlusion_cell_px", "px", 1, 256, "side of the image cells of the occlusion test"},
+      p.occlusion_cell_px);
+  }
 };
 
 /// The vote of one object.
