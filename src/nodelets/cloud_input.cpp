@@ -13,18 +13,18 @@
 #include <mutex>
 #include <string>
 
-#include <boost/make_shared.hpp>
 #include <nodelet/nodelet.h>
 #include <pcl_ros/point_cloud.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <boost/make_shared.hpp>
+#include <pluginlib/class_list_macros.hpp>
 
 #include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/pointcloud2_input.h"
 #include "urban_detection/ros/stage_diagnostics.h"
-#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -57,8 +57,9 @@ class CloudInputNodelet : public nodelet::Nodelet {
     diagnostics_->input(msg->header.seq);
     const std::uint64_t points = static_cast<std::uint64_t>(msg->width) * msg->height;
     if (points > static_cast<std::uint64_t>(max_points_)) {  // before any allocation of ours
-      NODELET_ERROR_THROTTLE(5, "CloudInput: refusing a PointCloud2 of %llu points (max_points "
-                                "%d); nothing of it is converted",
+      NODELET_ERROR_THROTTLE(5,
+                             "CloudInput: refusing a PointCloud2 of %llu points (max_points "
+                             "%d); nothing of it is converted",
                              static_cast<unsigned long long>(points), max_points_);
       diagnostics_->rejected();
       return;
@@ -75,8 +76,9 @@ class CloudInputNodelet : public nodelet::Nodelet {
       return;
     }
     if (!info.has_ring || !info.has_time) {
-      NODELET_INFO_ONCE("CloudInput: input has no ring/time fields (e.g. KITTI); they are set "
-                        "to 0");
+      NODELET_INFO_ONCE(
+          "CloudInput: input has no ring/time fields (e.g. KITTI); they are set "
+          "to 0");
     }
     diagnostics_->count("non_finite_points", info.non_finite, false);
     cloud->header.seq = msg->header.seq;

@@ -11,20 +11,20 @@
 #include <string>
 #include <vector>
 
-#include <boost/make_shared.hpp>
 #include <nodelet/nodelet.h>
 #include <pcl_ros/point_cloud.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
+#include <boost/make_shared.hpp>
+#include <pluginlib/class_list_macros.hpp>
 
 #include "urban_detection/GridSegmentationConfig.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/stage_thread.h"
 #include "urban_detection/ros/tunable_fields.h"
 #include "urban_detection/ros/validated_reconfigure.h"
-#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -77,8 +77,9 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
     lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
       diagnostics_->setActive(wanted);
       if (!wanted) return sub_.shutdown();
-      sub_ = thread_->handle(getNodeHandle())
-                 .subscribe("velodyne_points", queue_size_, &GridSegmentationNodelet::cloudCb, this);
+      sub_ =
+          thread_->handle(getNodeHandle())
+              .subscribe("velodyne_points", queue_size_, &GridSegmentationNodelet::cloudCb, this);
     });
     labeled_pub_ = lazy_->advertise<LabeledCloud>(nh, "segmentation/labeled_points", 2);
     foreground_pub_ = lazy_->advertise<LabeledCloud>(nh, "segmentation/foreground", 2);
@@ -112,8 +113,8 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
   std::unique_ptr<Reconfigure> reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
-  std::vector<core::SegmentClass> labels_;  // scratch: per-point classes
-  std::unique_ptr<ros_conv::StageThread> thread_;  // runs cloudCb
+  std::vector<core::SegmentClass> labels_;                 // scratch: per-point classes
+  std::unique_ptr<ros_conv::StageThread> thread_;          // runs cloudCb
   std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher labeled_pub_, foreground_pub_;
   ros::Subscriber sub_;

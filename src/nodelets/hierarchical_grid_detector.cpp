@@ -1,6 +1,7 @@
 // urban_detection/HierarchicalGridDetector: segmentation/foreground -> objects, objects/points
 // with the hierarchical grid model (paper Sec. 3.2). Parameters: ~hierarchical_grid/*
-// (config/hierarchical_grid.yaml, config/classification.yaml), tunable in ~hierarchical_grid (cfg/HierarchicalGridDetector.cfg).
+// (config/hierarchical_grid.yaml, config/classification.yaml), tunable in ~hierarchical_grid
+// (cfg/HierarchicalGridDetector.cfg).
 #include "urban_detection/core/common/point_types.h"
 
 #include <pluginlib/class_list_macros.hpp>

@@ -4,19 +4,19 @@
 #include <memory>
 #include <mutex>
 
-#include <boost/make_shared.hpp>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
+#include <boost/make_shared.hpp>
+#include <pluginlib/class_list_macros.hpp>
 
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/ObjectMarkersConfig.h"
+#include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/tunable_fields.h"
 #include "urban_detection/ros/validated_reconfigure.h"
-#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -33,12 +33,10 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
           "ObjectMarkers: " + std::string(e.what()) + "; the nodelet stays idle");
       return;
     }
-    const ObjectMarkersConfig initial =
-        ros_conv::toConfig<ObjectMarkersConfig>(params_);
+    const ObjectMarkersConfig initial = ros_conv::toConfig<ObjectMarkersConfig>(params_);
     auto apply = [this, pnh](const ObjectMarkersConfig& n) {
       std::lock_guard<std::mutex> lock(params_mutex_);  // applied from the next message on
-      const ros_conv::ObjectMarkerParams p =
-          ros_conv::fromConfig(n, params_);
+      const ros_conv::ObjectMarkerParams p = ros_conv::fromConfig(n, params_);
       const std::string error = checkFields(pnh, p);
       if (error.empty()) params_ = p;
       return error;
@@ -50,10 +48,10 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
     lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
       diagnostics_->setActive(wanted);
       if (!wanted) return sub_.shutdown();
-      sub_ = getNodeHandle().subscribe("objects", queue_size_, &ObjectMarkersNodelet::objectsCb, this);
+      sub_ =
+          getNodeHandle().subscribe("objects", queue_size_, &ObjectMarkersNodelet::objectsCb, this);
     });
-    pub_ = lazy_->advertise<visualization_msgs::MarkerArray>(getNodeHandle(), "objects/markers",
-                                                            2);
+    pub_ = lazy_->advertise<visualization_msgs::MarkerArray>(getNodeHandle(), "objects/markers", 2);
   }
 
   void objectsCb(const DetectedObjectArray::ConstPtr& objects) {

@@ -9,13 +9,13 @@
 #include <set>
 #include <string>
 
-#include <boost/make_shared.hpp>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
+#include <boost/make_shared.hpp>
+#include <pluginlib/class_list_macros.hpp>
 
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/ObjectTrackerConfig.h"
@@ -60,17 +60,19 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
       tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
       tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_);
     }
-    diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(getNodeHandle(), pnh, getName(),
-                                                                "tracker");
+    diagnostics_ =
+        std::make_unique<ros_conv::StageDiagnostics>(getNodeHandle(), pnh, getName(), "tracker");
     diagnostics_->setActive(false);
     lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
       diagnostics_->setActive(wanted);
       if (!wanted) return sub_.shutdown();
-      sub_ = getNodeHandle().subscribe("objects", queue_size_, &ObjectTrackerNodelet::objectsCb, this);
+      sub_ =
+          getNodeHandle().subscribe("objects", queue_size_, &ObjectTrackerNodelet::objectsCb, this);
     });
     ros::NodeHandle& nh = getNodeHandle();
     tracks_pub_ = lazy_->advertise<TrackedObjectArray>(nh, "objects/tracked", 2);
-    markers_pub_ = lazy_->advertise<visualization_msgs::MarkerArray>(nh, "objects/tracked/markers", 2);
+    markers_pub_ =
+        lazy_->advertise<visualization_msgs::MarkerArray>(nh, "objects/tracked/markers", 2);
   }
 
   // odom_T_sensor at the objects' stamp, or identity in the sensor frame when tf cannot say.
@@ -79,14 +81,15 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
     if (!tf_buffer_ || fixed_frame_ == header.frame_id) return header.frame_id;
     try {
       // Waits up to 50 ms for a transform that is late, not for a frame nobody publishes.
-      const bool known = tf_buffer_->_frameExists(fixed_frame_) &&
-                         tf_buffer_->_frameExists(header.frame_id);
+      const bool known =
+          tf_buffer_->_frameExists(fixed_frame_) && tf_buffer_->_frameExists(header.frame_id);
       *pose = tf2::transformToEigen(tf_buffer_->lookupTransform(
           fixed_frame_, header.frame_id, header.stamp, ros::Duration(known ? 0.05 : 0.0)));
       return fixed_frame_;
     } catch (const tf2::TransformException& e) {
       diagnostics_->count("tf_failures");
-      NODELET_WARN_THROTTLE(10, "no transform %s <- %s at the objects' stamp (%s): tracking in "
+      NODELET_WARN_THROTTLE(10,
+                            "no transform %s <- %s at the objects' stamp (%s): tracking in "
                             "the sensor frame %s, velocities include the sensor's own motion",
                             fixed_frame_.c_str(), header.frame_id.c_str(), e.what(),
                             header.frame_id.c_str());
@@ -105,10 +108,12 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       objects_.resize(msg->objects.size());
-      for (std::size_t k = 0; k < objects_.size(); ++k) ros_conv::fromMsg(msg->objects[k], &objects_[k]);
+      for (std::size_t k = 0; k < objects_.size(); ++k)
+        ros_conv::fromMsg(msg->objects[k], &objects_[k]);
       if (frame != frame_) {  // a new frame: positions are not comparable, start over
         if (!frame_.empty()) {
-          NODELET_INFO("tracking in frame %s (was %s): tracks restarted", frame.c_str(), frame_.c_str());
+          NODELET_INFO("tracking in frame %s (was %s): tracks restarted", frame.c_str(),
+                       frame_.c_str());
         }
         tracker_->reset();
         frame_ = frame;
@@ -137,7 +142,8 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
         const core::Track& t = tracker_->tracks()[k];
         ros_conv::toMsg(t, &tracked->objects[k]);
         if (t.detection >= 0) {
-          tracked->objects[k].detection_id = static_cast<std::int32_t>(msg->objects[t.detection].id);
+          tracked->objects[k].detection_id =
+              static_cast<std::int32_t>(msg->objects[t.detection].id);
         }
       }
       if (want_markers) {
@@ -148,7 +154,8 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
     if (tracks_pub_.getNumSubscribers() > 0) {
       tracks_pub_.publish(boost::shared_ptr<const TrackedObjectArray>(tracked));
     }
-    if (want_markers) markers_pub_.publish(boost::shared_ptr<const visualization_msgs::MarkerArray>(markers));
+    if (want_markers)
+      markers_pub_.publish(boost::shared_ptr<const visualization_msgs::MarkerArray>(markers));
     diagnostics_->latency(msg->header.stamp, ros::Time::now());
     diagnostics_->frame((ros::WallTime::now() - start).toSec());
     diagnostics_->output();
@@ -160,7 +167,7 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
   std::vector<core::DetectedObject> objects_;  // converted input, reused
   ros_conv::TrackMarkerParams marker_params_;
   std::string fixed_frame_ = "odom";
-  std::string frame_;  // the frame the current tracks live in
+  std::string frame_;               // the frame the current tracks live in
   std::set<std::uint32_t> arrows_;  // tracks whose velocity arrow is shown
   int queue_size_ = 2;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;

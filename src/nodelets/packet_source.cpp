@@ -6,8 +6,8 @@
 // then is not needed). Both outputs are lazy. The reading thread is PacketSourceWorker
 // (ros/packet_source_worker.h); this file wires it to ROS.
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
+#include <pluginlib/class_list_macros.hpp>
 
 #include <memory>
 
@@ -29,9 +29,9 @@ class PacketSourceNodelet : public nodelet::Nodelet {
     try {
       params = loadPacketSourceParams(getPrivateNodeHandle());
     } catch (const std::exception& e) {  // ParamError
-      refusal_ = ros_conv::RefusalDiagnostics::report(
-          getNodeHandle(), getPrivateNodeHandle(), getName(),
-          "PacketSource inactive: " + std::string(e.what()));
+      refusal_ =
+          ros_conv::RefusalDiagnostics::report(getNodeHandle(), getPrivateNodeHandle(), getName(),
+                                               "PacketSource inactive: " + std::string(e.what()));
       return;
     }
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
@@ -50,19 +50,20 @@ class PacketSourceNodelet : public nodelet::Nodelet {
           },
           [this] { return cloud_pub_ && cloud_pub_.getNumSubscribers() > 0; });
     } catch (const std::exception& e) {  // socket, file or calibration errors
-      refusal_ = ros_conv::RefusalDiagnostics::report(
-          getNodeHandle(), getPrivateNodeHandle(), getName(),
-          "PacketSource inactive: " + std::string(e.what()));
+      refusal_ =
+          ros_conv::RefusalDiagnostics::report(getNodeHandle(), getPrivateNodeHandle(), getName(),
+                                               "PacketSource inactive: " + std::string(e.what()));
       return;
     }
     diagnostics_->setHardwareId(worker_->describe());
-    const std::string decoding =
-        params.decode ? "; streaming decoding, calibration " + worker_->decoder()->calibration().source
-                      : "";
-    NODELET_INFO("PacketSource: %s, %.0f rpm (%.1f revolutions/s expected), stamped with the "
-                 "%s packet of a revolution%s", worker_->describe().c_str(), params.rpm,
-                 params.expectedRevolutionRateHz(),
-                 params.timestamp_first_packet ? "first" : "last", decoding.c_str());
+    const std::string decoding = params.decode ? "; streaming decoding, calibration " +
+                                                     worker_->decoder()->calibration().source
+                                               : "";
+    NODELET_INFO(
+        "PacketSource: %s, %.0f rpm (%.1f revolutions/s expected), stamped with the "
+        "%s packet of a revolution%s",
+        worker_->describe().c_str(), params.rpm, params.expectedRevolutionRateHz(),
+        params.timestamp_first_packet ? "first" : "last", decoding.c_str());
     if (!worker_->warning().empty()) NODELET_WARN("PacketSource: %s", worker_->warning().c_str());
     worker_->start();
   }

@@ -4,16 +4,16 @@
 // Lazy: subscribed to the packets only while someone listens to the points.
 #include <nodelet/nodelet.h>
 #include <pcl_ros/point_cloud.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
+#include <pluginlib/class_list_macros.hpp>
 
 #include <memory>
 #include <mutex>
 
+#include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/packet_params.h"
 #include "urban_detection/ros/scan_to_cloud.h"
 #include "urban_detection/ros/stage_diagnostics.h"
-#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -24,14 +24,14 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
       params_ = loadPacketToCloudParams(getPrivateNodeHandle());
       converter_ = std::make_unique<ScanToCloud>(params_, getNodeHandle());
     } catch (const std::exception& e) {  // ParamError, core::CalibrationError
-      refusal_ = ros_conv::RefusalDiagnostics::report(
-          getNodeHandle(), getPrivateNodeHandle(), getName(),
-          "PacketToCloud inactive: " + std::string(e.what()));
+      refusal_ =
+          ros_conv::RefusalDiagnostics::report(getNodeHandle(), getPrivateNodeHandle(), getName(),
+                                               "PacketToCloud inactive: " + std::string(e.what()));
       return;
     }
     NODELET_INFO("PacketToCloud: calibration %s, range [%.2f, %.2f] m",
-                 converter_->decoder().calibration().source.c_str(),
-                 params_.decoder.min_range_m, params_.decoder.max_range_m);
+                 converter_->decoder().calibration().source.c_str(), params_.decoder.min_range_m,
+                 params_.decoder.max_range_m);
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
         getNodeHandle(), getPrivateNodeHandle(), getName(), "decoding", "scans");
     diagnostics_->setActive(false);
@@ -56,8 +56,9 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
     }
     if (scan->packets.size() > static_cast<std::size_t>(params_.max_packets_per_scan)) {
       diagnostics_->rejected();  // refused before any allocation of ours
-      NODELET_ERROR_THROTTLE(5, "refusing a VelodyneScan of %zu packets (max_packets_per_scan "
-                                "%d); nothing of it is decoded",
+      NODELET_ERROR_THROTTLE(5,
+                             "refusing a VelodyneScan of %zu packets (max_packets_per_scan "
+                             "%d); nothing of it is decoded",
                              scan->packets.size(), params_.max_packets_per_scan);
       return;
     }
@@ -75,13 +76,12 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
     }
     if (stats.tf_failures > 0) {
       NODELET_WARN_THROTTLE(5, "no transform for %zu of %zu packets (%s -> %s): %s",
-                            stats.tf_failures, scan->packets.size(),
-                            scan->header.frame_id.c_str(),
+                            stats.tf_failures, scan->packets.size(), scan->header.frame_id.c_str(),
                             converter_->outputFrame(scan->header.frame_id).c_str(),
                             tf_error.c_str());
     }
     diagnostics_->frame((ros::WallTime::now() - start).toSec());
-    if (!ok) return;  // no packet could be placed: nothing to publish
+    if (!ok) return;      // no packet could be placed: nothing to publish
     pub_.publish(cloud);  // fresh, never touched again: zero copy inside the manager
     diagnostics_->output();
   }

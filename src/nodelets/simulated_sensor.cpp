@@ -6,12 +6,12 @@
 #include <string>
 #include <thread>
 
-#include <boost/make_shared.hpp>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
+#include <boost/make_shared.hpp>
+#include <pluginlib/class_list_macros.hpp>
 
 #include "urban_detection/core/simulation/simulation_config.h"
 #include "urban_detection/ros/param_loading.h"
@@ -50,7 +50,7 @@ class SimulatedSensorNodelet : public nodelet::Nodelet {
       refusal_ = ros_conv::RefusalDiagnostics::report(
           getNodeHandle(), getPrivateNodeHandle(), getName(),
           "SimulatedSensor: parameter ~config (path of a drive YAML such as "
-                     "config/demo_drive.yaml) is required; the nodelet stays idle");
+          "config/demo_drive.yaml) is required; the nodelet stays idle");
       return false;
     }
     bool first_packet = false;  // header.stamp convention of velodyne_driver (and PacketSource)
@@ -101,7 +101,8 @@ class SimulatedSensorNodelet : public nodelet::Nodelet {
         diagnostics_->frame((ros::WallTime::now() - start).toSec());
         const double rev_s = 60.0 / c.sensor.rpm;
         if (realtime_) {  // publish when the revolution's last packet would have arrived
-          const ros::WallTime due = wall0 + ros::WallDuration((rev.start_time_s + rev_s) / rate_factor_);
+          const ros::WallTime due =
+              wall0 + ros::WallDuration((rev.start_time_s + rev_s) / rate_factor_);
           const ros::WallDuration wait = due - ros::WallTime::now();
           if (wait > ros::WallDuration(0.0)) wait.sleep();
           if (wait < ros::WallDuration(-rev_s / rate_factor_)) {  // the machine is too slow
@@ -132,14 +133,13 @@ class SimulatedSensorNodelet : public nodelet::Nodelet {
                  bool first) {
     geometry_msgs::TransformStamped odom_base, base_sensor;
     if (first) {
-      ros_conv::toTransforms(sim, rev.start_time_s, rev.stamp_s, frames_, &odom_base,
-                             &base_sensor);
+      ros_conv::toTransforms(sim, rev.start_time_s, rev.stamp_s, frames_, &odom_base, &base_sensor);
       static_tf_->sendTransform(base_sensor);
       tf_->sendTransform(odom_base);
     }
     // The pose at the revolution's end: every packet stamp is bracketed by two samples.
-    ros_conv::toTransforms(sim, rev.start_time_s + rev_s, rev.stamp_s + rev_s, frames_,
-                           &odom_base, &base_sensor);
+    ros_conv::toTransforms(sim, rev.start_time_s + rev_s, rev.stamp_s + rev_s, frames_, &odom_base,
+                           &base_sensor);
     tf_->sendTransform(odom_base);
   }
 

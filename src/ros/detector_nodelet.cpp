@@ -3,15 +3,15 @@
 #include <cmath>
 #include <sstream>
 
-#include <boost/make_shared.hpp>
 #include <pcl_conversions/pcl_conversions.h>
 #include <pcl_ros/point_cloud.h>
+#include <boost/make_shared.hpp>
 
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/ros/detection_params.h"
+#include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/param_loading.h"
-#include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/tunable_fields.h"
 
 namespace urban_detection {
@@ -53,8 +53,8 @@ void DetectorNodelet::onInit() {
         std::make_unique<ros_conv::ValidatedReconfigure<ObjectClassifierConfig>>(classifier_nh,
                                                                                  initial, apply);
   }
-  diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(nh, getPrivateNodeHandle(),
-                                                              getName(), "detection");
+  diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(nh, getPrivateNodeHandle(), getName(),
+                                                              "detection");
   diagnostics_->setActive(false);
   thread_ = std::make_unique<ros_conv::StageThread>(thread_nice_);
   lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
@@ -68,11 +68,11 @@ void DetectorNodelet::onInit() {
   points_pub_ = lazy_->advertise<LabeledCloud>(nh, "objects/points", 2);
   rejected_pub_ = lazy_->advertise<DetectedObjectArray>(nh, "objects/rejected", 2);
   if (classifier_->params().enabled) {
-  if (!thread_->niceError().empty()) {
-    NODELET_WARN("%s: thread_nice %d not applied: %s", getName().c_str(), thread_nice_,
-                 thread_->niceError().c_str());
-  }
-  NODELET_INFO("%s: %s detector ready, classifier %s (P(object) >= %.2f)", getName().c_str(),
+    if (!thread_->niceError().empty()) {
+      NODELET_WARN("%s: thread_nice %d not applied: %s", getName().c_str(), thread_nice_,
+                   thread_->niceError().c_str());
+    }
+    NODELET_INFO("%s: %s detector ready, classifier %s (P(object) >= %.2f)", getName().c_str(),
                  detector_->name().c_str(), classifier_->params().model_path.c_str(),
                  classifier_->threshold());
   } else {
@@ -104,9 +104,9 @@ void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& 
   if (classifier_->params().enabled) {
     diagnostics_->count("rejected objects (classifier: non_object)", classified.rejected, false);
     for (int c = 1; c < core::kNumObjectCategories; ++c) {
-      diagnostics_->count(std::string("objects classified ") +
-                              core::toString(static_cast<core::ObjectCategory>(c)),
-                          classified.by_class[c], false);
+      diagnostics_->count(
+          std::string("objects classified ") + core::toString(static_cast<core::ObjectCategory>(c)),
+          classified.by_class[c], false);
     }
   }
   std_msgs::Header header;

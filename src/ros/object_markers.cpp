@@ -19,12 +19,30 @@ std_msgs::ColorRGBA colourForId(std::uint32_t id, double alpha) {
   const double c = v * s, x = c * (1.0 - std::fabs(std::fmod(h, 2.0) - 1.0)), m = v - c;
   double r = 0, g = 0, b = 0;
   switch (static_cast<int>(h)) {
-    case 0: r = c; g = x; break;
-    case 1: r = x; g = c; break;
-    case 2: g = c; b = x; break;
-    case 3: g = x; b = c; break;
-    case 4: r = x; b = c; break;
-    default: r = c; b = x; break;
+    case 0:
+      r = c;
+      g = x;
+      break;
+    case 1:
+      r = x;
+      g = c;
+      break;
+    case 2:
+      g = c;
+      b = x;
+      break;
+    case 3:
+      g = x;
+      b = c;
+      break;
+    case 4:
+      r = x;
+      b = c;
+      break;
+    default:
+      r = c;
+      b = x;
+      break;
   }
   std_msgs::ColorRGBA col;
   col.r = static_cast<float>(r + m);
@@ -41,17 +59,32 @@ std_msgs::ColorRGBA colourForClass(const std::string& class_label, double alpha)
   }
   // Cityscapes palette (RGB) for the urban classes a segmentation network typically reports.
   static const std::map<std::string, std::array<int, 3>> palette = {
-      {"car", {0, 0, 142}},          {"van", {0, 60, 100}},       {"truck", {0, 0, 70}},
-      {"bus", {0, 60, 100}},         {"train", {0, 80, 100}},     {"tram", {0, 80, 100}},
-      {"person", {220, 20, 60}},     {"pedestrian", {220, 20, 60}},
-      {"person_sitting", {220, 20, 60}}, {"rider", {255, 0, 0}}, {"cyclist", {255, 0, 0}},
-      {"bicycle", {119, 11, 32}},    {"motorcycle", {0, 0, 230}}, {"pole", {153, 153, 153}},
-      {"traffic sign", {220, 220, 0}}, {"traffic light", {250, 170, 30}},
-      {"vegetation", {107, 142, 35}}, {"terrain", {152, 251, 152}}, {"building", {70, 70, 70}},
-      {"wall", {102, 102, 156}},     {"fence", {190, 153, 153}},  {"road", {128, 64, 128}},
+      {"car", {0, 0, 142}},
+      {"van", {0, 60, 100}},
+      {"truck", {0, 0, 70}},
+      {"bus", {0, 60, 100}},
+      {"train", {0, 80, 100}},
+      {"tram", {0, 80, 100}},
+      {"person", {220, 20, 60}},
+      {"pedestrian", {220, 20, 60}},
+      {"person_sitting", {220, 20, 60}},
+      {"rider", {255, 0, 0}},
+      {"cyclist", {255, 0, 0}},
+      {"bicycle", {119, 11, 32}},
+      {"motorcycle", {0, 0, 230}},
+      {"pole", {153, 153, 153}},
+      {"traffic sign", {220, 220, 0}},
+      {"traffic light", {250, 170, 30}},
+      {"vegetation", {107, 142, 35}},
+      {"terrain", {152, 251, 152}},
+      {"building", {70, 70, 70}},
+      {"wall", {102, 102, 156}},
+      {"fence", {190, 153, 153}},
+      {"road", {128, 64, 128}},
       {"sidewalk", {244, 35, 232}},
       // The LiDAR classifier's classes (object_classifier.h).
-      {"vehicle", {0, 0, 142}},      {"other_object", {250, 170, 30}},
+      {"vehicle", {0, 0, 142}},
+      {"other_object", {250, 170, 30}},
       {"non_object", {107, 142, 35}}};
   const auto it = palette.find(name);
   if (it == palette.end()) {
@@ -88,8 +121,9 @@ void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerPa
     box.scale.y = std::max(o.obb_dimensions.y, params.min_box_size_m);
     box.scale.z = std::max(o.obb_dimensions.z, params.min_box_size_m);
     const bool classified = !o.class_label.empty() && o.class_label != "unknown";
-    box.color = classified && params.colour_by_class ? colourForClass(o.class_label, params.box_alpha)
-                                                     : colourForId(o.id, params.box_alpha);
+    box.color = classified && params.colour_by_class
+                    ? colourForClass(o.class_label, params.box_alpha)
+                    : colourForId(o.id, params.box_alpha);
     markers->markers.push_back(box);
     if (!params.show_ids) continue;
     visualization_msgs::Marker text;
@@ -113,7 +147,9 @@ void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerPa
   }
 }
 
-std::string validate(const ObjectMarkerParams& params) { return core::checkFieldRanges(params); }
+std::string validate(const ObjectMarkerParams& params) {
+  return core::checkFieldRanges(params);
+}
 
 }  // namespace ros_conv
 }  // namespace urban_detection

@@ -22,25 +22,24 @@ core::ObjectCategory categoryOf(const std::string& label) {
   return core::ObjectCategory::kUnknown;
 }
 
-
 }  // namespace
 
 void fromMsg(const DetectedObject& msg, core::DetectedObject* o) {
   o->id = msg.id;
   const auto& p = msg.obb_pose.position;
-  o->obb_center = Eigen::Vector3f(static_cast<float>(p.x), static_cast<float>(p.y),
-                                  static_cast<float>(p.z));
+  o->obb_center =
+      Eigen::Vector3f(static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z));
   const auto& q = msg.obb_pose.orientation;
   const double qn = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w;
   o->obb_yaw_rad = qn > 1e-12 ? static_cast<float>(std::atan2(2.0 * (q.w * q.z + q.x * q.y),
-                                                             1.0 - 2.0 * (q.y * q.y + q.z * q.z)))
+                                                              1.0 - 2.0 * (q.y * q.y + q.z * q.z)))
                               : std::nanf("");
   o->obb_size = Eigen::Vector3f(static_cast<float>(msg.obb_dimensions.x),
                                 static_cast<float>(msg.obb_dimensions.y),
                                 static_cast<float>(msg.obb_dimensions.z));
-  o->centroid = Eigen::Vector3f(static_cast<float>(msg.centroid.x),
-                                static_cast<float>(msg.centroid.y),
-                                static_cast<float>(msg.centroid.z));
+  o->centroid =
+      Eigen::Vector3f(static_cast<float>(msg.centroid.x), static_cast<float>(msg.centroid.y),
+                      static_cast<float>(msg.centroid.z));
   o->category = categoryOf(msg.class_label);
   o->class_confidence = msg.class_confidence;
 }
@@ -144,7 +143,9 @@ void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::
   }
 }
 
-std::string validate(const TrackMarkerParams& params) { return core::checkFieldRanges(params); }
+std::string validate(const TrackMarkerParams& params) {
+  return core::checkFieldRanges(params);
+}
 
 }  // namespace ros_conv
 }  // namespace urban_detection

@@ -23,8 +23,8 @@ PacketSourceParams loadPacketSourceParams(const ros::NodeHandle& nh) {
   loadParam(nh, "cut_angle", &p.cut_angle_deg, 0.0, 360.0, "deg");
   loadParam(nh, "rpm", &p.rpm, 300.0, 1200.0, "rev/min");
   loadParam(nh, "frame_id", &p.frame_id);
-  if (p.frame_id.empty()) throw ParamError("parameter '" + nh.resolveName("frame_id") +
-                                           "' must not be empty");
+  if (p.frame_id.empty())
+    throw ParamError("parameter '" + nh.resolveName("frame_id") + "' must not be empty");
   loadParam(nh, "queue_size", &p.queue_size, 1, 1000);
   loadParam(nh, "timestamp_first_packet", &p.timestamp_first_packet);
   loadParam(nh, "decode", &p.decode);

@@ -9,9 +9,9 @@
 namespace urban_detection {
 
 PacketSourceWorker::PacketSourceWorker(const PacketSourceParams& params,
-                                       ros_conv::StageDiagnostics* diagnostics,
-                                       PublishFn publish, ListenedFn scans_listened,
-                                       PublishCloudFn publish_cloud, ListenedFn clouds_listened)
+                                       ros_conv::StageDiagnostics* diagnostics, PublishFn publish,
+                                       ListenedFn scans_listened, PublishCloudFn publish_cloud,
+                                       ListenedFn clouds_listened)
     : params_(params),
       diagnostics_(diagnostics),
       publish_(std::move(publish)),
@@ -78,8 +78,10 @@ void PacketSourceWorker::udpLoop() {
         break;
       case core::UdpReceiver::Result::kWrongSize:
         diagnostics_->count("bad_size_packets");
-        ROS_WARN_THROTTLE(5, "PacketSource: dropped a %zu-byte datagram (HDL-64E packets are "
-                             "%zu bytes)", size, core::kPacketSize);
+        ROS_WARN_THROTTLE(5,
+                          "PacketSource: dropped a %zu-byte datagram (HDL-64E packets are "
+                          "%zu bytes)",
+                          size, core::kPacketSize);
         break;
       case core::UdpReceiver::Result::kOtherSender:
         diagnostics_->count("other_sender_packets");
@@ -143,8 +145,9 @@ void PacketSourceWorker::pcapLoop() {
     const double replay_s = timeline.next(packet.stamp_s, &anomaly);
     if (anomaly != core::ReplayTimeline::Anomaly::kNone) {
       diagnostics_->setTotal("pcap_time_anomalies", ++anomalies);
-      ROS_WARN_THROTTLE(5, "PacketSource: pcap '%s', packet %lu: capture time %s (%.6f s); "
-                           "pacing at the nominal packet rate until the times are sane again",
+      ROS_WARN_THROTTLE(5,
+                        "PacketSource: pcap '%s', packet %lu: capture time %s (%.6f s); "
+                        "pacing at the nominal packet rate until the times are sane again",
                         params_.pcap.c_str(), static_cast<unsigned long>(in_pass),
                         core::toString(anomaly), packet.stamp_s);
     }
@@ -158,9 +161,9 @@ void PacketSourceWorker::pcapLoop() {
       anchored = true;
     }
     if (params_.rate > 0) {
-      const auto due = wall_anchor + std::chrono::duration_cast<Clock::duration>(
-                                         std::chrono::duration<double>(
-                                             (replay_s - replay_anchor_s) / params_.rate));
+      const auto due =
+          wall_anchor + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                            (replay_s - replay_anchor_s) / params_.rate));
       while (running_ && Clock::now() < due) {  // interruptible sleep
         std::this_thread::sleep_for(
             std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(50)));
@@ -194,8 +197,10 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
         const ScanDecodeStats& stats = streamer_->lastStats();
         diagnostics_->count("bad_packets", stats.decode.bad_packets);
         if (stats.decode.bad_packets > 0) {
-          ROS_WARN_THROTTLE(5, "PacketSource: dropped %zu of %zu packets of a revolution "
-                               "(last: %s)", stats.decode.bad_packets, streamer_->lastPackets(),
+          ROS_WARN_THROTTLE(5,
+                            "PacketSource: dropped %zu of %zu packets of a revolution "
+                            "(last: %s)",
+                            stats.decode.bad_packets, streamer_->lastPackets(),
                             core::toString(stats.last_bad_status));
         }
         publish_cloud_(cloud);  // fresh, never touched again: zero copy inside the manager
@@ -214,8 +219,9 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
   if (boundary.invalidPackets() != invalid_before) {  // in no revolution, never decoded
     diagnostics_->setTotal("invalid_packets", boundary.invalidPackets());
     if (boundary.lastStatus() == core::PacketStatus::kOtherModel) {
-      ROS_WARN_THROTTLE(10, "PacketSource: refusing packets of a %s: this package decodes "
-                            "HDL-64E packets only",
+      ROS_WARN_THROTTLE(10,
+                        "PacketSource: refusing packets of a %s: this package decodes "
+                        "HDL-64E packets only",
                         core::velodyneModelName(packet.data(), packet.size()).c_str());
     } else {
       ROS_WARN_THROTTLE(5, "PacketSource: refusing invalid packets (last: %s)",
@@ -224,16 +230,17 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
   }
   if (boundary.strayPackets() != strays_before) {
     diagnostics_->setTotal("stray_packets", boundary.strayPackets());
-    ROS_WARN_THROTTLE(5, "PacketSource: ignoring packets whose azimuth does not follow the "
-                         "stream (another sender's, or corrupt)%s",
-                      params_.device_ip.empty() ? "; set device_ip to accept one sensor only"
-                                                : "");
+    ROS_WARN_THROTTLE(5,
+                      "PacketSource: ignoring packets whose azimuth does not follow the "
+                      "stream (another sender's, or corrupt)%s",
+                      params_.device_ip.empty() ? "; set device_ip to accept one sensor only" : "");
   }
   diagnostics_->setTotal("reordered_packets", boundary.reorderedPackets(), false);
   if (assembler_.forcedCuts() != forced_before) {
     diagnostics_->setTotal("forced_cuts", assembler_.forcedCuts());
-    ROS_WARN_THROTTLE(5, "PacketSource: no revolution boundary at cut_angle %.2f deg within %zu "
-                         "packets: dropped them (is the sensor spinning?)",
+    ROS_WARN_THROTTLE(5,
+                      "PacketSource: no revolution boundary at cut_angle %.2f deg within %zu "
+                      "packets: dropped them (is the sensor spinning?)",
                       params_.cut_angle_deg, ScanAssembler::kMaxPacketsPerScan);
   }
   revolution_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -241,8 +248,9 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
   ++scans_;
   if (*assembler_.lastSizeProblem()) {
     diagnostics_->count(std::string("revolutions with ") + assembler_.lastSizeProblem());
-    ROS_WARN_THROTTLE(5, "PacketSource: a revolution of %zu packets, %s for %.0f rpm "
-                         "(expected about %zu)",
+    ROS_WARN_THROTTLE(5,
+                      "PacketSource: a revolution of %zu packets, %s for %.0f rpm "
+                      "(expected about %zu)",
                       assembler_.lastPackets(), assembler_.lastSizeProblem(), params_.rpm,
                       params_.expectedPacketsPerRevolution());
   }

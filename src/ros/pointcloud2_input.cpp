@@ -30,11 +30,20 @@ Field findField(const sensor_msgs::PointCloud2& msg, const char* name) {
 std::uint32_t sizeOf(std::uint8_t type) {
   using PF = sensor_msgs::PointField;
   switch (type) {
-    case PF::INT8: case PF::UINT8: return 1;
-    case PF::INT16: case PF::UINT16: return 2;
-    case PF::INT32: case PF::UINT32: case PF::FLOAT32: return 4;
-    case PF::FLOAT64: return 8;
-    default: return 0;
+    case PF::INT8:
+    case PF::UINT8:
+      return 1;
+    case PF::INT16:
+    case PF::UINT16:
+      return 2;
+    case PF::INT32:
+    case PF::UINT32:
+    case PF::FLOAT32:
+      return 4;
+    case PF::FLOAT64:
+      return 8;
+    default:
+      return 0;
   }
 }
 
@@ -49,15 +58,24 @@ double read(const std::uint8_t* point, const Field& f) {
   using PF = sensor_msgs::PointField;
   const std::uint8_t* p = point + f.offset;
   switch (f.type) {
-    case PF::INT8: return load<std::int8_t>(p);
-    case PF::UINT8: return load<std::uint8_t>(p);
-    case PF::INT16: return load<std::int16_t>(p);
-    case PF::UINT16: return load<std::uint16_t>(p);
-    case PF::INT32: return load<std::int32_t>(p);
-    case PF::UINT32: return load<std::uint32_t>(p);
-    case PF::FLOAT32: return load<float>(p);
-    case PF::FLOAT64: return load<double>(p);
-    default: return 0.0;
+    case PF::INT8:
+      return load<std::int8_t>(p);
+    case PF::UINT8:
+      return load<std::uint8_t>(p);
+    case PF::INT16:
+      return load<std::int16_t>(p);
+    case PF::UINT16:
+      return load<std::uint16_t>(p);
+    case PF::INT32:
+      return load<std::int32_t>(p);
+    case PF::UINT32:
+      return load<std::uint32_t>(p);
+    case PF::FLOAT32:
+      return load<float>(p);
+    case PF::FLOAT64:
+      return load<double>(p);
+    default:
+      return 0.0;
   }
 }
 

@@ -33,9 +33,9 @@ bool ScanToCloud::convert(const VelodyneScan& scan, CloudXYZIRT* cloud, ScanDeco
                              ros::Duration(params_.tf_timeout_s));
     transform = [&](const ros::Time& t, Eigen::Affine3f* out) {
       try {
-        *out = tf2::transformToEigen(
-                   tf_buffer_->lookupTransform(frame, stamp, sensor_frame, t, fixed))
-                   .cast<float>();
+        *out =
+            tf2::transformToEigen(tf_buffer_->lookupTransform(frame, stamp, sensor_frame, t, fixed))
+                .cast<float>();
       } catch (const tf2::TransformException& e) {
         *tf_error = e.what();
         return false;

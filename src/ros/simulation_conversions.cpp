@@ -94,7 +94,9 @@ topic_tools::ShapeShifter asVelodyneMsgsScan(const urban_detection::VelodyneScan
 SimulationBagWriter::SimulationBagWriter(const std::string& path, const SimulationFrames& frames)
     : bag_(std::make_unique<rosbag::Bag>(path, rosbag::bagmode::Write)), frames_(frames) {}
 
-SimulationBagWriter::~SimulationBagWriter() { close(); }
+SimulationBagWriter::~SimulationBagWriter() {
+  close();
+}
 
 void SimulationBagWriter::write(const core::LidarSimulator& sim, const core::SimRevolution& rev) {
   if (!bag_ || rev.packets.empty()) return;

@@ -5,9 +5,9 @@
 namespace urban_detection {
 namespace ros_conv {
 
-StageDiagnostics::StageDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh,
-                                   const std::string& name, const std::string& task,
-                                   const std::string& input_name, double load_warn_fraction)
+StageDiagnostics::StageDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name,
+                                   const std::string& task, const std::string& input_name,
+                                   double load_warn_fraction)
     : updater_(new diagnostic_updater::Updater(nh, pnh, name)),
       input_name_(input_name),
       load_warn_fraction_(load_warn_fraction),
@@ -53,7 +53,9 @@ void StageDiagnostics::latency(const ros::Time& stamp, const ros::Time& now) {
   if (window_latency_s_.size() < 10000) window_latency_s_.push_back(s);
 }
 
-void StageDiagnostics::rejected() { count("rejected_inputs"); }
+void StageDiagnostics::rejected() {
+  count("rejected_inputs");
+}
 
 void StageDiagnostics::count(const std::string& key, std::uint64_t n, bool warn) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -102,8 +104,8 @@ void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
                   static_cast<unsigned long>(skipped_.window), window_s);
   } else if (frames_.window > 0 && load > load_warn_fraction_) {
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
-                  "falling behind: busy %.0f%% of the time (%.1f ms per revolution)",
-                  100.0 * load, 1e3 * mean_s);
+                  "falling behind: busy %.0f%% of the time (%.1f ms per revolution)", 100.0 * load,
+                  1e3 * mean_s);
   } else if (grown != counters_.end()) {
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "dropping input: %s +%lu",
                   grown->first.c_str(), static_cast<unsigned long>(grown->second.window));
@@ -111,8 +113,7 @@ void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
              output_hz < 0.8 * expected_hz_) {
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                   "output %.1f Hz below the sensor's %.1f Hz", output_hz, expected_hz_);
-  } else if (active_ && expected_hz_ > 0.0 && window_s >= 0.5 &&
-             output_hz > 1.25 * expected_hz_) {
+  } else if (active_ && expected_hz_ > 0.0 && window_s >= 0.5 && output_hz > 1.25 * expected_hz_) {
     // More revolutions than the sensor spins: revolutions cut in pieces (or rpm misconfigured).
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                   "output %.1f Hz above the sensor's %.1f Hz (revolutions cut in pieces?)",

@@ -5,13 +5,13 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstring>
 #include <chrono>
+#include <cstring>
 #include <future>
 #include <mutex>
 
-#include <boost/make_shared.hpp>
 #include <ros/callback_queue_interface.h>
+#include <boost/make_shared.hpp>
 
 namespace urban_detection {
 namespace ros_conv {
@@ -22,7 +22,8 @@ std::mutex nice_mutex;  // nice_error_ written on the stage thread, read by the 
 // Runs once on the stage thread: sets that thread's niceness (Linux: per thread).
 class NiceCallback : public ros::CallbackInterface {
  public:
-  NiceCallback(int nice, std::shared_ptr<std::string> error, std::shared_ptr<std::promise<void>> done)
+  NiceCallback(int nice, std::shared_ptr<std::string> error,
+               std::shared_ptr<std::promise<void>> done)
       : nice_(nice), error_(std::move(error)), done_(std::move(done)) {}
   CallResult call() override {
     const pid_t tid = static_cast<pid_t>(syscall(SYS_gettid));
@@ -53,7 +54,9 @@ StageThread::StageThread(int nice) : nice_(nice), nice_error_(std::make_shared<s
   }
 }
 
-StageThread::~StageThread() { stop(); }
+StageThread::~StageThread() {
+  stop();
+}
 
 ros::NodeHandle StageThread::handle(const ros::NodeHandle& nh) {
   ros::NodeHandle own(nh);

@@ -1,7 +1,7 @@
 #include "urban_detection/ros/velodyne_scan.h"
 
-#include <boost/make_shared.hpp>
 #include <pcl_conversions/pcl_conversions.h>
+#include <boost/make_shared.hpp>
 
 #include <algorithm>
 #include <cstdint>
@@ -17,7 +17,9 @@ void toMessage(const core::RawPacket& packet, const ros::Time& stamp, VelodynePa
 
 ScanAssembler::ScanAssembler(double cut_angle_deg, const std::string& frame_id,
                              std::size_t expected_packets, ScanStamp stamp)
-    : boundary_(cut_angle_deg), frame_id_(frame_id), stamp_(stamp),
+    : boundary_(cut_angle_deg),
+      frame_id_(frame_id),
+      stamp_(stamp),
       expected_packets_(expected_packets > 0 ? expected_packets : 700),
       nominal_packets_(expected_packets) {}
 
@@ -67,8 +69,8 @@ void accumulate(const core::DecodeStats& in, core::DecodeStats* sum) {
 }  // namespace
 
 void decodePacket(const core::PacketDecoder& decoder, const std::uint8_t* data, std::size_t size,
-                  const ros::Time& stamp, const ros::Time& start,
-                  const Eigen::Affine3f* transform, CloudXYZIRT* cloud, ScanDecodeStats* stats) {
+                  const ros::Time& stamp, const ros::Time& start, const Eigen::Affine3f* transform,
+                  CloudXYZIRT* cloud, ScanDecodeStats* stats) {
   const std::size_t begin = cloud->points.size();
   // In nanoseconds, not ros::Time - ros::Time: that Duration throws std::runtime_error when
   // two stamps of one scan are more than 68 years apart (a corrupt or hostile message), and
@@ -117,10 +119,13 @@ void decodeScan(const core::PacketDecoder& decoder, const VelodyneScan& scan,
   finishCloud(cloud);
 }
 
-StreamingScanDecoder::StreamingScanDecoder(const core::PacketDecoder* decoder,
-                                           double cut_angle_deg, const std::string& frame_id,
+StreamingScanDecoder::StreamingScanDecoder(const core::PacketDecoder* decoder, double cut_angle_deg,
+                                           const std::string& frame_id,
                                            std::size_t expected_packets, ScanStamp stamp)
-    : decoder_(decoder), boundary_(cut_angle_deg), frame_id_(frame_id), stamp_(stamp),
+    : decoder_(decoder),
+      boundary_(cut_angle_deg),
+      frame_id_(frame_id),
+      stamp_(stamp),
       expected_packets_(expected_packets > 0 ? expected_packets : 700) {}
 
 void StreamingScanDecoder::open(const ros::Time& stamp) {

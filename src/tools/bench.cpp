@@ -14,9 +14,9 @@
 // "pipeline" = packet_decode (pcap input only) + segmentation (Hough refinement included) +
 // foreground_extraction + hierarchical_detection + object_filter (when enabled in the
 // config's object_filter section) + classification (features and forest, when the config's
-// classifier section enables it, as config/classification.yaml does), i.e. packets -> objects on a pcap (the
-// simulated drive of scripts/run bench) and cloud -> objects on PCD / .bin sweeps (KITTI raw
-// comes as motion-compensated clouds, not packets); the JSON says which
+// classifier section enables it, as config/classification.yaml does), i.e. packets -> objects on a
+// pcap (the simulated drive of scripts/run bench) and cloud -> objects on PCD / .bin sweeps (KITTI
+// raw comes as motion-compensated clouds, not packets); the JSON says which
 // (pipeline_includes_packet_decode). The pipeline's stages run back to back per revolution
 // (markers after them, timed but not in the pipeline figure); kdtree_detection and the
 // standalone hough_refinement are timed in a second pass over the same revolutions, so they do
@@ -44,20 +44,20 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/sensor/calibration.h"
-#include "urban_detection/core/evaluation/eval_datasets.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
-#include "urban_detection/core/sensor/hdl64e_packet.h"
-#include "urban_detection/core/detection/hierarchical_grid_detector.h"
-#include "urban_detection/core/segmentation/hough_wall_refiner.h"
-#include "urban_detection/core/detection/kdtree_detector.h"
-#include "urban_detection/core/sensor/kitti_io.h"
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/segmentation/hough_wall_refiner.h"
+#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/kitti_io.h"
+#include "urban_detection/core/sensor/pcap_io.h"
 #include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/object_markers.h"
-#include "urban_detection/core/sensor/pcap_io.h"
 
 #include "tool_common.h"
 #include "tracker_bench.h"
@@ -66,10 +66,10 @@ namespace core = urban_detection::core;
 using urban_detection::CloudXYZIRT;
 using Clock = std::chrono::steady_clock;
 
-using urban_detection::tools::median;
-using urban_detection::tools::percentile;
 using urban_detection::tools::jsonEscape;
 using urban_detection::tools::jsonNumber;
+using urban_detection::tools::median;
+using urban_detection::tools::percentile;
 
 namespace {
 
@@ -181,10 +181,10 @@ class PcapSource : public Source {
 
 void usage() {
   std::fprintf(stderr,
-      "usage: urban_detection_bench [--pcd-dir DIR]... [--bin-dir DIR]...\n"
-      "         [--pcap FILE [--calibration FILE]] [--config FILE]... [--repeat N]\n"
-      "         [--max-frames N] [--label NAME] [--json FILE] [--no-kdtree]\n"
-      "Run it pinned to one core (taskset -c 0) from a Release build.\n");
+               "usage: urban_detection_bench [--pcd-dir DIR]... [--bin-dir DIR]...\n"
+               "         [--pcap FILE [--calibration FILE]] [--config FILE]... [--repeat N]\n"
+               "         [--max-frames N] [--label NAME] [--json FILE] [--no-kdtree]\n"
+               "Run it pinned to one core (taskset -c 0) from a Release build.\n");
 }
 
 }  // namespace
@@ -204,20 +204,36 @@ int main(int argc, char** argv) {
   bool run_kdtree = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&](const char* what) { return urban_detection::tools::optionValue(argc, argv, &i, what); };
-    auto integer = [&](const char* what) { return urban_detection::tools::optionCount(argc, argv, &i, what); };
-    if (a == "--pcd-dir") pcd_dirs.push_back(value("--pcd-dir"));
-    else if (a == "--bin-dir") bin_dirs.push_back(value("--bin-dir"));
-    else if (a == "--pcap") pcap = value("--pcap");
-    else if (a == "--calibration") calib_path = value("--calibration");
-    else if (a == "--config") configs.push_back(value("--config"));
-    else if (a == "--repeat") repeat = std::max(1L, integer("--repeat"));
-    else if (a == "--max-frames") max_frames = integer("--max-frames");
-    else if (a == "--label") label = value("--label");
-    else if (a == "--json") json_path = value("--json");
-    else if (a == "--no-kdtree") run_kdtree = false;
-    else if (a == "-h" || a == "--help") { usage(); return 0; }
-    else {
+    auto value = [&](const char* what) {
+      return urban_detection::tools::optionValue(argc, argv, &i, what);
+    };
+    auto integer = [&](const char* what) {
+      return urban_detection::tools::optionCount(argc, argv, &i, what);
+    };
+    if (a == "--pcd-dir")
+      pcd_dirs.push_back(value("--pcd-dir"));
+    else if (a == "--bin-dir")
+      bin_dirs.push_back(value("--bin-dir"));
+    else if (a == "--pcap")
+      pcap = value("--pcap");
+    else if (a == "--calibration")
+      calib_path = value("--calibration");
+    else if (a == "--config")
+      configs.push_back(value("--config"));
+    else if (a == "--repeat")
+      repeat = std::max(1L, integer("--repeat"));
+    else if (a == "--max-frames")
+      max_frames = integer("--max-frames");
+    else if (a == "--label")
+      label = value("--label");
+    else if (a == "--json")
+      json_path = value("--json");
+    else if (a == "--no-kdtree")
+      run_kdtree = false;
+    else if (a == "-h" || a == "--help") {
+      usage();
+      return 0;
+    } else {
       std::fprintf(stderr, "error: unknown argument '%s'\n", a.c_str());
       usage();
       return 2;
@@ -230,13 +246,17 @@ int main(int argc, char** argv) {
   std::vector<std::unique_ptr<Source>> sources;
   for (const auto& d : pcd_dirs) {
     auto files = core::listFiles(d, ".pcd");
-    if (files.empty()) std::fprintf(stderr, "warning: no .pcd files in %s\n", d.c_str());
-    else sources.emplace_back(new FileSource(d, files, true));
+    if (files.empty())
+      std::fprintf(stderr, "warning: no .pcd files in %s\n", d.c_str());
+    else
+      sources.emplace_back(new FileSource(d, files, true));
   }
   for (const auto& d : bin_dirs) {
     auto files = core::listFiles(d, ".bin");
-    if (files.empty()) std::fprintf(stderr, "warning: no .bin files in %s\n", d.c_str());
-    else sources.emplace_back(new FileSource(d, files, false));
+    if (files.empty())
+      std::fprintf(stderr, "warning: no .bin files in %s\n", d.c_str());
+    else
+      sources.emplace_back(new FileSource(d, files, false));
   }
   try {
     if (!pcap.empty()) {
@@ -411,19 +431,25 @@ int main(int argc, char** argv) {
   for (double v : pipeline_cpu) pipeline_cpu_sum += v;
   const double pipeline_cpu_fps =
       1000.0 * static_cast<double>(pipeline_cpu.size()) / pipeline_cpu_sum;
-  const double speedup = run_kdtree ? median(stage["kdtree_detection"]) /
-                                         median(stage["hierarchical_detection"])
-                                   : std::nan("");
+  const double speedup =
+      run_kdtree ? median(stage["kdtree_detection"]) / median(stage["hierarchical_detection"])
+                 : std::nan("");
   const double speedup_pcl_default =
       stage.count("kdtree_detection_pcl_default")
           ? median(stage["kdtree_detection_pcl_default"]) / median(stage["hierarchical_detection"])
           : std::nan("");
 
-  const char* order[] = {"packet_decode", "segmentation", "hough_refinement",
-                         "foreground_extraction", "hierarchical_detection", "object_filter",
+  const char* order[] = {"packet_decode",
+                         "segmentation",
+                         "hough_refinement",
+                         "foreground_extraction",
+                         "hierarchical_detection",
+                         "object_filter",
                          "classification",
-                         "markers", "tracker_100_objects",
-                         "kdtree_detection", "kdtree_detection_pcl_default"};
+                         "markers",
+                         "tracker_100_objects",
+                         "kdtree_detection",
+                         "kdtree_detection_pcl_default"};
   std::printf("%s: %zu revolutions (%ld pass%s over", label.c_str(), frames, repeat,
               repeat > 1 ? "es" : "");
   for (const auto& s : sources) std::printf(" [%s]", s->describe().c_str());
@@ -449,10 +475,11 @@ int main(int argc, char** argv) {
   std::printf("  %-28s %10.3f %10.3f %14.3f  (%s-> hierarchical objects)\n", "pipeline",
               pipeline_median, percentile(pipeline, 0.95), median(pipeline_cpu),
               any_packets ? "packets " : "cloud ");
-  std::printf("  object_filter %s, classifier %s: %.1f hierarchical objects rejected per "
-              "revolution\n",
-              params.object_filter.enabled ? "on" : "off", classifier ? "on" : "off",
-              rejected_sum / frames);
+  std::printf(
+      "  object_filter %s, classifier %s: %.1f hierarchical objects rejected per "
+      "revolution\n",
+      params.object_filter.enabled ? "on" : "off", classifier ? "on" : "off",
+      rejected_sum / frames);
   char speedup_text[64] = "not measured (--no-kdtree)";
   if (run_kdtree) std::snprintf(speedup_text, sizeof(speedup_text), "%.1fx", speedup);
   if (std::isfinite(speedup_pcl_default)) {
@@ -460,8 +487,10 @@ int main(int argc, char** argv) {
     std::snprintf(speedup_text + used, sizeof(speedup_text) - used, " (PCL default: %.1fx)",
                   speedup_pcl_default);
   }
-  std::printf("  pipeline_fps %.1f (cpu-time fps %.1f)   hier_vs_kdtree_speedup %s   "
-              "peak_rss %.1f MB\n", pipeline_fps, pipeline_cpu_fps, speedup_text, peak_mb);
+  std::printf(
+      "  pipeline_fps %.1f (cpu-time fps %.1f)   hier_vs_kdtree_speedup %s   "
+      "peak_rss %.1f MB\n",
+      pipeline_fps, pipeline_cpu_fps, speedup_text, peak_mb);
 
   if (!json_path.empty()) {
     std::ofstream out(json_path);
@@ -474,7 +503,8 @@ int main(int argc, char** argv) {
         << ",\n  \"mean_points\": " << jsonNumber(points_sum / frames)
         << ",\n  \"mean_foreground_points\": " << jsonNumber(fg_sum / frames)
         << ",\n  \"mean_objects_hierarchical\": " << jsonNumber(hier_obj_sum / frames)
-        << ",\n  \"mean_objects_kdtree\": " << jsonNumber(run_kdtree ? kd_obj_sum / frames : std::nan(""))
+        << ",\n  \"mean_objects_kdtree\": "
+        << jsonNumber(run_kdtree ? kd_obj_sum / frames : std::nan(""))
         << ",\n  \"object_filter\": " << (params.object_filter.enabled ? "true" : "false")
         << ",\n  \"mean_rejected_objects_hierarchical\": " << jsonNumber(rejected_sum / frames)
         << ",\n  \"pipeline_includes_packet_decode\": " << (any_packets ? "true" : "false")
@@ -483,8 +513,9 @@ int main(int argc, char** argv) {
     for (const char* name : order) {
       auto it = stage.find(name);
       if (it == stage.end()) continue;
-      out << (first ? "\n" : ",\n") << "    \"" << name << "\": {\"median_ms\": "
-          << jsonNumber(median(it->second)) << ", \"p95_ms\": " << jsonNumber(percentile(it->second, 0.95))
+      out << (first ? "\n" : ",\n") << "    \"" << name
+          << "\": {\"median_ms\": " << jsonNumber(median(it->second))
+          << ", \"p95_ms\": " << jsonNumber(percentile(it->second, 0.95))
           << ", \"cpu_median_ms\": " << jsonNumber(median(cpu_stage[name]))
           << ", \"cpu_p95_ms\": " << jsonNumber(percentile(cpu_stage[name], 0.95)) << "}";
       first = false;

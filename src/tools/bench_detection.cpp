@@ -25,18 +25,18 @@
 
 #include <algorithm>
 #include <cinttypes>
-#include <ctime>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
 #include "tool_common.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
 
 using namespace urban_detection;
 

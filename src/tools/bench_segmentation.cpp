@@ -83,9 +83,15 @@ void runSegmentation(benchmark::State& state, bool hough, bool cold_cache = fals
   state.SetItemsProcessed(static_cast<std::int64_t>(points));
 }
 
-void BM_SegmentWithHough(benchmark::State& state) { runSegmentation(state, true); }
-void BM_SegmentWithoutHough(benchmark::State& state) { runSegmentation(state, false); }
-void BM_SegmentWithHoughColdCache(benchmark::State& state) { runSegmentation(state, true, true); }
+void BM_SegmentWithHough(benchmark::State& state) {
+  runSegmentation(state, true);
+}
+void BM_SegmentWithoutHough(benchmark::State& state) {
+  runSegmentation(state, false);
+}
+void BM_SegmentWithHoughColdCache(benchmark::State& state) {
+  runSegmentation(state, true, true);
+}
 BENCHMARK(BM_SegmentWithHough)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 BENCHMARK(BM_SegmentWithoutHough)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 BENCHMARK(BM_SegmentWithHoughColdCache)->Unit(benchmark::kMillisecond)->MinTime(3.0);

@@ -33,9 +33,9 @@ void BM_SimulateRevolution(benchmark::State& state) {
   static std::unique_ptr<ud::LidarSimulator> sim;
   static double rpm = 0.0;
   if (!sim || rpm != c.sensor.rpm) {  // one simulator per rpm, driving on across repetitions
-    sim = std::make_unique<ud::LidarSimulator>(ud::generateScene(c.scene, c.drive), c.scene,
-                                               c.drive, ud::Calibration::nominalHdl64eS2(),
-                                               c.sensor);
+    sim =
+        std::make_unique<ud::LidarSimulator>(ud::generateScene(c.scene, c.drive), c.scene, c.drive,
+                                             ud::Calibration::nominalHdl64eS2(), c.sensor);
     rpm = c.sensor.rpm;
   }
   ud::SimRevolution rev;
@@ -52,8 +52,7 @@ void BM_SimulateRevolution(benchmark::State& state) {
     returns += rev.stats.returns;
   }
   state.counters["rays"] = benchmark::Counter(static_cast<double>(rays) / state.iterations());
-  state.counters["returns"] =
-      benchmark::Counter(static_cast<double>(returns) / state.iterations());
+  state.counters["returns"] = benchmark::Counter(static_cast<double>(returns) / state.iterations());
 }
 BENCHMARK(BM_SimulateRevolution)
     ->Arg(600)

@@ -99,11 +99,11 @@ int main(int argc, char** argv) {
   }
   std::printf("maximum fitness %.4f at %.2f m\n", f[best], sizes[best]);
   if (!png.empty()) {
-    const bool ok = tools::plotSeries(png, "Cell fitness f = #d / (#d + #s + #e)",
-                                      "grid cell size [m]",
-                                      {{sizes, f, cv::Scalar(200, 80, 0), "fitness", false},
-                                       {sizes, f, cv::Scalar(200, 80, 0), "", true}},
-                                      0.0, std::max(0.05, f[best] * 1.15));
+    const bool ok =
+        tools::plotSeries(png, "Cell fitness f = #d / (#d + #s + #e)", "grid cell size [m]",
+                          {{sizes, f, cv::Scalar(200, 80, 0), "fitness", false},
+                           {sizes, f, cv::Scalar(200, 80, 0), "", true}},
+                          0.0, std::max(0.05, f[best] * 1.15));
     std::printf(ok ? "wrote %s\n" : "could not write %s\n", png.c_str());
   }
   return 0;

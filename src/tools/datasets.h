@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "urban_detection/core/common/object_class.h"
+#include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/evaluation/evaluation.h"
 #include "urban_detection/core/sensor/kitti_io.h"
-#include "urban_detection/core/common/object_class.h"
-#include "urban_detection/core/detection/object_detector.h"
 
 namespace urban_detection {
 namespace tools {
@@ -60,8 +60,13 @@ class IndexedDataset : public Dataset {
 class KittiObjectDataset : public IndexedDataset {
  public:
   // Point classes for diagnostics.
-  enum : std::uint16_t { kBackground = 0, kOutOfView = 1, kDontCareBox = 2, kExcluded = 3,
-                         kInBox = 4 };
+  enum : std::uint16_t {
+    kBackground = 0,
+    kOutOfView = 1,
+    kDontCareBox = 2,
+    kExcluded = 3,
+    kInBox = 4
+  };
   KittiObjectDataset(const std::string& dir, const core::KittiGroundTruthParams& p)
       : dir_(dir), params_(p), bins_(core::listFiles(dir + "/velodyne", ".bin")) {}
   std::string name() const override { return "kitti_object"; }
@@ -150,9 +155,7 @@ class SemanticKittiDataset : public IndexedDataset {
     }
     return true;
   }
-  std::string className(std::uint16_t c) const override {
-    return core::semanticKittiClassName(c);
-  }
+  std::string className(std::uint16_t c) const override { return core::semanticKittiClassName(c); }
 
  private:
   struct Item {
@@ -209,7 +212,8 @@ inline std::string mostCommon(const std::map<std::string, std::size_t>& counts) 
 }
 
 // The dataset class most of a detection's points carry ("part_of_<label>" for GT points).
-inline std::string detectionContent(const Frame& f, const Dataset& ds, const core::DetectedObject& d) {
+inline std::string detectionContent(const Frame& f, const Dataset& ds,
+                                    const core::DetectedObject& d) {
   const std::size_t n = f.cloud.size();
   std::map<std::string, std::size_t> content;
   for (std::uint32_t i : d.indices) {
@@ -219,7 +223,6 @@ inline std::string detectionContent(const Frame& f, const Dataset& ds, const cor
   }
   return mostCommon(content);
 }
-
 
 /// The sequence of a frame id "SEQ/NNNNNN" (SemanticKITTI), else the dataset name.
 inline std::string frameGroup(const std::string& frame_id, const std::string& dataset) {

@@ -20,12 +20,12 @@
 
 #include <ros/package.h>
 
-#include "urban_detection/core/evaluation/evaluation.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
-#include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/evaluation/evaluation.h"
 #include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/simulation/simulation_config.h"
 
 namespace uc = urban_detection::core;
@@ -72,14 +72,22 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (i + 1 >= argc) return usage(argv[0]);
-    if (a == "--config") config_path = argv[++i];
-    else if (a == "--segmentation") seg_path = argv[++i];
-    else if (a == "--calibration") calibration_path = argv[++i];
-    else if (a == "--revolutions") revolutions = std::strtol(argv[++i], nullptr, 10);
-    else if (a == "--rpm") rpm = std::strtod(argv[++i], nullptr);
-    else if (a == "--every") every = std::max(1L, std::strtol(argv[++i], nullptr, 10));
-    else if (a == "--kdtree-every") kd_every = std::max(1L, std::strtol(argv[++i], nullptr, 10));
-    else return usage(argv[0]);
+    if (a == "--config")
+      config_path = argv[++i];
+    else if (a == "--segmentation")
+      seg_path = argv[++i];
+    else if (a == "--calibration")
+      calibration_path = argv[++i];
+    else if (a == "--revolutions")
+      revolutions = std::strtol(argv[++i], nullptr, 10);
+    else if (a == "--rpm")
+      rpm = std::strtod(argv[++i], nullptr);
+    else if (a == "--every")
+      every = std::max(1L, std::strtol(argv[++i], nullptr, 10));
+    else if (a == "--kdtree-every")
+      kd_every = std::max(1L, std::strtol(argv[++i], nullptr, 10));
+    else
+      return usage(argv[0]);
   }
   if (config_path.empty()) {
     std::fprintf(stderr, "package urban_detection not found; pass --config\n");
@@ -133,9 +141,10 @@ int main(int argc, char** argv) {
     // confusion[ground-truth class][segment class] over all points
     std::vector<std::vector<std::size_t>> confusion(uc::kNumObjectClasses,
                                                     std::vector<std::size_t>(5, 0));
-    std::printf("columns: per-stage ms; gt = ground-truth street objects with >= %zu points, fg = "
-                "of them kept as foreground by the segmentation, hier / kd = objects detected\n",
-                kMinObjectPoints);
+    std::printf(
+        "columns: per-stage ms; gt = ground-truth street objects with >= %zu points, fg = "
+        "of them kept as foreground by the segmentation, hier / kd = objects detected\n",
+        kMinObjectPoints);
     std::printf("%5s %7s %7s %7s %7s %7s %7s %6s %6s %6s %6s\n", "rev", "points", "sim_ms",
                 "dec_ms", "seg_ms", "hier_ms", "kd_ms", "gt", "fg", "hier", "kd");
     for (std::size_t r = 0; r < n; ++r) {
@@ -200,7 +209,9 @@ int main(int argc, char** argv) {
         if (rev.instance_ids[i] > 0 && uc::isStreetObject(cls)) {
           auto it = slot.find(rev.instance_ids[i]);
           if (it == slot.end()) {
-            it = slot.emplace(rev.instance_ids[i], static_cast<std::int32_t>(gt_frame.objects.size())).first;
+            it = slot.emplace(rev.instance_ids[i],
+                              static_cast<std::int32_t>(gt_frame.objects.size()))
+                     .first;
             uc::EvalObject o;
             o.label = uc::toString(cls);
             o.id = rev.instance_ids[i];
@@ -218,8 +229,8 @@ int main(int argc, char** argv) {
       if (r % static_cast<std::size_t>(every) == 0 || r + 1 == n) {
         std::printf("%5zu %7zu %7.2f %7.3f %7.2f %7.2f %7.2f %6zu %6zu %6zu %6zu\n", r,
                     cloud.size(), s_sim.ms.back(), s_dec.ms.back(), s_seg.ms.back(),
-                    s_hier.ms.back(), s_kd.ms.back(), gt_objs, fg_objs,
-                    objects_hier.size(), objects_kd.size());
+                    s_hier.ms.back(), s_kd.ms.back(), gt_objs, fg_objs, objects_hier.size(),
+                    objects_kd.size());
       }
     }
     std::printf("\nper-stage time per revolution (this machine, %zu revolutions):\n", n);
@@ -249,9 +260,9 @@ int main(int argc, char** argv) {
                   uc::toString(static_cast<uc::ObjectClass>(k)), tot, pct(row[2]), pct(row[3]),
                   pct(row[4]), pct(other));
     }
-    std::printf("\n%zu points in %zu revolutions; decoded cloud and ground truth %s\n", points, n,
-                mismatched == 0 ? "aligned in every revolution"
-                                : "DIFFER in some revolutions (see above)");
+    std::printf(
+        "\n%zu points in %zu revolutions; decoded cloud and ground truth %s\n", points, n,
+        mismatched == 0 ? "aligned in every revolution" : "DIFFER in some revolutions (see above)");
     return mismatched == 0 ? 0 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "urban_detection_demo: %s\n", e.what());

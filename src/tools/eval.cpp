@@ -22,16 +22,16 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/evaluation/eval_datasets.h"
-#include "urban_detection/core/evaluation/evaluation.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
-#include "urban_detection/core/detection/hierarchical_grid_detector.h"
-#include "urban_detection/core/detection/kdtree_detector.h"
-#include "urban_detection/core/sensor/kitti_io.h"
-#include "urban_detection/core/common/object_class.h"
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/common/object_class.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/evaluation/evaluation.h"
 #include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/sensor/kitti_io.h"
 
 #include <Eigen/Core>
 #include <opencv2/imgcodecs.hpp>
@@ -44,13 +44,13 @@
 namespace core = urban_detection::core;
 namespace fs = std::filesystem;
 
+using urban_detection::tools::Dataset;
+using urban_detection::tools::detectionContent;
+using urban_detection::tools::Frame;
 using urban_detection::tools::jsonEscape;
 using urban_detection::tools::jsonNumber;
-using urban_detection::tools::Dataset;
-using urban_detection::tools::Frame;
-using urban_detection::tools::detectionContent;
-using urban_detection::tools::mostCommon;
 using urban_detection::tools::KittiObjectDataset;
+using urban_detection::tools::mostCommon;
 using urban_detection::tools::SemanticKittiDataset;
 using urban_detection::tools::SimulatedDriveDataset;
 
@@ -65,7 +65,9 @@ struct Diagnostics {
   std::map<std::string, std::size_t> false_fragments;  // false parts of GT objects, by kind
 };
 
-const char* segName(core::SegmentClass c) { return core::toString(c); }
+const char* segName(core::SegmentClass c) {
+  return core::toString(c);
+}
 
 // Explains each missed GT object and each false detection of one frame; appends to `diag`
 // and, when `out` is not null, prints one line per object.
@@ -158,12 +160,14 @@ void diagnose(const Frame& f, const Dataset& ds, const std::vector<core::Segment
       // The detections holding its points: "points of this object/detection size" each.
       std::string pieces;
       for (const auto& kv : det_count) {
-        pieces += " " + std::to_string(kv.second) + "/" +
-                  std::to_string(dets[kv.first].indices.size());
+        pieces +=
+            " " + std::to_string(kv.second) + "/" + std::to_string(dets[kv.first].indices.size());
       }
-      std::fprintf(out, "  %s %-18s missed %-12s id %-5u %6zu pts %5.1f m (%.1f, %.1f)  fg %3.0f%%  %s  in:%s\n",
-                   f.id.c_str(), detector.c_str(), o.label.c_str(), o.id, pts[g].size(), range,
-                   cx / np, cy / np, 100.0 * fg / np, cause.c_str(), pieces.c_str());
+      std::fprintf(
+          out,
+          "  %s %-18s missed %-12s id %-5u %6zu pts %5.1f m (%.1f, %.1f)  fg %3.0f%%  %s  in:%s\n",
+          f.id.c_str(), detector.c_str(), o.label.c_str(), o.id, pts[g].size(), range, cx / np,
+          cy / np, 100.0 * fg / np, cause.c_str(), pieces.c_str());
     }
   }
   for (std::size_t d = 0; d < dets.size(); ++d) {
@@ -313,8 +317,8 @@ void writeFramePng(const std::string& path, const Frame& f, const urban_detectio
   for (int panel = 0; panel < 2; ++panel) {
     cv::circle(img, toPx(0, 0, panel), 3, cv::Scalar(255, 255, 255), -1);
   }
-  cv::putText(img, f.id, cv::Point(5, 15), cv::FONT_HERSHEY_SIMPLEX, 0.5,
-              cv::Scalar(255, 255, 255), 1);
+  cv::putText(img, f.id, cv::Point(5, 15), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255),
+              1);
   cv::imwrite(path, img);
 }
 
@@ -325,8 +329,8 @@ std::string scoreJson(const core::DetectionScore& s) {
   std::ostringstream o;
   o << "\"no\": " << s.no << ", \"mo\": " << s.mo << ", \"fo\": " << s.fo << ", \"tp\": " << s.tp
     << ", \"ignored\": " << s.ignored << ", \"detections\": " << s.detections
-    << ", \"precision\": " << jsonNumber(s.precision()) << ", \"recall\": " << jsonNumber(s.recall())
-    << ", \"f_rate\": " << jsonNumber(s.fRate());
+    << ", \"precision\": " << jsonNumber(s.precision())
+    << ", \"recall\": " << jsonNumber(s.recall()) << ", \"f_rate\": " << jsonNumber(s.fRate());
   return o.str();
 }
 
@@ -415,7 +419,8 @@ class ExternalDetections : public core::ObjectDetector {
 };
 
 void usage() {
-  std::fprintf(stderr,
+  std::fprintf(
+      stderr,
       "usage: urban_detection_eval (--kitti-object DIR | --semantic-kitti DIR |\n"
       "                             --sim GTFILE --pcap PCAP [--calibration FILE]\n"
       "                             [--cut-angle DEG])\n"
@@ -435,7 +440,8 @@ void usage() {
       "  --features CSV  write the object classifier's features of every detection (before the\n"
       "                  object filter and the classifier) with its verdict and content\n"
       "  --classifier MODEL|off  the object classifier after the detector (default: classifier/\n"
-      "                  of the config, e.g. config/classification.yaml's shipped model; else off)\n"
+      "                  of the config, e.g. config/classification.yaml's shipped model; else "
+      "off)\n"
       "  --detections DIR  score another system's output instead of this package's detectors:\n"
       "                  per frame a file of one uint32 per input point, the point's instance\n"
       "                  (0 = none), at DIR/<frame>.label (SemanticKITTI: DIR/SEQ/NNNNNN.label\n"
@@ -468,37 +474,58 @@ int main(int argc, char** argv) {
   std::string kitti_tracking_dir, tracker_config;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&](const char* what) { return urban_detection::tools::optionValue(argc, argv, &i, what); };
-    auto integer = [&](const char* what) { return urban_detection::tools::optionCount(argc, argv, &i, what); };
-    if (a == "--kitti-object") kitti_dir = value("--kitti-object");
-    else if (a == "--semantic-kitti") skitti_dir = value("--semantic-kitti");
-    else if (a == "--sim") sim_gt = value("--sim");
-    else if (a == "--pcap") sim_pcap = value("--pcap");
-    else if (a == "--calibration") calibration_path = value("--calibration");
+    auto value = [&](const char* what) {
+      return urban_detection::tools::optionValue(argc, argv, &i, what);
+    };
+    auto integer = [&](const char* what) {
+      return urban_detection::tools::optionCount(argc, argv, &i, what);
+    };
+    if (a == "--kitti-object")
+      kitti_dir = value("--kitti-object");
+    else if (a == "--semantic-kitti")
+      skitti_dir = value("--semantic-kitti");
+    else if (a == "--sim")
+      sim_gt = value("--sim");
+    else if (a == "--pcap")
+      sim_pcap = value("--pcap");
+    else if (a == "--calibration")
+      calibration_path = value("--calibration");
     else if (a == "--cut-angle") {
       const std::string v = value("--cut-angle");
       char* end = nullptr;
       cut_angle_deg = std::strtod(v.c_str(), &end);
       if (end == v.c_str() || *end != '\0' || !std::isfinite(cut_angle_deg)) {
-        std::fprintf(stderr, "error: --cut-angle needs a number of degrees, got '%s'\n",
-                     v.c_str());
+        std::fprintf(stderr, "error: --cut-angle needs a number of degrees, got '%s'\n", v.c_str());
         return 2;
       }
-    }
-    else if (a == "--detector") detector_arg = value("--detector");
-    else if (a == "--config") configs.push_back(value("--config"));
-    else if (a == "--json") json_path = value("--json");
-    else if (a == "--max-frames") max_frames = integer("--max-frames");
-    else if (a == "--min-gt-points") min_gt_points = integer("--min-gt-points");
-    else if (a == "--details") details = true;
-    else if (a == "--object-filter") filter_arg = value("--object-filter");
-    else if (a == "--features") features_path = value("--features");
-    else if (a == "--classifier") classifier_arg = value("--classifier");
-    else if (a == "--detections") detections_dir = value("--detections");
-    else if (a == "--png") png_dir = value("--png");
-    else if (a == "--tracking") tracking = true;
-    else if (a == "--kitti-tracking") kitti_tracking_dir = value("--kitti-tracking");
-    else if (a == "--tracker-config") tracker_config = value("--tracker-config");
+    } else if (a == "--detector")
+      detector_arg = value("--detector");
+    else if (a == "--config")
+      configs.push_back(value("--config"));
+    else if (a == "--json")
+      json_path = value("--json");
+    else if (a == "--max-frames")
+      max_frames = integer("--max-frames");
+    else if (a == "--min-gt-points")
+      min_gt_points = integer("--min-gt-points");
+    else if (a == "--details")
+      details = true;
+    else if (a == "--object-filter")
+      filter_arg = value("--object-filter");
+    else if (a == "--features")
+      features_path = value("--features");
+    else if (a == "--classifier")
+      classifier_arg = value("--classifier");
+    else if (a == "--detections")
+      detections_dir = value("--detections");
+    else if (a == "--png")
+      png_dir = value("--png");
+    else if (a == "--tracking")
+      tracking = true;
+    else if (a == "--kitti-tracking")
+      kitti_tracking_dir = value("--kitti-tracking");
+    else if (a == "--tracker-config")
+      tracker_config = value("--tracker-config");
     else if (a == "--png-view") {
       const std::string v = value("--png-view");
       if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &png_view.cx, &png_view.cy, &png_view.half_m) !=
@@ -509,16 +536,17 @@ int main(int argc, char** argv) {
         return 2;
       }
       png_view.px_per_m = std::min(40.0, 600.0 / png_view.half_m);
-    }
-    else if (a == "-h" || a == "--help") { usage(); return 0; }
-    else {
+    } else if (a == "-h" || a == "--help") {
+      usage();
+      return 0;
+    } else {
       std::fprintf(stderr, "error: unknown argument '%s'\n", a.c_str());
       usage();
       return 2;
     }
   }
-  if ((!kitti_dir.empty() + !skitti_dir.empty() + !sim_gt.empty() +
-       !kitti_tracking_dir.empty()) != 1 ||
+  if ((!kitti_dir.empty() + !skitti_dir.empty() + !sim_gt.empty() + !kitti_tracking_dir.empty()) !=
+          1 ||
       (tracking && sim_gt.empty())) {
     std::fprintf(stderr, "error: give exactly one dataset\n");
     usage();
@@ -597,8 +625,7 @@ int main(int argc, char** argv) {
   try {
     if (!detections_dir.empty()) {
       if (!fs::is_directory(detections_dir)) {
-        std::fprintf(stderr, "error: --detections %s is not a directory\n",
-                     detections_dir.c_str());
+        std::fprintf(stderr, "error: --detections %s is not a directory\n", detections_dir.c_str());
         return 1;
       }
       external = new ExternalDetections(detections_dir);
@@ -636,9 +663,8 @@ int main(int argc, char** argv) {
       return urban_detection::tools::runKittiTracking(tp, kitti_tracking_dir, json_path);
     }
     try {
-      return urban_detection::tools::runSimTracking(tp, sim_gt, sim_pcap,
-                                                    core::loadCalibration(calibration_path),
-                                                    cut_angle_deg, json_path);
+      return urban_detection::tools::runSimTracking(
+          tp, sim_gt, sim_pcap, core::loadCalibration(calibration_path), cut_angle_deg, json_path);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "error: %s\n", e.what());
       return 1;
@@ -771,16 +797,16 @@ int main(int argc, char** argv) {
               "NO", "MO", "FO", "ign", "precision", "recall", "F-rate");
   for (std::size_t k = 0; k < detectors.size(); ++k) {
     const core::DetectionScore& t = evaluators[k].total();
-    std::printf("%-15s %-18s %6zu %5zu %5zu %5zu %5zu %9.3f %7.3f %7.3f\n",
-                dataset->name().c_str(), detectors[k]->name().c_str(), frames - failed, t.no,
-                t.mo, t.fo, t.ignored, t.precision(), t.recall(), t.fRate());
+    std::printf("%-15s %-18s %6zu %5zu %5zu %5zu %5zu %9.3f %7.3f %7.3f\n", dataset->name().c_str(),
+                detectors[k]->name().c_str(), frames - failed, t.no, t.mo, t.fo, t.ignored,
+                t.precision(), t.recall(), t.fRate());
   }
   for (std::size_t k = 0; k < detectors.size() && by_group[k].size() > 1; ++k) {
     for (const auto& g : by_group[k]) {
       const core::DetectionScore& t = g.second;
       std::printf("%-15s %-18s %6s %5zu %5zu %5zu %5zu %9.3f %7.3f %7.3f\n",
-                  (dataset->name() + ":" + g.first).c_str(), detectors[k]->name().c_str(), "",
-                  t.no, t.mo, t.fo, t.ignored, t.precision(), t.recall(), t.fRate());
+                  (dataset->name() + ":" + g.first).c_str(), detectors[k]->name().c_str(), "", t.no,
+                  t.mo, t.fo, t.ignored, t.precision(), t.recall(), t.fRate());
     }
   }
   std::printf("classifier: %s\n",
@@ -788,10 +814,11 @@ int main(int argc, char** argv) {
   std::printf("foreground points by class: %s\n", countsJson(fg_composition).c_str());
   for (std::size_t k = 0; k < detectors.size(); ++k) {
     if (classifier) {
-      std::printf("%s: classifier rejected by content %s; matched objects' class "
-                  "(truth->given) %s\n",
-                  detectors[k]->name().c_str(), countsJson(classified_out[k]).c_str(),
-                  countsJson(class_pairs[k]).c_str());
+      std::printf(
+          "%s: classifier rejected by content %s; matched objects' class "
+          "(truth->given) %s\n",
+          detectors[k]->name().c_str(), countsJson(classified_out[k]).c_str(),
+          countsJson(class_pairs[k]).c_str());
     }
     std::printf("%s: missed by cause %s; false by content %s\n", detectors[k]->name().c_str(),
                 countsJson(diags[k].missed_by_cause).c_str(),
@@ -813,9 +840,9 @@ int main(int argc, char** argv) {
     }
     out << "{\n  \"dataset\": \"" << dataset->name() << "\",\n  \"path\": \""
         << jsonEscape(dataset_path) << "\",\n  \"frames_evaluated\": " << frames - failed
-        << ",\n  \"frames_failed\": " << failed << ",\n  \"min_iou\": "
-        << jsonNumber(evaluators[0].params().min_iou) << ",\n  \"min_gt_points\": " << min_gt_points
-        << ",\n  \"classifier\": "
+        << ",\n  \"frames_failed\": " << failed
+        << ",\n  \"min_iou\": " << jsonNumber(evaluators[0].params().min_iou)
+        << ",\n  \"min_gt_points\": " << min_gt_points << ",\n  \"classifier\": "
         << (classifier ? "\"" + jsonEscape(params.classifier.model_path) + "\"" : "null")
         << ",\n  \"configs\": [";
     for (std::size_t c = 0; c < configs.size(); ++c) {
@@ -836,8 +863,7 @@ int main(int argc, char** argv) {
           << ", \"object_filter\": " << (params.object_filter.enabled ? "true" : "false")
           << ", \"rejected_by_content\": " << countsJson(rejected_by_content[k])
           << ", \"classifier_rejected_by_content\": " << countsJson(classified_out[k])
-          << ", \"class_truth_to_given\": " << countsJson(class_pairs[k])
-          << ", \"by_sequence\": {";
+          << ", \"class_truth_to_given\": " << countsJson(class_pairs[k]) << ", \"by_sequence\": {";
       bool first_group = true;
       for (const auto& g : by_group[k]) {
         out << (first_group ? "" : ", ") << "\"" << jsonEscape(g.first) << "\": {"

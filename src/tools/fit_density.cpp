@@ -7,8 +7,9 @@
 // DIR_OR_FILE: directories of KITTI .bin or PCD sweeps (e.g. ../shared/data/kitti_raw/*), or
 // single files. Density per 1 m ring of horizontal distance from 1 to 80 m, normalised by the
 // ring area and by its maximum; least-squares polynomial fit of its logarithm (--linear: of
-// the density itself, the paper's literal reading; see distance_weight.h); prints and writes the YAML
-// `weight:` block of config/hierarchical_grid.yaml and a PNG of density, fit and resulting weight.
+// the density itself, the paper's literal reading; see distance_weight.h); prints and writes the
+// YAML `weight:` block of config/hierarchical_grid.yaml and a PNG of density, fit and resulting
+// weight.
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -160,13 +161,13 @@ int main(int argc, char** argv) {
       fit[i] = std::log10(std::max(fitted(d[i]), 1e-5));
       w[i] = std::log10(weight.exact(d[i]));
     }
-    const bool ok = tools::plotSeries(
-        png_path, "log10: normalised ring density, polynomial fit, weight w(d)",
-        "horizontal distance from the sensor [m]",
-        {{dd, ld, cv::Scalar(200, 80, 0), "normalised density (rings)", true},
-         {d, fit, cv::Scalar(0, 0, 220), "fitted density", false},
-         {d, w, cv::Scalar(0, 150, 0), "weight w(d) (clamped)", false}},
-        -5.0, 4.0);
+    const bool ok =
+        tools::plotSeries(png_path, "log10: normalised ring density, polynomial fit, weight w(d)",
+                          "horizontal distance from the sensor [m]",
+                          {{dd, ld, cv::Scalar(200, 80, 0), "normalised density (rings)", true},
+                           {d, fit, cv::Scalar(0, 0, 220), "fitted density", false},
+                           {d, w, cv::Scalar(0, 150, 0), "weight w(d) (clamped)", false}},
+                          -5.0, 4.0);
     std::printf(ok ? "wrote %s\n" : "could not write %s\n", png_path.c_str());
   }
   return 0;

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include <pcl_conversions/pcl_conversions.h>
-#include <rosbag/bag.h>
 #include <ros/time.h>
+#include <rosbag/bag.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
 
@@ -77,15 +77,24 @@ int main(int argc, char** argv) {
     auto value = [&] { return urban_detection::tools::optionValue(argc, argv, &i, a.c_str()); };
     auto number = [&] { return urban_detection::tools::optionNumber(argc, argv, &i, a.c_str()); };
     auto count = [&] { return urban_detection::tools::optionCount(argc, argv, &i, a.c_str()); };
-    if (a == "--rate") rate_hz = number();
-    else if (a == "--start") start_s = number();
-    else if (a == "--repeat") repeat = count();
-    else if (a == "--max") max_sweeps = count();
-    else if (a == "--frame-id") frame_id = value();
-    else if (a == "--base-frame") base_frame = value();
-    else if (a == "--odom-frame") odom_frame = value();
-    else if (a == "--sensor-height") sensor_height_m = number();
-    else if (a == "--topic") topic = value();
+    if (a == "--rate")
+      rate_hz = number();
+    else if (a == "--start")
+      start_s = number();
+    else if (a == "--repeat")
+      repeat = count();
+    else if (a == "--max")
+      max_sweeps = count();
+    else if (a == "--frame-id")
+      frame_id = value();
+    else if (a == "--base-frame")
+      base_frame = value();
+    else if (a == "--odom-frame")
+      odom_frame = value();
+    else if (a == "--sensor-height")
+      sensor_height_m = number();
+    else if (a == "--topic")
+      topic = value();
     else if (a == "-h" || a == "--help") {
       usage();
       return 0;
@@ -104,8 +113,9 @@ int main(int argc, char** argv) {
   if (!(rate_hz > 0.0 && rate_hz <= 100.0) || !(start_s > 0.0) || repeat < 1 ||
       !std::isfinite(sensor_height_m) || frame_id.empty() || base_frame.empty() ||
       odom_frame.empty() || topic.empty()) {
-    std::fprintf(stderr, "invalid option value: --rate in (0, 100] Hz, --start > 0 s, --repeat "
-                         ">= 1, finite --sensor-height, non-empty frame names\n");
+    std::fprintf(stderr,
+                 "invalid option value: --rate in (0, 100] Hz, --start > 0 s, --repeat "
+                 ">= 1, finite --sensor-height, non-empty frame names\n");
     return 2;
   }
   if (topic.front() != '/') topic = "/" + topic;  // as a recorder stores it
@@ -154,10 +164,11 @@ int main(int argc, char** argv) {
       }
     }
     bag.close();
-    std::printf("kitti_to_bag: %zu sweeps (%zu points, %zu unreadable skipped) at %.1f Hz -> %s "
-                "(%s, frame %s; tf %s -> %s -> %s)\n",
-                written, points, skipped, rate_hz, positional[1].c_str(), topic.c_str(),
-                frame_id.c_str(), odom_frame.c_str(), base_frame.c_str(), frame_id.c_str());
+    std::printf(
+        "kitti_to_bag: %zu sweeps (%zu points, %zu unreadable skipped) at %.1f Hz -> %s "
+        "(%s, frame %s; tf %s -> %s -> %s)\n",
+        written, points, skipped, rate_hz, positional[1].c_str(), topic.c_str(), frame_id.c_str(),
+        odom_frame.c_str(), base_frame.c_str(), frame_id.c_str());
     return written > 0 ? 0 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "urban_detection_kitti_to_bag: %s\n", e.what());

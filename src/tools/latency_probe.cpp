@@ -6,8 +6,8 @@
 // Also keeps the last /diagnostics status of every stage reporting a processing time, and writes
 // its timing, rate and skip figures under "stages" (where a latency figure comes from).
 #include <algorithm>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -63,8 +63,8 @@ class Probe {
     }
     if (r.latency_ms.empty()) r.first = wall;
     r.last = wall;
-    r.latency_ms.push_back(1e-6 * (static_cast<double>(now.toNSec()) -
-                                   static_cast<double>(stamp.toNSec())));
+    r.latency_ms.push_back(
+        1e-6 * (static_cast<double>(now.toNSec()) - static_cast<double>(stamp.toNSec())));
   }
 
   void diagnostics(const diagnostic_msgs::DiagnosticArray& array) {
@@ -74,8 +74,8 @@ class Probe {
       bool is_stage = false;
       for (const diagnostic_msgs::KeyValue& kv : status.values) {
         is_stage = is_stage || kv.key == "mean processing time [ms]";
-        if (kv.key.find("[ms]") != std::string::npos ||
-            kv.key.find("[Hz]") != std::string::npos || kv.key == "skipped_revolutions") {
+        if (kv.key.find("[ms]") != std::string::npos || kv.key.find("[Hz]") != std::string::npos ||
+            kv.key == "skipped_revolutions") {
           kept.emplace_back(kv.key, kv.value);
         }
       }
@@ -110,8 +110,8 @@ class Probe {
         std::fprintf(out,
                      ", \"rate_hz\": %.3f, \"p50_ms\": %.3f, \"p95_ms\": %.3f, \"p99_ms\": %.3f, "
                      "\"max_ms\": %.3f, \"min_ms\": %.3f",
-                     span_s > 0 ? static_cast<double>(l.size() - 1) / span_s : 0.0, q(0.5),
-                     q(0.95), q(0.99), l.back(), l.front());
+                     span_s > 0 ? static_cast<double>(l.size() - 1) / span_s : 0.0, q(0.5), q(0.95),
+                     q(0.99), l.back(), l.front());
       }
       std::fprintf(out, "}");
     }
@@ -150,13 +150,24 @@ int main(int argc, char** argv) {
   std::string out_path;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--objects") objects.push_back(ud::tools::optionValue(argc, argv, &i, "--objects"));
-    else if (a == "--markers") markers.push_back(ud::tools::optionValue(argc, argv, &i, "--markers"));
-    else if (a == "--warmup") warmup_s = ud::tools::optionNumber(argc, argv, &i, "--warmup");
-    else if (a == "--duration") duration_s = ud::tools::optionNumber(argc, argv, &i, "--duration");
-    else if (a == "--out") out_path = ud::tools::optionValue(argc, argv, &i, "--out");
-    else if (a == "-h" || a == "--help") { usage(); return 0; }
-    else { std::fprintf(stderr, "error: unknown option %s\n", a.c_str()); usage(); return 2; }
+    if (a == "--objects")
+      objects.push_back(ud::tools::optionValue(argc, argv, &i, "--objects"));
+    else if (a == "--markers")
+      markers.push_back(ud::tools::optionValue(argc, argv, &i, "--markers"));
+    else if (a == "--warmup")
+      warmup_s = ud::tools::optionNumber(argc, argv, &i, "--warmup");
+    else if (a == "--duration")
+      duration_s = ud::tools::optionNumber(argc, argv, &i, "--duration");
+    else if (a == "--out")
+      out_path = ud::tools::optionValue(argc, argv, &i, "--out");
+    else if (a == "-h" || a == "--help") {
+      usage();
+      return 0;
+    } else {
+      std::fprintf(stderr, "error: unknown option %s\n", a.c_str());
+      usage();
+      return 2;
+    }
   }
   if (warmup_s < 0 || duration_s <= 0) {
     std::fprintf(stderr, "error: --warmup >= 0 and --duration > 0 needed\n");
@@ -174,22 +185,26 @@ int main(int argc, char** argv) {
     const std::string name = nh.resolveName(t);
     topics.push_back(name);
     subs.push_back(nh.subscribe<ud::DetectedObjectArray>(
-        t, 10, [&probe, name](const ud::DetectedObjectArray::ConstPtr& m) {
+        t, 10,
+        [&probe, name](const ud::DetectedObjectArray::ConstPtr& m) {
           probe.record(name, m->header.stamp);
-        }, ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+        },
+        ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
   }
   for (const std::string& t : markers) {
     const std::string name = nh.resolveName(t);
     topics.push_back(name);
     subs.push_back(nh.subscribe<visualization_msgs::MarkerArray>(
-        t, 10, [&probe, name](const visualization_msgs::MarkerArray::ConstPtr& m) {
+        t, 10,
+        [&probe, name](const visualization_msgs::MarkerArray::ConstPtr& m) {
           for (const visualization_msgs::Marker& marker : m->markers) {
             if (!marker.header.stamp.isZero()) {
               probe.record(name, marker.header.stamp);
               return;
             }
           }
-        }, ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+        },
+        ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
   }
   subs.push_back(nh.subscribe<diagnostic_msgs::DiagnosticArray>(
       "/diagnostics", 50,

@@ -19,7 +19,8 @@ namespace {
 
 template <class Params>
 void section(const std::string& title, const std::string& where) {
-  std::cout << "## " << title << "\n\n" << where << "\n\n"
+  std::cout << "## " << title << "\n\n"
+            << where << "\n\n"
             << core::fieldTableMarkdown(Params()) << "\n";
 }
 

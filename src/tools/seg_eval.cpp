@@ -23,13 +23,13 @@
 #include <utility>
 #include <vector>
 
-#include "urban_detection/core/sensor/calibration.h"
-#include "urban_detection/core/evaluation/eval_datasets.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
-#include "urban_detection/core/simulation/ground_truth.h"
-#include "urban_detection/core/sensor/kitti_io.h"
 #include "urban_detection/core/common/object_class.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/sensor/kitti_io.h"
+#include "urban_detection/core/simulation/ground_truth.h"
 
 #include "tool_common.h"
 
@@ -43,10 +43,10 @@ namespace {
 
 // What a point of either dataset is, for these figures.
 enum class Group : std::uint8_t {
-  kIgnore,        // unlabeled / outlier
-  kGround,        // SemanticKITTI road, sidewalk, parking, other-ground, terrain, lane-marking;
-                  // simulated road, curb, sidewalk, terrain
-  kWall,          // building + fence; simulated facades
+  kIgnore,  // unlabeled / outlier
+  kGround,  // SemanticKITTI road, sidewalk, parking, other-ground, terrain, lane-marking;
+            // simulated road, curb, sidewalk, terrain
+  kWall,    // building + fence; simulated facades
   kCar,
   kPerson,
   kCyclist,       // bicyclist + motorcyclist; simulated cyclists with their bicycle
@@ -61,31 +61,56 @@ Group semanticKittiGroup(std::uint32_t label) {
   if (cls == sk::kUnlabeled || cls == sk::kOutlier) return Group::kIgnore;
   if (core::isSemanticKittiGround(cls)) return Group::kGround;
   switch (cls) {
-    case sk::kBuilding: case sk::kFence: return Group::kWall;
-    case sk::kCar: return Group::kCar;
-    case sk::kPerson: return Group::kPerson;
-    case sk::kBicyclist: case sk::kMotorcyclist: return Group::kCyclist;
-    case sk::kTruck: case sk::kOtherVehicle: case sk::kBicycle: case sk::kMotorcycle:
+    case sk::kBuilding:
+    case sk::kFence:
+      return Group::kWall;
+    case sk::kCar:
+      return Group::kCar;
+    case sk::kPerson:
+      return Group::kPerson;
+    case sk::kBicyclist:
+    case sk::kMotorcyclist:
+      return Group::kCyclist;
+    case sk::kTruck:
+    case sk::kOtherVehicle:
+    case sk::kBicycle:
+    case sk::kMotorcycle:
       return Group::kOtherVehicle;
-    case sk::kVegetation: case sk::kTrunk: case sk::kPole: case sk::kTrafficSign:
+    case sk::kVegetation:
+    case sk::kTrunk:
+    case sk::kPole:
+    case sk::kTrafficSign:
       return Group::kVegPole;
-    default: return Group::kOther;
+    default:
+      return Group::kOther;
   }
 }
 
 Group simulatedGroup(std::uint8_t c) {
   switch (static_cast<ObjectClass>(c)) {
-    case ObjectClass::kGround: case ObjectClass::kTerrain: return Group::kGround;
-    case ObjectClass::kWall: return Group::kWall;
-    case ObjectClass::kCar: return Group::kCar;
-    case ObjectClass::kVan: return Group::kOtherVehicle;
-    case ObjectClass::kPedestrian: return Group::kPerson;
-    case ObjectClass::kCyclist: return Group::kCyclist;
-    case ObjectClass::kVegetation: case ObjectClass::kTrunk: case ObjectClass::kPole:
+    case ObjectClass::kGround:
+    case ObjectClass::kTerrain:
+      return Group::kGround;
+    case ObjectClass::kWall:
+      return Group::kWall;
+    case ObjectClass::kCar:
+      return Group::kCar;
+    case ObjectClass::kVan:
+      return Group::kOtherVehicle;
+    case ObjectClass::kPedestrian:
+      return Group::kPerson;
+    case ObjectClass::kCyclist:
+      return Group::kCyclist;
+    case ObjectClass::kVegetation:
+    case ObjectClass::kTrunk:
+    case ObjectClass::kPole:
     case ObjectClass::kSign:
       return Group::kVegPole;
-    case ObjectClass::kBin: case ObjectClass::kBench: return Group::kStreetObject;
-    default: return Group::kIgnore;
+    case ObjectClass::kBin:
+    case ObjectClass::kBench:
+      return Group::kStreetObject;
+    default:
+      return Group::kIgnore;
   }
 }
 
@@ -103,7 +128,9 @@ struct Counts {
   const Share& of(Group g) const { return group[static_cast<int>(g)]; }
 };
 
-double ratio(long a, long b) { return b > 0 ? static_cast<double>(a) / static_cast<double>(b) : 0.0; }
+double ratio(long a, long b) {
+  return b > 0 ? static_cast<double>(a) / static_cast<double>(b) : 0.0;
+}
 
 void accumulate(const std::vector<Group>& gt, const std::vector<SegmentClass>& pred, Counts* c) {
   for (std::size_t i = 0; i < gt.size(); ++i) {
@@ -114,10 +141,11 @@ void accumulate(const std::vector<Group>& gt, const std::vector<SegmentClass>& p
     c->ground_tp += is_ground && pred_ground;
     c->ground_fp += !is_ground && pred_ground;
     c->ground_fn += is_ground && !pred_ground;
-    const int row = is_ground ? 0
-                    : g == Group::kWall ? 1
-                    : g == Group::kCar ? 2
-                    : (g == Group::kPerson || g == Group::kCyclist) ? 3 : 4;
+    const int row = is_ground                                       ? 0
+                    : g == Group::kWall                             ? 1
+                    : g == Group::kCar                              ? 2
+                    : (g == Group::kPerson || g == Group::kCyclist) ? 3
+                                                                    : 4;
     ++c->confusion[row][static_cast<int>(pred[i]) % 5];
     Share& s = c->group[static_cast<int>(g)];
     ++s.total;
@@ -125,14 +153,22 @@ void accumulate(const std::vector<Group>& gt, const std::vector<SegmentClass>& p
   }
 }
 
-double groundPrecision(const Counts& c) { return ratio(c.ground_tp, c.ground_tp + c.ground_fp); }
-double groundRecall(const Counts& c) { return ratio(c.ground_tp, c.ground_tp + c.ground_fn); }
+double groundPrecision(const Counts& c) {
+  return ratio(c.ground_tp, c.ground_tp + c.ground_fp);
+}
+double groundRecall(const Counts& c) {
+  return ratio(c.ground_tp, c.ground_tp + c.ground_fn);
+}
 double groundF1(const Counts& c) {
   const double p = groundPrecision(c), r = groundRecall(c);
   return p + r > 0 ? 2 * p * r / (p + r) : 0.0;
 }
-double notFg(const Share& s) { return ratio(s.total - s.fg, s.total); }
-double fg(const Share& s) { return ratio(s.fg, s.total); }
+double notFg(const Share& s) {
+  return ratio(s.total - s.fg, s.total);
+}
+double fg(const Share& s) {
+  return ratio(s.fg, s.total);
+}
 
 void print(const char* name, const Counts& c) {
   const Share& wall = c.of(Group::kWall);
@@ -140,17 +176,18 @@ void print(const char* name, const Counts& c) {
   const Share& person = c.of(Group::kPerson);
   const Share& cyclist = c.of(Group::kCyclist);
   const Share& vehicle = c.of(Group::kOtherVehicle);
-  std::printf("| %-9s | %6.4f | %6.4f | %6.4f | %6.4f (%ld) | %6.4f (%ld) | %6.4f (%ld) | %6.4f (%ld) "
-              "| %6.4f (%ld) | %6.4f | %6.2f |\n",
-              name, groundPrecision(c), groundRecall(c), groundF1(c), notFg(wall), wall.total,
-              fg(car), car.total, fg(person), person.total, fg(cyclist), cyclist.total,
-              fg(vehicle), vehicle.total, fg(c.of(Group::kVegPole)),
-              c.frames > 0 ? c.ms_total / c.frames : 0.0);
+  std::printf(
+      "| %-9s | %6.4f | %6.4f | %6.4f | %6.4f (%ld) | %6.4f (%ld) | %6.4f (%ld) | %6.4f (%ld) "
+      "| %6.4f (%ld) | %6.4f | %6.2f |\n",
+      name, groundPrecision(c), groundRecall(c), groundF1(c), notFg(wall), wall.total, fg(car),
+      car.total, fg(person), person.total, fg(cyclist), cyclist.total, fg(vehicle), vehicle.total,
+      fg(c.of(Group::kVegPole)), c.frames > 0 ? c.ms_total / c.frames : 0.0);
 }
 
 void printTable(const Counts& on, const Counts& off) {
-  std::printf("| hough     | gnd P  | gnd R  | gnd F1 | wall not-fg (n)  | car fg (n)       | "
-              "person fg (n)    | cyclist fg (n)   | other veh fg (n) | veg/pole fg | ms/scan |\n");
+  std::printf(
+      "| hough     | gnd P  | gnd R  | gnd F1 | wall not-fg (n)  | car fg (n)       | "
+      "person fg (n)    | cyclist fg (n)   | other veh fg (n) | veg/pole fg | ms/scan |\n");
   print("on", on);
   print("off", off);
 }
@@ -164,13 +201,16 @@ bool writeJson(const std::string& path, const std::string& dataset, const std::s
   if (!f) return false;
   std::fprintf(f, "{\n  \"dataset\": \"%s\",\n  \"path\": \"%s\",\n  \"frames\": %d",
                dataset.c_str(), urban_detection::tools::jsonEscape(source).c_str(), on.frames);
-  const std::pair<const char*, Group> shares[] = {
-      {"car", Group::kCar}, {"person", Group::kPerson}, {"cyclist", Group::kCyclist},
-      {"other_vehicle", Group::kOtherVehicle}, {"street_object", Group::kStreetObject},
-      {"veg_pole", Group::kVegPole}};
+  const std::pair<const char*, Group> shares[] = {{"car", Group::kCar},
+                                                  {"person", Group::kPerson},
+                                                  {"cyclist", Group::kCyclist},
+                                                  {"other_vehicle", Group::kOtherVehicle},
+                                                  {"street_object", Group::kStreetObject},
+                                                  {"veg_pole", Group::kVegPole}};
   for (int k = 0; k < 2; ++k) {
     const Counts& c = k == 0 ? on : off;
-    std::fprintf(f, ",\n  \"%s\": {\"ground_precision\": %.6f, \"ground_recall\": %.6f, "
+    std::fprintf(f,
+                 ",\n  \"%s\": {\"ground_precision\": %.6f, \"ground_recall\": %.6f, "
                  "\"ground_f1\": %.6f, \"ground_points\": %ld, \"wall_not_foreground\": %.6f, "
                  "\"wall_points\": %ld",
                  k == 0 ? "hough_on" : "hough_off", groundPrecision(c), groundRecall(c),
@@ -188,7 +228,8 @@ bool writeJson(const std::string& path, const std::string& dataset, const std::s
 
 void printConfusion(const char* name, const Counts& c) {
   static const char* groups[5] = {"ground", "building+fence", "car", "person+cyclist", "other"};
-  std::printf("confusion (hough %s): rows = SemanticKITTI group, columns = predicted share\n", name);
+  std::printf("confusion (hough %s): rows = SemanticKITTI group, columns = predicted share\n",
+              name);
   std::printf("  %-15s %8s %8s %8s %8s %8s\n", "", "unknown", "clutter", "ground", "tall", "short");
   for (int g = 0; g < 5; ++g) {
     long n = 0;
@@ -213,11 +254,20 @@ void printAscii(const core::GridSegmenter& seg, double half_m) {
         ch = 'S';
       } else if (r >= 0 && r < g.rows() && c >= 0 && c < g.cols()) {
         switch (seg.cellClasses()[static_cast<std::size_t>(r) * g.cols() + c]) {
-          case SegmentClass::kGround: ch = '.'; break;
-          case SegmentClass::kTall: ch = 'T'; break;
-          case SegmentClass::kShort: ch = 's'; break;
-          case SegmentClass::kClutter: ch = ','; break;
-          default: break;
+          case SegmentClass::kGround:
+            ch = '.';
+            break;
+          case SegmentClass::kTall:
+            ch = 'T';
+            break;
+          case SegmentClass::kShort:
+            ch = 's';
+            break;
+          case SegmentClass::kClutter:
+            ch = ',';
+            break;
+          default:
+            break;
         }
       }
       std::putchar(ch);
@@ -232,14 +282,19 @@ bool setParam(core::GridSegmenterParams* p, const std::string& kv) {
   const std::string k = kv.substr(0, eq);
   const double v = std::atof(kv.c_str() + eq + 1);
   std::map<std::string, double*> d = {
-      {"sensor_height_m", &p->sensor_height_m}, {"cell_size_m", &p->cell_size_m},
-      {"max_range_m", &p->max_range_m}, {"ground_max_range_m", &p->ground_max_range_m},
-      {"ground_tolerance_m", &p->ground_tolerance_m}, {"ground_max_step_m", &p->ground_max_step_m},
-      {"seed_radius_m", &p->seed_radius_m}, {"ground_max_gap_m", &p->ground_max_gap_m},
+      {"sensor_height_m", &p->sensor_height_m},
+      {"cell_size_m", &p->cell_size_m},
+      {"max_range_m", &p->max_range_m},
+      {"ground_max_range_m", &p->ground_max_range_m},
+      {"ground_tolerance_m", &p->ground_tolerance_m},
+      {"ground_max_step_m", &p->ground_max_step_m},
+      {"seed_radius_m", &p->seed_radius_m},
+      {"ground_max_gap_m", &p->ground_max_gap_m},
       {"seed_max_abs_height_m", &p->seed_max_abs_height_m},
       {"terrain_max_offset_m", &p->terrain_max_offset_m},
       {"fov_top_elevation_deg", &p->fov_top_elevation_deg},
-      {"tall_min_height_m", &p->tall_min_height_m}, {"tall_min_range_m", &p->tall_min_range_m},
+      {"tall_min_height_m", &p->tall_min_height_m},
+      {"tall_min_range_m", &p->tall_min_range_m},
       {"vehicle_max_height_m", &p->vehicle_max_height_m},
       {"vehicle_max_length_m", &p->vehicle_max_length_m},
       {"vehicle_max_width_m", &p->vehicle_max_width_m},
@@ -249,15 +304,31 @@ bool setParam(core::GridSegmenterParams* p, const std::string& kv) {
       {"hough.theta_resolution_deg", &p->hough.theta_resolution_deg},
       {"hough.min_tall_fraction", &p->hough.min_tall_fraction},
       {"hough.min_mixed_wall_length_m", &p->hough.min_mixed_wall_length_m}};
-  std::map<std::string, int*> di = {{"min_points_per_cell", &p->min_points_per_cell},
-                                    {"terrain_fill_iterations", &p->terrain_fill_iterations},
-                                    {"hough.votes", &p->hough.votes},
-                                    {"hough.line_half_width_cells", &p->hough.line_half_width_cells}};
-  if (k == "hough.extend_lines") { p->hough.extend_lines = v != 0.0; return true; }
-  if (k == "ground_in_sparse_cells") { p->ground_in_sparse_cells = v != 0.0; return true; }
-  if (k == "curb_cells_ground") { p->curb_cells_ground = v != 0.0; return true; }
-  if (d.count(k)) { *d[k] = v; return true; }
-  if (di.count(k)) { *di[k] = static_cast<int>(v); return true; }
+  std::map<std::string, int*> di = {
+      {"min_points_per_cell", &p->min_points_per_cell},
+      {"terrain_fill_iterations", &p->terrain_fill_iterations},
+      {"hough.votes", &p->hough.votes},
+      {"hough.line_half_width_cells", &p->hough.line_half_width_cells}};
+  if (k == "hough.extend_lines") {
+    p->hough.extend_lines = v != 0.0;
+    return true;
+  }
+  if (k == "ground_in_sparse_cells") {
+    p->ground_in_sparse_cells = v != 0.0;
+    return true;
+  }
+  if (k == "curb_cells_ground") {
+    p->curb_cells_ground = v != 0.0;
+    return true;
+  }
+  if (d.count(k)) {
+    *d[k] = v;
+    return true;
+  }
+  if (di.count(k)) {
+    *di[k] = static_cast<int>(v);
+    return true;
+  }
   return false;
 }
 
@@ -308,9 +379,10 @@ void evalKittiObject(const std::string& dir, const core::GridSegmenterParams& pa
     }
   }
   if (ascii_half_m > 0.0 && frames > 0) printAscii(seg_on, ascii_half_m);
-  std::printf("\nKITTI object %s, %d frames: object points (in boxes, above the ground band) in "
-              "the foreground\n| class | points | fg hough on | fg hough off |\n", dir.c_str(),
-              frames);
+  std::printf(
+      "\nKITTI object %s, %d frames: object points (in boxes, above the ground band) in "
+      "the foreground\n| class | points | fg hough on | fg hough off |\n",
+      dir.c_str(), frames);
   for (const auto& kv : per_class) {
     std::printf("| %-14s | %6ld | %6.4f | %6.4f |\n", kv.first.c_str(), kv.second[0],
                 ratio(kv.second[1], kv.second[0]), ratio(kv.second[2], kv.second[0]));
@@ -395,11 +467,10 @@ bool evalSemanticKitti(const std::string& dir, const std::string& dump_dir, Eval
 // A simulated drive: the revolutions of PCAP against the per-point classes of GTFILE (matched
 // by stamp). Returns 0, or 1 with a message when the files cannot be read or hold no frame.
 int evalSimulated(const std::string& gt_path, const std::string& pcap_path,
-                  const std::string& calibration_path, long max_frames,
-                  const std::string& dump_dir, Evaluator* ev) {
+                  const std::string& calibration_path, long max_frames, const std::string& dump_dir,
+                  Evaluator* ev) {
   try {
-    core::SimulatedDriveReader reader(pcap_path, gt_path,
-                                      core::loadCalibration(calibration_path));
+    core::SimulatedDriveReader reader(pcap_path, gt_path, core::loadCalibration(calibration_path));
     urban_detection::CloudXYZIRT cloud;
     core::GroundTruthFrame gt;
     std::vector<Group> groups;
@@ -434,7 +505,8 @@ int evalSimulated(const std::string& gt_path, const std::string& pcap_path,
 }
 
 void usage(const char* argv0, FILE* out) {
-  std::fprintf(out,
+  std::fprintf(
+      out,
       "usage: %s [DIR] [options]                     SemanticKITTI sequence (velodyne/, labels/)\n"
       "       %s --sim GTFILE --pcap PCAP [options]  simulated drive (urban_detection_simulate)\n"
       "       %s --kitti-object [DIR] [options]      KITTI object frames\n"
@@ -459,8 +531,8 @@ int main(int argc, char** argv) {
   core::GridSegmenterParams params;
   bool verbose = false;
   std::string kitti_object_dir;  // evaluate KITTI object frames instead of SemanticKITTI
-  double ascii_half_m = 0.0;  // print the cell classes of the last scan within this half side
-  std::string dump_dir;  // per-point x y z group class text files, for analysis
+  double ascii_half_m = 0.0;     // print the cell classes of the last scan within this half side
+  std::string dump_dir;          // per-point x y z group class text files, for analysis
   std::string sim_gt, sim_pcap, calibration_path, json_path;
   long max_frames = -1;
   for (int i = 1; i < argc; ++i) {
@@ -502,8 +574,7 @@ int main(int argc, char** argv) {
       char* end = nullptr;
       max_frames = std::strtol(v.c_str(), &end, 10);
       if (end == v.c_str() || *end != '\0' || max_frames < 1) {
-        std::fprintf(stderr, "error: --max-frames needs a positive integer, not '%s'\n",
-                     v.c_str());
+        std::fprintf(stderr, "error: --max-frames needs a positive integer, not '%s'\n", v.c_str());
         return 2;
       }
     } else if (a == "--kitti-object") {
@@ -538,15 +609,16 @@ int main(int argc, char** argv) {
   Evaluator ev(params);
   std::string dataset, source;
   if (!sim_gt.empty()) {
-    if (const int rc = evalSimulated(sim_gt, sim_pcap, calibration_path, max_frames, dump_dir,
-                                     &ev)) {
+    if (const int rc =
+            evalSimulated(sim_gt, sim_pcap, calibration_path, max_frames, dump_dir, &ev)) {
       return rc;
     }
     dataset = "sim";
     source = sim_pcap;
-    std::printf("Simulated drive %s, %d revolutions, exact per-point classes (walls = facades, "
-                "cyclist = rider with bicycle, other vehicle = van)\n",
-                sim_pcap.c_str(), ev.on().frames);
+    std::printf(
+        "Simulated drive %s, %d revolutions, exact per-point classes (walls = facades, "
+        "cyclist = rider with bicycle, other vehicle = van)\n",
+        sim_pcap.c_str(), ev.on().frames);
   } else {
     if (!evalSemanticKitti(dir, dump_dir, &ev)) {
       std::fprintf(stderr, "no SemanticKITTI scans in %s/velodyne (data absent?)\n", dir.c_str());

@@ -10,8 +10,8 @@
 #include <ros/package.h>
 #include <ros/time.h>
 
-#include "urban_detection/core/simulation/ground_truth.h"
 #include "urban_detection/core/sensor/pcap_io.h"
+#include "urban_detection/core/simulation/ground_truth.h"
 #include "urban_detection/core/simulation/simulation_config.h"
 #include "urban_detection/ros/simulation_conversions.h"
 
@@ -28,7 +28,8 @@ void usage() {
       "  --revolutions N      revolutions to simulate (default: the whole drive)\n"
       "  --pcap FILE          write the packets as a pcap (UDP 2368)\n"
       "  --bag FILE           write /velodyne_packets, /ground_truth, /tf, /tf_static\n"
-      "  --gt FILE            write the ground-truth file (format: core/simulation/ground_truth.h)\n"
+      "  --gt FILE            write the ground-truth file (format: "
+      "core/simulation/ground_truth.h)\n"
       "  --calibration FILE   override the config's calibration (velodyne YAML or db.xml)\n"
       "  --seed N             override the scene seed\n"
       "  --rpm R              override the spin rate (300..1200)\n");
@@ -46,14 +47,22 @@ int main(int argc, char** argv) {
     auto value = [&] { return urban_detection::tools::optionValue(argc, argv, &i, a.c_str()); };
     auto number = [&] { return urban_detection::tools::optionNumber(argc, argv, &i, a.c_str()); };
     auto count = [&] { return urban_detection::tools::optionCount(argc, argv, &i, a.c_str()); };
-    if (a == "--config") config_path = value();
-    else if (a == "--revolutions") revolutions = count();
-    else if (a == "--pcap") pcap_path = value();
-    else if (a == "--bag") bag_path = value();
-    else if (a == "--gt") gt_path = value();
-    else if (a == "--calibration") calibration_path = value();
-    else if (a == "--seed") seed = count();
-    else if (a == "--rpm") rpm = number();
+    if (a == "--config")
+      config_path = value();
+    else if (a == "--revolutions")
+      revolutions = count();
+    else if (a == "--pcap")
+      pcap_path = value();
+    else if (a == "--bag")
+      bag_path = value();
+    else if (a == "--gt")
+      gt_path = value();
+    else if (a == "--calibration")
+      calibration_path = value();
+    else if (a == "--seed")
+      seed = count();
+    else if (a == "--rpm")
+      rpm = number();
     else if (a == "-h" || a == "--help") {
       usage();
       return 0;
@@ -71,8 +80,9 @@ int main(int argc, char** argv) {
   if (config_path.empty()) {
     const std::string pkg = ros::package::getPath("urban_detection");
     if (pkg.empty()) {
-      std::fprintf(stderr, "package urban_detection not found (source devel/setup.bash) and no "
-                           "--config given\n");
+      std::fprintf(stderr,
+                   "package urban_detection not found (source devel/setup.bash) and no "
+                   "--config given\n");
       return 2;
     }
     config_path = pkg + "/config/demo_drive.yaml";
@@ -83,10 +93,10 @@ int main(int argc, char** argv) {
     if (seed >= 0) c.scene.seed = static_cast<std::uint64_t>(seed);
     if (rpm > 0.0) c.sensor.rpm = rpm;
     const ud::core::Calibration cal = ud::core::loadCalibration(c.calibration_file);
-    ud::core::LidarSimulator sim(ud::core::generateScene(c.scene, c.drive), c.scene, c.drive,
-                                 cal, c.sensor);
-    const std::size_t n = revolutions > 0 ? static_cast<std::size_t>(revolutions)
-                                          : sim.revolutionsInDrive();
+    ud::core::LidarSimulator sim(ud::core::generateScene(c.scene, c.drive), c.scene, c.drive, cal,
+                                 c.sensor);
+    const std::size_t n =
+        revolutions > 0 ? static_cast<std::size_t>(revolutions) : sim.revolutionsInDrive();
     ros::Time::init();  // rosbag needs ros::Time without a master
     std::unique_ptr<ud::core::PcapWriter> pcap;
     std::unique_ptr<ud::ros_conv::SimulationBagWriter> bag;
@@ -104,7 +114,8 @@ int main(int argc, char** argv) {
     for (std::size_t r = 0; r < n; ++r) {
       const auto t0 = std::chrono::steady_clock::now();
       sim.simulateNext(&rev);
-      sim_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      sim_ms +=
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       packets += rev.packets.size();
       points += rev.instance_ids.size();
       if (pcap) {
@@ -120,9 +131,10 @@ int main(int argc, char** argv) {
     }
     if (bag) bag->close();
     if (gt) gt->close();
-    std::printf("simulate: %zu packets, %zu points (%.0f per revolution), %.1f ms simulation per "
-                "revolution\n",
-                packets, points, n ? static_cast<double>(points) / n : 0.0, n ? sim_ms / n : 0.0);
+    std::printf(
+        "simulate: %zu packets, %zu points (%.0f per revolution), %.1f ms simulation per "
+        "revolution\n",
+        packets, points, n ? static_cast<double>(points) / n : 0.0, n ? sim_ms / n : 0.0);
     if (pcap) std::printf("  pcap: %s\n", pcap_path.c_str());
     if (bag) std::printf("  bag:  %s\n", bag_path.c_str());
     if (gt) std::printf("  ground truth: %s\n", gt_path.c_str());

@@ -44,12 +44,12 @@
 #include <vector>
 
 #include "tool_common.h"
+#include "urban_detection/core/classification/object_classifier.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
-#include "urban_detection/core/detection/hierarchical_grid_detector.h"
-#include "urban_detection/core/spark/image_label_transfer.h"
-#include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/spark/camera_fusion.h"
+#include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/spark/kitti_spark_eval.h"
 #include "urban_detection/core/spark/spark_capture.h"
 #include "urban_detection/core/spark/spark_instances.h"

@@ -14,9 +14,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "urban_detection/core/sensor/kitti_io.h"
-#include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/sensor/kitti_io.h"
 
 namespace urban_detection {
 namespace tools {

@@ -68,8 +68,8 @@ inline void benchTracker(int objects, int revolutions,
       o.centroid = o.obb_center;
       o.obb_size = t.size.cast<float>();
       o.obb_yaw_rad = static_cast<float>(t.yaw);
-      o.category = t.size.x() > 1.0 ? core::ObjectCategory::kVehicle
-                                     : core::ObjectCategory::kPedestrian;
+      o.category =
+          t.size.x() > 1.0 ? core::ObjectCategory::kVehicle : core::ObjectCategory::kPedestrian;
       o.class_confidence = 0.8f;
       dets.push_back(o);
     }

@@ -27,8 +27,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -38,13 +38,13 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "urban_detection/core/classification/object_classifier.h"
+#include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/common/object_class.h"
+#include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/sensor/kitti_io.h"
-#include "urban_detection/core/common/object_class.h"
-#include "urban_detection/core/classification/object_classifier.h"
-#include "urban_detection/core/detection/object_detector.h"
-#include "urban_detection/core/classification/object_filter.h"
 #include "urban_detection/core/tracking/clear_mot.h"
 #include "urban_detection/core/tracking/kitti_tracking.h"
 #include "urban_detection/core/tracking/tracker.h"
@@ -55,7 +55,6 @@ namespace urban_detection {
 namespace tools {
 
 namespace core = urban_detection::core;
-
 
 // The stages before the tracker, owned by eval's main().
 struct TrackingPipeline {
@@ -89,33 +88,34 @@ class TrackingPipelineRunner {
 };
 
 inline double steadySeconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 inline void printMot(const char* what, const core::ClearMotResult& r) {
-  std::printf("%-28s frames %4zu  GT %6zu  GT tracks %4zu  MOTA %.3f  MOTP %.3f m  recall %.3f  "
-              "precision %.3f  FN %zu  FP %zu  IDSW %zu (%.2f per 100 GT tracks)  frag %zu  "
-              "MT %zu  PT %zu  ML %zu\n",
-              what, r.frames, r.gt, r.gt_tracks, r.mota(), r.motp_m(), r.recall(), r.precision(),
-              r.misses, r.false_positives, r.id_switches, r.idSwitchesPer100GtTracks(),
-              r.fragmentations, r.mostly_tracked, r.partially_tracked, r.mostly_lost);
+  std::printf(
+      "%-28s frames %4zu  GT %6zu  GT tracks %4zu  MOTA %.3f  MOTP %.3f m  recall %.3f  "
+      "precision %.3f  FN %zu  FP %zu  IDSW %zu (%.2f per 100 GT tracks)  frag %zu  "
+      "MT %zu  PT %zu  ML %zu\n",
+      what, r.frames, r.gt, r.gt_tracks, r.mota(), r.motp_m(), r.recall(), r.precision(), r.misses,
+      r.false_positives, r.id_switches, r.idSwitchesPer100GtTracks(), r.fragmentations,
+      r.mostly_tracked, r.partially_tracked, r.mostly_lost);
 }
 
 inline std::string motJson(const core::ClearMotResult& r) {
   char buf[640];
-  std::snprintf(buf, sizeof buf,
-                "{\"frames\": %zu, \"gt\": %zu, \"gt_tracks\": %zu, \"matches\": %zu, \"mota\": %s, "
-                "\"motp_m\": %s, "
-                "\"recall\": %s, \"precision\": %s, \"misses\": %zu, \"false_positives\": %zu, "
-                "\"id_switches\": %zu, \"id_switches_per_100_gt_tracks\": %s, "
-                "\"fragmentations\": %zu, \"mostly_tracked\": %zu, \"partially_tracked\": %zu, "
-                "\"mostly_lost\": %zu}",
-                r.frames, r.gt, r.gt_tracks, r.matches, jsonNumber(r.mota()).c_str(),
-                jsonNumber(r.motp_m()).c_str(), jsonNumber(r.recall()).c_str(),
-                jsonNumber(r.precision()).c_str(), r.misses, r.false_positives, r.id_switches,
-                jsonNumber(r.idSwitchesPer100GtTracks()).c_str(), r.fragmentations,
-                r.mostly_tracked, r.partially_tracked, r.mostly_lost);
+  std::snprintf(
+      buf, sizeof buf,
+      "{\"frames\": %zu, \"gt\": %zu, \"gt_tracks\": %zu, \"matches\": %zu, \"mota\": %s, "
+      "\"motp_m\": %s, "
+      "\"recall\": %s, \"precision\": %s, \"misses\": %zu, \"false_positives\": %zu, "
+      "\"id_switches\": %zu, \"id_switches_per_100_gt_tracks\": %s, "
+      "\"fragmentations\": %zu, \"mostly_tracked\": %zu, \"partially_tracked\": %zu, "
+      "\"mostly_lost\": %zu}",
+      r.frames, r.gt, r.gt_tracks, r.matches, jsonNumber(r.mota()).c_str(),
+      jsonNumber(r.motp_m()).c_str(), jsonNumber(r.recall()).c_str(),
+      jsonNumber(r.precision()).c_str(), r.misses, r.false_positives, r.id_switches,
+      jsonNumber(r.idSwitchesPer100GtTracks()).c_str(), r.fragmentations, r.mostly_tracked,
+      r.partially_tracked, r.mostly_lost);
   return buf;
 }
 
@@ -158,19 +158,18 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
           for (const core::Track& t : tracker.tracks()) {
             if (t.id == it->second) prev = &t;
           }
-          const Eigen::Vector3d rel = gt.sensor_pose.inverse() *
-                                      gt_of[g]->center.cast<double>();
-          std::printf("%s IDSW rev %zu gt %u %s pts %u at (%.1f, %.1f) sensor frame: %u -> %u "
-                      "(age %u hits %u); previous %s\n",
-                      tag, frames, gts[g].id, core::toString(gt_of[g]->object_class),
-                      gt_of[g]->num_points, rel.x(), rel.y(), it->second, h,
-                      0u, 0u,
-                      prev ? (std::string(core::toString(prev->state)) + " misses " +
-                              std::to_string(prev->misses) + " dist " +
-                              std::to_string((prev->center - gt_of[g]->center.cast<double>())
-                                                 .head<2>().norm()))
-                                 .c_str()
-                           : "dead");
+          const Eigen::Vector3d rel = gt.sensor_pose.inverse() * gt_of[g]->center.cast<double>();
+          std::printf(
+              "%s IDSW rev %zu gt %u %s pts %u at (%.1f, %.1f) sensor frame: %u -> %u "
+              "(age %u hits %u); previous %s\n",
+              tag, frames, gts[g].id, core::toString(gt_of[g]->object_class), gt_of[g]->num_points,
+              rel.x(), rel.y(), it->second, h, 0u, 0u,
+              prev ? (std::string(core::toString(prev->state)) + " misses " +
+                      std::to_string(prev->misses) + " dist " +
+                      std::to_string(
+                          (prev->center - gt_of[g]->center.cast<double>()).head<2>().norm()))
+                         .c_str()
+                   : "dead");
         }
         last[gts[g].id] = h;
       }
@@ -248,7 +247,8 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
     // would give them): what the tracker does when the detector is perfect.
     gt_boxes.clear();
     const Eigen::Isometry3d sensor_T_world = gt.sensor_pose.inverse();
-    const double pose_yaw = std::atan2(gt.sensor_pose.linear()(1, 0), gt.sensor_pose.linear()(0, 0));
+    const double pose_yaw =
+        std::atan2(gt.sensor_pose.linear()(1, 0), gt.sensor_pose.linear()(0, 0));
     for (std::size_t g = 0; g < gts.size(); ++g) {
       if (gts[g].ignored) continue;
       core::DetectedObject o;
@@ -278,24 +278,27 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
   const core::ClearMotResult r = mot.result();
   const core::ClearMotResult d = detections_mot.result();
   const core::ClearMotResult o = oracle_mot.result();
-  std::printf("tracking on the simulated drive (%zu revolutions, %zu skipped), detector %s, "
-              "classifier %s\n",
-              frames, skipped, p.detector->name().c_str(), p.classifier ? "on" : "off");
+  std::printf(
+      "tracking on the simulated drive (%zu revolutions, %zu skipped), detector %s, "
+      "classifier %s\n",
+      frames, skipped, p.detector->name().c_str(), p.classifier ? "on" : "off");
   printMot("tracker (confirmed tracks)", r);
-  std::printf("%-28s recall %.3f  precision %.3f  (MOTA <= recall of the tracks; the detector "
-              "bounds it unless coasting fills its gaps)\n",
-              "detector alone", d.recall(), d.precision());
+  std::printf(
+      "%-28s recall %.3f  precision %.3f  (MOTA <= recall of the tracks; the detector "
+      "bounds it unless coasting fills its gaps)\n",
+      "detector alone", d.recall(), d.precision());
   printMot("tracker on GT boxes", o);
-  std::printf("speed error of matched moving cars/vans: median %.3f m/s, p90 %.3f m/s "
-              "(%zu matches); speed of matched parked cars/vans: median %.3f m/s, p90 %.3f m/s "
-              "(%zu)\n",
-              median(speed_error), percentile(speed_error, 0.9), speed_error.size(),
-              median(static_speed), percentile(static_speed, 0.9), static_speed.size());
-  std::printf("tracker update: median %.4f ms, max %.4f ms per revolution (wall clock, with "
-              "the pipeline around it)\n",
-              median(update_ms), update_ms.empty() ? 0.0
-                                                   : *std::max_element(update_ms.begin(),
-                                                                       update_ms.end()));
+  std::printf(
+      "speed error of matched moving cars/vans: median %.3f m/s, p90 %.3f m/s "
+      "(%zu matches); speed of matched parked cars/vans: median %.3f m/s, p90 %.3f m/s "
+      "(%zu)\n",
+      median(speed_error), percentile(speed_error, 0.9), speed_error.size(), median(static_speed),
+      percentile(static_speed, 0.9), static_speed.size());
+  std::printf(
+      "tracker update: median %.4f ms, max %.4f ms per revolution (wall clock, with "
+      "the pipeline around it)\n",
+      median(update_ms),
+      update_ms.empty() ? 0.0 : *std::max_element(update_ms.begin(), update_ms.end()));
   if (!json_path.empty()) {
     std::ofstream out(json_path);
     out << "{\n  \"dataset\": \"sim\",\n  \"pcap\": \"" << jsonEscape(pcap_path)
@@ -303,11 +306,12 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
         << ",\n  \"detector_alone\": " << motJson(d)
         << ",\n  \"tracker_on_ground_truth_boxes\": " << motJson(o)
         << ",\n  \"moving_vehicle_speed_error_mps\": {\"median\": "
-        << jsonNumber(median(speed_error)) << ", \"p90\": "
-        << jsonNumber(percentile(speed_error, 0.9)) << ", \"n\": " << speed_error.size()
+        << jsonNumber(median(speed_error))
+        << ", \"p90\": " << jsonNumber(percentile(speed_error, 0.9))
+        << ", \"n\": " << speed_error.size()
         << "},\n  \"parked_vehicle_speed_mps\": {\"median\": " << jsonNumber(median(static_speed))
-        << ", \"n\": " << static_speed.size() << "},\n  \"tracker_update_ms_median\": "
-        << jsonNumber(median(update_ms)) << "\n}\n";
+        << ", \"n\": " << static_speed.size()
+        << "},\n  \"tracker_update_ms_median\": " << jsonNumber(median(update_ms)) << "\n}\n";
     if (!out) {
       std::fprintf(stderr, "error: cannot write %s\n", json_path.c_str());
       return 1;

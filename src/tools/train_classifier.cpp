@@ -35,12 +35,12 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/evaluation/evaluation.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
-#include "urban_detection/core/detection/hierarchical_grid_detector.h"
-#include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_features.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/evaluation/evaluation.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
 
 #include "datasets.h"
 #include "tool_common.h"
@@ -194,13 +194,15 @@ std::string scoreRow(const core::DetectionScore& s) {
 std::string scoreJson(const core::DetectionScore& s) {
   std::ostringstream o;
   o << "{\"no\": " << s.no << ", \"mo\": " << s.mo << ", \"fo\": " << s.fo
-    << ", \"precision\": " << jsonNumber(s.precision()) << ", \"recall\": "
-    << jsonNumber(s.recall()) << ", \"f_rate\": " << jsonNumber(s.fRate()) << "}";
+    << ", \"precision\": " << jsonNumber(s.precision())
+    << ", \"recall\": " << jsonNumber(s.recall()) << ", \"f_rate\": " << jsonNumber(s.fRate())
+    << "}";
   return o.str();
 }
 
 void usage() {
-  std::fprintf(stderr,
+  std::fprintf(
+      stderr,
       "usage: urban_detection_train_classifier --semantic-kitti DIR [--config FILE]...\n"
       "         [--out MODEL] [--csv FILE] [--json FILE] [--no-intensity] [--trees N]\n"
       "         [--max-depth N] [--min-samples N] [--fragments reject|skip]\n"
@@ -222,7 +224,7 @@ void usage() {
 
 int main(int argc, char** argv) {
   std::string skitti_dir, out_path, csv_path, json_path, fragments_arg = "skip",
-                                                        threshold_arg = "auto";
+                                                         threshold_arg = "auto";
   std::vector<std::string> configs;
   core::ClassifierTrainingParams tp;
   bool loso = true, kdtree = true;
@@ -235,20 +237,34 @@ int main(int argc, char** argv) {
     auto integer = [&](const char* what) {
       return urban_detection::tools::optionCount(argc, argv, &i, what);
     };
-    if (a == "--semantic-kitti") skitti_dir = value("--semantic-kitti");
-    else if (a == "--config") configs.push_back(value("--config"));
-    else if (a == "--out") out_path = value("--out");
-    else if (a == "--csv") csv_path = value("--csv");
-    else if (a == "--json") json_path = value("--json");
-    else if (a == "--no-intensity") tp.use_intensity = false;
-    else if (a == "--trees") tp.trees = static_cast<int>(integer("--trees"));
-    else if (a == "--max-depth") tp.max_depth = static_cast<int>(integer("--max-depth"));
-    else if (a == "--min-samples") tp.min_sample_count = static_cast<int>(integer("--min-samples"));
-    else if (a == "--fragments") fragments_arg = value("--fragments");
-    else if (a == "--threshold") threshold_arg = value("--threshold");
-    else if (a == "--no-loso") loso = false;
-    else if (a == "--no-kdtree") kdtree = false;
-    else if (a == "--max-frames") max_frames = integer("--max-frames");
+    if (a == "--semantic-kitti")
+      skitti_dir = value("--semantic-kitti");
+    else if (a == "--config")
+      configs.push_back(value("--config"));
+    else if (a == "--out")
+      out_path = value("--out");
+    else if (a == "--csv")
+      csv_path = value("--csv");
+    else if (a == "--json")
+      json_path = value("--json");
+    else if (a == "--no-intensity")
+      tp.use_intensity = false;
+    else if (a == "--trees")
+      tp.trees = static_cast<int>(integer("--trees"));
+    else if (a == "--max-depth")
+      tp.max_depth = static_cast<int>(integer("--max-depth"));
+    else if (a == "--min-samples")
+      tp.min_sample_count = static_cast<int>(integer("--min-samples"));
+    else if (a == "--fragments")
+      fragments_arg = value("--fragments");
+    else if (a == "--threshold")
+      threshold_arg = value("--threshold");
+    else if (a == "--no-loso")
+      loso = false;
+    else if (a == "--no-kdtree")
+      kdtree = false;
+    else if (a == "--max-frames")
+      max_frames = integer("--max-frames");
     else if (a == "-h" || a == "--help") {
       usage();
       return 0;
@@ -311,7 +327,8 @@ int main(int argc, char** argv) {
       return 1;
     }
     std::fprintf(csv, "sequence,frame,detector,label,verdict,content");
-    for (int k = 0; k < core::kNumObjectFeatures; ++k) std::fprintf(csv, ",%s", core::featureName(k));
+    for (int k = 0; k < core::kNumObjectFeatures; ++k)
+      std::fprintf(csv, ",%s", core::featureName(k));
     std::fprintf(csv, "\n");
   }
   urban_detection::tools::Frame f;
@@ -366,8 +383,10 @@ int main(int argc, char** argv) {
   std::size_t unlabelled = 0;
   for (const FrameData& fd : frames) {
     for (const auto l : fd.detectors[0].labels) {
-      if (l == core::ObjectCategory::kUnknown) ++unlabelled;
-      else ++label_count[static_cast<int>(l)];
+      if (l == core::ObjectCategory::kUnknown)
+        ++unlabelled;
+      else
+        ++label_count[static_cast<int>(l)];
     }
   }
   std::printf("%zu scans, %zu sequences; training rows (hierarchical grid):", frames.size(),
@@ -418,18 +437,19 @@ int main(int argc, char** argv) {
     std::printf("%-8s %-18s %9s | %-43s | %-43s\n", "seq", "detector", "threshold",
                 "classifier off: NO MO FO P R F", "classifier on: NO MO FO P R F");
     json << "{\n  \"dataset\": \"semantic_kitti\",\n  \"path\": \"" << jsonEscape(skitti_dir)
-         << "\",\n  \"scans\": " << frames.size() << ",\n  \"intensity_features\": "
-         << (tp.use_intensity ? "true" : "false") << ",\n  \"fragments\": \"" << fragments_arg
-         << "\",\n  \"trees\": " << tp.trees << ",\n  \"loso\": {";
+         << "\",\n  \"scans\": " << frames.size()
+         << ",\n  \"intensity_features\": " << (tp.use_intensity ? "true" : "false")
+         << ",\n  \"fragments\": \"" << fragments_arg << "\",\n  \"trees\": " << tp.trees
+         << ",\n  \"loso\": {";
     for (std::size_t k = 0; k < detectors.size(); ++k) {
       json << (k ? ",\n" : "\n") << "    \"" << detectors[k]->name() << "\": {\"sequences\": {";
       bool first = true;
       for (const std::string& g : groups) {
         std::printf("%-8s %-18s %9.2f | %s | %s\n", g.c_str(), detectors[k]->name().c_str(),
                     fold_threshold[g], scoreRow(off[k][g]).c_str(), scoreRow(on[k][g]).c_str());
-        json << (first ? "" : ", ") << "\"" << g << "\": {\"threshold\": "
-             << jsonNumber(fold_threshold[g]) << ", \"off\": " << scoreJson(off[k][g])
-             << ", \"on\": " << scoreJson(on[k][g]) << "}";
+        json << (first ? "" : ", ") << "\"" << g
+             << "\": {\"threshold\": " << jsonNumber(fold_threshold[g])
+             << ", \"off\": " << scoreJson(off[k][g]) << ", \"on\": " << scoreJson(on[k][g]) << "}";
         first = false;
       }
       std::printf("%-8s %-18s %9s | %s | %s\n", "pooled", detectors[k]->name().c_str(), "",

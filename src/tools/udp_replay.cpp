@@ -3,11 +3,11 @@
 // Pacing is by absolute deadlines on the monotonic clock, so a late packet does not shift the
 // ones after it; with --loop the capture restarts one nominal packet gap after its last packet.
 #include <arpa/inet.h>
-#include <csignal>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
+#include <csignal>
 
 #include <cerrno>
 #include <cstdio>
@@ -37,7 +37,9 @@ void usage() {
 }
 
 volatile std::sig_atomic_t g_stop = 0;
-void onStopSignal(int) { g_stop = 1; }
+void onStopSignal(int) {
+  g_stop = 1;
+}
 
 std::int64_t nowNs() {
   timespec ts{};
@@ -62,18 +64,32 @@ int main(int argc, char** argv) {
   bool loop = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--pcap") pcap_path = ud::tools::optionValue(argc, argv, &i, "--pcap");
-    else if (a == "--host") host = ud::tools::optionValue(argc, argv, &i, "--host");
-    else if (a == "--port") port = ud::tools::optionCount(argc, argv, &i, "--port");
-    else if (a == "--rate") rate = ud::tools::optionNumber(argc, argv, &i, "--rate");
-    else if (a == "--duration") duration_s = ud::tools::optionNumber(argc, argv, &i, "--duration");
-    else if (a == "--start-delay") start_delay_s = ud::tools::optionNumber(argc, argv, &i, "--start-delay");
-    else if (a == "--loop") loop = true;
-    else if (a == "-h" || a == "--help") { usage(); return 0; }
-    else { std::fprintf(stderr, "error: unknown option %s\n", a.c_str()); usage(); return 2; }
+    if (a == "--pcap")
+      pcap_path = ud::tools::optionValue(argc, argv, &i, "--pcap");
+    else if (a == "--host")
+      host = ud::tools::optionValue(argc, argv, &i, "--host");
+    else if (a == "--port")
+      port = ud::tools::optionCount(argc, argv, &i, "--port");
+    else if (a == "--rate")
+      rate = ud::tools::optionNumber(argc, argv, &i, "--rate");
+    else if (a == "--duration")
+      duration_s = ud::tools::optionNumber(argc, argv, &i, "--duration");
+    else if (a == "--start-delay")
+      start_delay_s = ud::tools::optionNumber(argc, argv, &i, "--start-delay");
+    else if (a == "--loop")
+      loop = true;
+    else if (a == "-h" || a == "--help") {
+      usage();
+      return 0;
+    } else {
+      std::fprintf(stderr, "error: unknown option %s\n", a.c_str());
+      usage();
+      return 2;
+    }
   }
   if (pcap_path.empty() || port < 1 || port > 65535 || !(rate > 0.0) || start_delay_s < 0.0) {
-    std::fprintf(stderr, "error: needs --pcap, a port in 1..65535, --rate > 0, --start-delay >= 0\n");
+    std::fprintf(stderr,
+                 "error: needs --pcap, a port in 1..65535, --rate > 0, --start-delay >= 0\n");
     return 2;
   }
   sockaddr_in to{};
@@ -131,8 +147,8 @@ int main(int argc, char** argv) {
       if (lateness > 1000000) ++late;
       if (lateness > worst_late_ns) worst_late_ns = lateness;
       if (sendto(fd, packet.data.data(), packet.data.size(), 0,
-                 reinterpret_cast<const sockaddr*>(&to), sizeof(to)) !=
-          static_cast<ssize_t>(packet.data.size())) {
+                 reinterpret_cast<const sockaddr*>(&to),
+                 sizeof(to)) != static_cast<ssize_t>(packet.data.size())) {
         ++errors;
       } else {
         ++sent;

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/detection/object_detector.h"
 
 namespace urban_detection {
 namespace test {
@@ -63,7 +63,8 @@ inline LabeledCloud fromAsciiArt(const std::vector<std::string>& rows,
         const float fx = 0.02f + 0.16f * ((k * 7) % n) / std::max(1, n - 1);
         const float fy = 0.02f + 0.16f * ((k * 3) % n) / std::max(1, n - 1);
         const float z = h - 0.9f * h * static_cast<float>(k) / std::max(1, n);
-        addPoint(&cloud, x0 + 0.2f * c + fx, y0 + 0.2f * r + fy, z, static_cast<std::uint32_t>(obj));
+        addPoint(&cloud, x0 + 0.2f * c + fx, y0 + 0.2f * r + fy, z,
+                 static_cast<std::uint32_t>(obj));
       }
     }
   }

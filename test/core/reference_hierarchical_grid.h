@@ -44,9 +44,9 @@
 #include <utility>
 #include <vector>
 
+#include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/detection/distance_weight.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
-#include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
 namespace reference {
@@ -250,7 +250,8 @@ inline RefHierarchicalOutput detectHierarchical(const LabeledCloud& cloud,
       edges[b].insert(a);
     };
     // Step 3: 8-neighbours and bridges between dense sub-cells of linked super-cells.
-    const int reach_near = p.radial_bridge_subcells + 1, reach_far = p.far_radial_bridge_subcells + 1;
+    const int reach_near = p.radial_bridge_subcells + 1,
+              reach_far = p.far_radial_bridge_subcells + 1;
     const float bridge2 = static_cast<float>(p.bridge_range_m * p.bridge_range_m);
     const float gap2 = static_cast<float>(p.gap_bridge_range_m * p.gap_bridge_range_m);
     for (const Cell& a : dense_cells) {

@@ -208,8 +208,8 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
       cls[c] = SegmentClass::kGround;
       state[c] = kFilled;
       ground[c] = g.mean();
-    } else if (p.curb_cells_ground && state[c] == kReached && g.range() < step && std::fabs(g.z_min - gz) < step &&
-               g.z_max - gz < step && [&] {
+    } else if (p.curb_cells_ground && state[c] == kReached && g.range() < step &&
+               std::fabs(g.z_min - gz) < step && g.z_max - gz < step && [&] {
                  // A kerb inside the cell: its top is the ground of a reached neighbour.
                  const int r = c / side, k = c % side;
                  for (int dr = -1; dr <= 1; ++dr) {
@@ -238,7 +238,8 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
   // cell centres (in cell units) span at most vehicle_max_length_m along every one of 8
   // directions 22.5 deg apart and vehicle_max_width_m along at least one (plus one cell each),
   // and at most half of whose tall cells have their top at the upper edge of the field of view
-  // (the wall-support test), has its tall cells turned short (with the wall support of a short cell).
+  // (the wall-support test), has its tall cells turned short (with the wall support of a short
+  // cell).
   if (p.vehicle_max_height_m > 0.0) {
     const float vmax = static_cast<float>(p.vehicle_max_height_m);
     auto groundOf = [&](int c) { return state[c] != kNone ? ground[c] : 0.0f; };
@@ -330,11 +331,21 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
     if (split && point_z[i] < ground[c] + tol) label = SegmentClass::kGround;
     out.labels[i] = label;
     switch (label) {
-      case SegmentClass::kClutter: ++out.stats.points_clutter; break;
-      case SegmentClass::kGround: ++out.stats.points_ground; break;
-      case SegmentClass::kTall: ++out.stats.points_tall; break;
-      case SegmentClass::kShort: ++out.stats.points_short; break;
-      default: ++out.stats.points_unknown; break;
+      case SegmentClass::kClutter:
+        ++out.stats.points_clutter;
+        break;
+      case SegmentClass::kGround:
+        ++out.stats.points_ground;
+        break;
+      case SegmentClass::kTall:
+        ++out.stats.points_tall;
+        break;
+      case SegmentClass::kShort:
+        ++out.stats.points_short;
+        break;
+      default:
+        ++out.stats.points_unknown;
+        break;
     }
   }
   return out;

@@ -19,8 +19,7 @@ namespace test {
 /// 5000 = 10 m) with intensity `intensity + k * intensity_step`; packet i is stamped
 /// i * stamp_step_us.
 inline std::vector<core::RawPacket> spinPackets(int count, double first_az_deg,
-                                                double deg_per_firing,
-                                                std::uint32_t stamp_step_us,
+                                                double deg_per_firing, std::uint32_t stamp_step_us,
                                                 std::uint8_t intensity = 50,
                                                 std::uint8_t intensity_step = 0,
                                                 std::uint16_t distance_raw = 5000) {

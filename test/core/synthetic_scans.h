@@ -11,8 +11,8 @@
 
 #include <Eigen/Core>
 
-#include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/detection/object_detector.h"
 
 namespace urban_detection {
 namespace test {

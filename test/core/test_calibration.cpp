@@ -12,8 +12,8 @@
 #include <sstream>
 #include <string>
 
-#include "urban_detection/core/sensor/calibration.h"
 #include "test_files.h"
+#include "urban_detection/core/sensor/calibration.h"
 
 namespace uc = urban_detection::core;
 
@@ -25,7 +25,9 @@ std::string sharedCalibration(const std::string& name) {
   return std::string(UD_SHARED_DATA) + "/calibration/" + name;
 }
 
-bool exists(const std::string& path) { return std::ifstream(path).good(); }
+bool exists(const std::string& path) {
+  return std::ifstream(path).good();
+}
 
 using ud_test::TempFile;
 

@@ -162,12 +162,9 @@ TEST(KittiTracking, ReadsLabelsWithDontCareAndScores) {
 TEST(KittiTracking, RefusesMalformedLines) {
   core::KittiTrackingLabel l;
   EXPECT_FALSE(core::parseKittiTrackingLine("0 1 Car 0 0", &l));
-  EXPECT_FALSE(core::parseKittiTrackingLine(
-      "x 1 Car 0 0 0 1 2 3 4 1.5 1.6 3.9 1 2 3 0.1", &l));
-  EXPECT_FALSE(core::parseKittiTrackingLine(
-      "0 1 Car 0 0 0 1 2 3 4 1.5 nan 3.9 1 2 3 0.1", &l));
-  EXPECT_FALSE(core::parseKittiTrackingLine(
-      "0 -2 Car 0 0 0 1 2 3 4 1.5 1.6 3.9 1 2 3 0.1", &l));
+  EXPECT_FALSE(core::parseKittiTrackingLine("x 1 Car 0 0 0 1 2 3 4 1.5 1.6 3.9 1 2 3 0.1", &l));
+  EXPECT_FALSE(core::parseKittiTrackingLine("0 1 Car 0 0 0 1 2 3 4 1.5 nan 3.9 1 2 3 0.1", &l));
+  EXPECT_FALSE(core::parseKittiTrackingLine("0 -2 Car 0 0 0 1 2 3 4 1.5 1.6 3.9 1 2 3 0.1", &l));
   EXPECT_TRUE(core::parseKittiTrackingLine("3 1 Car 0 0 0 1 2 3 4 1.5 1.6 3.9 1 2 3 0.1", &l));
   EXPECT_EQ(l.frame, 3);
   const std::string path = tempPath("bad.txt");
@@ -207,8 +204,7 @@ TEST(KittiTracking, CalibrationAndBoxGeometry) {
 
   // A car 10 m ahead (camera z), 4 m long along the camera x axis (rotation_y 0).
   core::KittiTrackingLabel car;
-  ASSERT_TRUE(core::parseKittiTrackingLine(
-      "0 1 Car 0 0 0 0 0 10 10 1.5 1.8 4.0 0 1.0 10 0", &car));
+  ASSERT_TRUE(core::parseKittiTrackingLine("0 1 Car 0 0 0 0 0 10 10 1.5 1.8 4.0 0 1.0 10 0", &car));
   const Eigen::Vector3d centre = core::kittiTrackingBoxCenterVelo(car, calib);
   EXPECT_TRUE(core::insideKittiTrackingBox(car, calib, centre));
   // Along the length: camera x = -velo y; 1.9 m inside, 2.1 m outside.

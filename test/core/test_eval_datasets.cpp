@@ -13,11 +13,11 @@
 #include <set>
 #include <stdexcept>
 
+#include "test_files.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/sensor/kitti_io.h"
 #include "urban_detection/core/simulation/lidar_simulator.h"
 #include "urban_detection/core/simulation/simulation_config.h"
-#include "test_files.h"
 
 namespace urban_detection {
 namespace core {
@@ -50,7 +50,6 @@ KittiLabel carLabel() {
   return l;
 }
 
-
 TEST(KittiObject, ParsesLabelLine) {
   const KittiLabel l = carLabel();
   EXPECT_EQ(l.type, "Car");
@@ -74,8 +73,8 @@ TEST(KittiObject, BoxCornersInLidarFrameByHand) {
       {13.27, -2.8, -1.78}, {13.27, -1.2, -1.78}, {17.27, -1.2, -1.78}, {17.27, -2.8, -1.78},
       {13.27, -2.8, -0.28}, {13.27, -1.2, -0.28}, {17.27, -1.2, -0.28}, {17.27, -2.8, -0.28}};
   for (int k = 0; k < 8; ++k) {
-    EXPECT_NEAR((c[k] - expected[k]).norm(), 0.0, 1e-9) << "corner " << k << ": "
-                                                         << c[k].transpose();
+    EXPECT_NEAR((c[k] - expected[k]).norm(), 0.0, 1e-9)
+        << "corner " << k << ": " << c[k].transpose();
   }
 }
 
@@ -118,26 +117,26 @@ TEST(KittiObject, GroundTruthRoles) {
   ASSERT_TRUE(parseKittiLabelLine(
       "DontCare -1 -1 -10 690 170 720 190 -1 -1 -1 -1000 -1000 -1000 -10", &dont_care));
   KittiLabel ped;
-  ASSERT_TRUE(parseKittiLabelLine(
-      "Pedestrian 0 0 0 0 0 10 10 1.8 0.6 0.8 -1.0 1.7 8.0 0.0", &ped));
+  ASSERT_TRUE(parseKittiLabelLine("Pedestrian 0 0 0 0 0 10 10 1.8 0.6 0.8 -1.0 1.7 8.0 0.0", &ped));
   CloudXYZIRT cloud;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cloud.push_back(makePoint(15.27f, -2.0f, -1.0f));   // 0 car, 0.78 m above its bottom
   cloud.push_back(makePoint(15.27f, -2.0f, -1.7f));   // 1 car, 0.08 m above bottom: excluded
   cloud.push_back(makePoint(15.27f, -2.85f, -1.0f));  // 2 0.05 m outside the side: within margin
-  cloud.push_back(makePoint(15.27f, -2.95f, -1.0f));  // 3 0.15 m outside: background, u 737.7 v 222.9
-  cloud.push_back(makePoint(-5.0f, 0.0f, 0.0f));      // 4 behind the camera: don't care
-  cloud.push_back(makePoint(1.0f, 10.0f, 0.0f));      // 5 left of the image: don't care
-  cloud.push_back(makePoint(20.27f, -3.0f, 0.0f));    // 6 projects to (705, 177.2): DontCare box
-  cloud.push_back(makePoint(17.2f, -2.0f, -0.35f));   // 7 car, near the top rear corner
-  cloud.push_back(makePoint(17.45f, -2.0f, -1.0f));   // 8 0.18 m behind the car: background
-  cloud.push_back(makePoint(nan, 0.0f, 0.0f));        // 9 non-finite: excluded
-  cloud.push_back(makePoint(8.27f, 1.0f, -1.08f));    // 10 pedestrian: camera (-1.0, 1.0, 8.0)
+  cloud.push_back(
+      makePoint(15.27f, -2.95f, -1.0f));            // 3 0.15 m outside: background, u 737.7 v 222.9
+  cloud.push_back(makePoint(-5.0f, 0.0f, 0.0f));    // 4 behind the camera: don't care
+  cloud.push_back(makePoint(1.0f, 10.0f, 0.0f));    // 5 left of the image: don't care
+  cloud.push_back(makePoint(20.27f, -3.0f, 0.0f));  // 6 projects to (705, 177.2): DontCare box
+  cloud.push_back(makePoint(17.2f, -2.0f, -0.35f));  // 7 car, near the top rear corner
+  cloud.push_back(makePoint(17.45f, -2.0f, -1.0f));  // 8 0.18 m behind the car: background
+  cloud.push_back(makePoint(nan, 0.0f, 0.0f));       // 9 non-finite: excluded
+  cloud.push_back(makePoint(8.27f, 1.0f, -1.08f));   // 10 pedestrian: camera (-1.0, 1.0, 8.0)
   KittiGroundTruthParams params;
   params.min_points = 1;
   EvalFrame gt;
-  buildKittiGroundTruth(cloud, {carLabel(), dont_care, ped}, handCalibration(), params, 1242,
-                        375, &gt);
+  buildKittiGroundTruth(cloud, {carLabel(), dont_care, ped}, handCalibration(), params, 1242, 375,
+                        &gt);
   ASSERT_EQ(gt.objects.size(), 2u);
   EXPECT_EQ(gt.objects[0].label, "Car");
   EXPECT_EQ(gt.objects[1].label, "Pedestrian");
@@ -178,8 +177,8 @@ TEST(FileReaders, PngHeaderAndListing) {
   const fs::path dir = fs::temp_directory_path() / "ud_eval_png_test";
   fs::create_directories(dir);
   // Signature, IHDR chunk length 13, "IHDR", width 0x04DA = 1242, height 0x0177 = 375.
-  const unsigned char png[24] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13,
-                                 'I', 'H', 'D', 'R', 0, 0, 0x04, 0xDA, 0, 0, 0x01, 0x77};
+  const unsigned char png[24] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0,    13,
+                                 'I',  'H', 'D', 'R', 0,    0,    0x04, 0xDA, 0, 0, 0x01, 0x77};
   {
     std::ofstream f((dir / "b.png").string(), std::ios::binary);
     f.write(reinterpret_cast<const char*>(png), sizeof(png));
@@ -225,9 +224,9 @@ TEST(SemanticKitti, GroundTruthFromLabels) {
   std::vector<std::uint32_t> labels;
   for (int i = 0; i < 12; ++i) labels.push_back(lab(10, 5));   // car 5: 12 points
   for (int i = 0; i < 3; ++i) labels.push_back(lab(10, 7));    // car 7: 3 points, too few
-  labels.push_back(lab(10, 0));                                 // car without instance
-  labels.push_back(lab(80, 0));                                 // pole
-  labels.push_back(lab(40, 0));                                 // road
+  labels.push_back(lab(10, 0));                                // car without instance
+  labels.push_back(lab(80, 0));                                // pole
+  labels.push_back(lab(40, 0));                                // road
   for (int i = 0; i < 10; ++i) labels.push_back(lab(252, 5));  // moving car, same instance id
   SemanticKittiGroundTruthParams params;
   params.min_points = 10;
@@ -477,8 +476,8 @@ TEST(SimulatedDrive, VegetationAndTerrainAreScoredBackgroundTrunksPolesSignsDont
 
   std::vector<DetectedObject> dets(3);
   for (int k = 0; k < 3; ++k) {
-    const ObjectClass c = k == 0 ? ObjectClass::kVegetation
-                                 : (k == 1 ? ObjectClass::kTerrain : ObjectClass::kTrunk);
+    const ObjectClass c =
+        k == 0 ? ObjectClass::kVegetation : (k == 1 ? ObjectClass::kTerrain : ObjectClass::kTrunk);
     dets[k].indices.assign(by_class[c].begin(), by_class[c].begin() + 50);
   }
   DetectionEvaluator eval;

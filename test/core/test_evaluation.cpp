@@ -20,9 +20,8 @@ DetectedObject det(std::uint32_t first, std::uint32_t last_inclusive) {
 }
 
 // A frame of `n` points, GT objects given as inclusive index ranges.
-EvalFrame frame(std::size_t n,
-                       const std::vector<std::pair<std::uint32_t, std::uint32_t>>& objects,
-                       std::size_t min_points = 1) {
+EvalFrame frame(std::size_t n, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& objects,
+                std::size_t min_points = 1) {
   EvalFrame gt;
   gt.reset(n);
   for (std::size_t k = 0; k < objects.size(); ++k) {
@@ -186,7 +185,7 @@ TEST(DetectionEvaluator, OutOfRangeIndicesAndEmptyInputs) {
 
 TEST(DetectionEvaluator, AccumulatesOverFrames) {
   DetectionEvaluator ev;
-  ev.evaluate(frame(60, {{0, 29}, {30, 49}}), {det(0, 49)}, nullptr);  // NO 2, MO 1
+  ev.evaluate(frame(60, {{0, 29}, {30, 49}}), {det(0, 49)}, nullptr);   // NO 2, MO 1
   ev.evaluate(frame(40, {{0, 9}}), {det(0, 9), det(30, 39)}, nullptr);  // NO 1, FO 1
   const DetectionScore& t = ev.total();
   EXPECT_EQ(t.no, 3u);

@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "detection_test_utils.h"
+#include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/detection/far_object_merger.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/object_geometry.h"
-#include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
 namespace {

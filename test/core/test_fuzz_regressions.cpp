@@ -9,14 +9,14 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
-#include <vector>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "test_files.h"
 #include "urban_detection/core/sensor/calibration.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/sensor/pcap_io.h"
-#include "test_files.h"
 
 namespace uc = urban_detection::core;
 
@@ -63,7 +63,8 @@ TEST(FuzzRegressions, DbXmlLaserIdOutsideIntRangeIsRejectedByName) {
     const std::string msg = errorOf(f.path());
     EXPECT_NE(msg.find(f.path()), std::string::npos) << id << ": " << msg;
     EXPECT_NE(msg.find("points_ item #5"), std::string::npos) << id << ": " << msg;
-    EXPECT_NE(msg.find("'id_' must be an integer in 0..63"), std::string::npos) << id << ": " << msg;
+    EXPECT_NE(msg.find("'id_' must be an integer in 0..63"), std::string::npos)
+        << id << ": " << msg;
   }
 }
 
@@ -99,7 +100,8 @@ TEST(FuzzRegressions, PcapReaderStaysTruncatedAfterACorruptRecordHeader) {
     writer.write(packet, 1.5e9);
   }
   std::ifstream in(valid_path, std::ios::binary);
-  const std::vector<char> valid((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::vector<char> valid((std::istreambuf_iterator<char>(in)),
+                                std::istreambuf_iterator<char>());
   std::remove(valid_path.c_str());
   ASSERT_GT(valid.size(), 24u + 16u + 1206u);
   // Global header, then a record header claiming 2 GB (libpcap rejects > 256 kB), then the

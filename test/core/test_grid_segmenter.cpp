@@ -23,7 +23,9 @@ using core::SegmentClass;
 
 constexpr float kKittiHeight = 1.73f;
 
-PointXYZIRT pt(float x, float y, float z) { return makePoint(x, y, z, 1.0f); }
+PointXYZIRT pt(float x, float y, float z) {
+  return makePoint(x, y, z, 1.0f);
+}
 
 int countLabel(const std::vector<SegmentClass>& labels, SegmentClass c) {
   int n = 0;
@@ -323,8 +325,8 @@ TEST(GridSegmenter, SparseFarRoadIsGroundOnlyWhenEnabled) {
 // d < 5.7 m: without refinement those cells are short objects.
 struct FacadeScene {
   FacadeScene() {
-    boxes = {{-25.f, 4.f, 0.f, 25.f, 4.4f, 8.f, 1},       // facade along x
-             {6.f, -6.f, 0.f, 10.5f, -4.2f, 1.1f, 2}};     // an isolated low car
+    boxes = {{-25.f, 4.f, 0.f, 25.f, 4.4f, 8.f, 1},     // facade along x
+             {6.f, -6.f, 0.f, 10.5f, -4.2f, 1.1f, 2}};  // an isolated low car
     cloud = test::rayCast(1.2f, boxes, &tags);
     params.sensor_height_m = 1.2;
     params.tall_min_height_m = 1.4;
@@ -359,7 +361,8 @@ TEST(HoughWallRefiner, FacadeSeenOnlyBelowTallThresholdNearTheSensorBecomesTall)
   EXPECT_GT(with.stats().hough.cells_relabeled, 0);
   // The car is left alone.
   int car = 0;
-  for (std::size_t i = 0; i < s.cloud.size(); ++i) car += s.tags[i] == 2 && s.cloud[i].z + 1.2f > above;
+  for (std::size_t i = 0; i < s.cloud.size(); ++i)
+    car += s.tags[i] == 2 && s.cloud[i].z + 1.2f > above;
   EXPECT_GT(car, 100);
   EXPECT_EQ(count(2, SegmentClass::kTall, above), 0);
   EXPECT_GE(count(2, SegmentClass::kShort, above), car - car / 100);
@@ -439,14 +442,10 @@ TEST(HoughWallRefiner, AsciiWallRunIsRelabelledAndCarsAreNot) {
   // 1 m cells. Row 1: a wall, tall at both ends, its middle seen short but reaching the top
   // of the field of view ('!'). Row 4: a wall run broken by a 4 m gap from a car ('sss'):
   // the car is not part of the run. Row 7: cars in a row, never a wall.
-  AsciiGrid g({"................................",
-               "TTTTT!!!!!!!!!!!!!!TTTTTTT......",
-               "................................",
-               "................................",
-               "TTTTTTTTTTTTTT....sss...........",
-               "................................",
-               "................................",
-               "ssss.ssss.ssss.ssss.ssss........",
+  AsciiGrid g({"................................", "TTTTT!!!!!!!!!!!!!!TTTTTTT......",
+               "................................", "................................",
+               "TTTTTTTTTTTTTT....sss...........", "................................",
+               "................................", "ssss.ssss.ssss.ssss.ssss........",
                "................................"});
   core::HoughWallRefinerParams p = asciiRefinerParams();
   core::HoughWallRefiner refiner(p);
@@ -467,8 +466,7 @@ TEST(HoughWallRefiner, AsciiWallRunIsRelabelledAndCarsAreNot) {
   EXPECT_EQ(listed, changed);
   EXPECT_EQ(changed.size(), 14u);
   // Without the wall-support evidence the middle of row 1 is 14 short of 21 cells: rejected.
-  AsciiGrid h({"................................",
-               "TTTTT!!!!!!!!!!!!!!TTTTTTT......",
+  AsciiGrid h({"................................", "TTTTT!!!!!!!!!!!!!!TTTTTTT......",
                "................................"});
   refiner.refine(h.rows, h.cols, 1.0, &h.classes);
   EXPECT_EQ(h.row(1), "TTTTTssssssssssssssTTTTTTT......");
@@ -481,12 +479,9 @@ TEST(HoughWallRefiner, FacadeContinuingARowOfCarsIsAWallAndAVanAmongCarsIsNot) {
   // them supporting (0.64 < 0.8), yet the 16 m supported stretch is a facade (the simulated
   // drive's narrow street). Row 4: a van ('!!!!!', 5 m, truncated by the field of view)
   // between cars: its supported stretch is shorter than a vehicle-proof wall.
-  AsciiGrid g({"................................",
-               "sssssssss.!!!!!!!!!!!!TTTT......",
-               "................................",
-               "................................",
-               "ssss.ssss.!!!!!.ssss.ssss.......",
-               "................................"});
+  AsciiGrid g({"................................", "sssssssss.!!!!!!!!!!!!TTTT......",
+               "................................", "................................",
+               "ssss.ssss.!!!!!.ssss.ssss.......", "................................"});
   core::HoughWallRefinerParams p = asciiRefinerParams();
   p.min_mixed_wall_length_m = 8.0;
   core::HoughWallRefiner refiner(p);
@@ -497,10 +492,8 @@ TEST(HoughWallRefiner, FacadeContinuingARowOfCarsIsAWallAndAVanAmongCarsIsNot) {
 
   // A bin ('ss', short, not truncated by the field of view) against that facade, with a line
   // half width of one cell: the facade's own cells change, the bin and the cars do not.
-  AsciiGrid b({"................................",
-               "..............ss................",
-               "sssssssss.!!!!!!!!!!!!TTTT......",
-               "................................"});
+  AsciiGrid b({"................................", "..............ss................",
+               "sssssssss.!!!!!!!!!!!!TTTT......", "................................"});
   p.line_half_width_cells = 1;
   refiner.setParams(p);
   refiner.refine(b.rows, b.cols, 1.0, &b.classes, &b.support);
@@ -509,8 +502,7 @@ TEST(HoughWallRefiner, FacadeContinuingARowOfCarsIsAWallAndAVanAmongCarsIsNot) {
   p.line_half_width_cells = 0;
 
   // With the mixed-run rule off, the cars veto the facade (the behaviour before it).
-  AsciiGrid h({"................................",
-               "sssssssss.!!!!!!!!!!!!TTTT......",
+  AsciiGrid h({"................................", "sssssssss.!!!!!!!!!!!!TTTT......",
                "................................"});
   p.min_mixed_wall_length_m = 0.0;
   refiner.setParams(p);
@@ -588,10 +580,12 @@ TEST(GridSegmenter, ReusedSegmenterMatchesAFreshOne) {
   // Scratch buffers are reset between frames: frame B after frame A gives exactly what a
   // fresh segmenter gives on B.
   std::vector<int> tags;
-  CloudXYZIRT a = test::rayCast(kKittiHeight, {{-25.f, 6.f, 0.f, 25.f, 6.5f, 6.f, 1},
-                                               {5.f, -4.f, 0.f, 9.5f, -2.2f, 1.5f, 2}}, &tags);
-  CloudXYZIRT b = test::rayCast(kKittiHeight, {{10.f, -20.f, 0.f, 10.5f, 20.f, 4.f, 1},
-                                               {-9.f, 2.f, 0.f, -4.5f, 3.8f, 1.6f, 2}}, &tags);
+  CloudXYZIRT a = test::rayCast(
+      kKittiHeight, {{-25.f, 6.f, 0.f, 25.f, 6.5f, 6.f, 1}, {5.f, -4.f, 0.f, 9.5f, -2.2f, 1.5f, 2}},
+      &tags);
+  CloudXYZIRT b = test::rayCast(
+      kKittiHeight,
+      {{10.f, -20.f, 0.f, 10.5f, 20.f, 4.f, 1}, {-9.f, 2.f, 0.f, -4.5f, 3.8f, 1.6f, 2}}, &tags);
   GridSegmenter reused, fresh;
   std::vector<SegmentClass> la, lb, lf;
   reused.segment(a, &la);

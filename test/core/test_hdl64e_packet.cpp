@@ -381,7 +381,9 @@ void roundTrip(const uc::Calibration& cal, int trials_per_laser) {
 
 }  // namespace
 
-TEST(Hdl64eRoundTrip, NominalGeometry) { roundTrip(uc::Calibration::nominalHdl64eS2(), 60); }
+TEST(Hdl64eRoundTrip, NominalGeometry) {
+  roundTrip(uc::Calibration::nominalHdl64eS2(), 60);
+}
 
 TEST(Hdl64eRoundTrip, SztakiCalibration) {
   const std::string path = std::string(UD_SHARED_DATA) + "/calibration/64e_s2.1-sztaki.yaml";
@@ -537,7 +539,8 @@ TEST(RevolutionCutter, ReorderedAndStrayPacketsDoNotCut) {
   std::vector<std::uint16_t> strays;
   for (std::size_t i = 0; i < az.size(); ++i) {
     strays.push_back(az[i]);
-    if (i % 347 == 200) strays.push_back(i < 347 ? 10 : static_cast<std::uint16_t>((az[i] + 18000) % 36000));
+    if (i % 347 == 200)
+      strays.push_back(i < 347 ? 10 : static_cast<std::uint16_t>((az[i] + 18000) % 36000));
   }
   steps.clear();
   EXPECT_EQ(cuts(strays, &steps).size(), 3u);
@@ -604,7 +607,8 @@ TEST(PacketDecoder, OtherModelsAreRefusedAndNamed) {
   p[1205] = 0x21;
   EXPECT_EQ(uc::velodyneModelName(p.data(), p.size()), "HDL-32E (dual return)");
   p[1205] = 0x99;
-  EXPECT_EQ(uc::velodyneModelName(p.data(), p.size()), "an unknown model (factory bytes 0x39 0x99)");
+  EXPECT_EQ(uc::velodyneModelName(p.data(), p.size()),
+            "an unknown model (factory bytes 0x39 0x99)");
   uc::PacketDecoder decoder(cal, uc::DecoderParams());
   CloudXYZIRT cloud;
   uc::DecodeStats stats;

@@ -12,9 +12,9 @@
 #include <stdexcept>
 
 #include "detection_test_utils.h"
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
-#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 namespace urban_detection {
 namespace {
@@ -279,8 +279,8 @@ TEST(HierarchicalGridFilters, WeightedPointCountDropsNearFragmentsKeepsSparseFar
   ASSERT_DOUBLE_EQ(shipped.min_weighted_points, 60.0);
   LabeledCloud cloud;
   for (int i = 0; i < 40; ++i) {  // 2 x 2 sub-cells around (5.1, 0.1), 10 points each
-    test::addPoint(&cloud, 5.05f + 0.1f * (i % 4), 0.05f + 0.1f * ((i / 4) % 4),
-                   -1.0f + 0.01f * i, 1);
+    test::addPoint(&cloud, 5.05f + 0.1f * (i % 4), 0.05f + 0.1f * ((i / 4) % 4), -1.0f + 0.01f * i,
+                   1);
   }
   for (int i = 0; i < 24; ++i) {  // 2 x 1 sub-cells around (40.1, 0.1), 12 points each
     test::addPoint(&cloud, 40.05f + 0.1f * (i % 4), 0.05f + 0.05f * ((i / 4) % 3),

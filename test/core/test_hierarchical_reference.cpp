@@ -21,15 +21,15 @@
 
 #include "detection_test_utils.h"
 #include "reference_hierarchical_grid.h"
-#include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/detection/far_object_merger.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/object_geometry.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
-#include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/sensor/kitti_io.h"
 #include "urban_detection/core/simulation/lidar_simulator.h"
-#include "urban_detection/core/detection/object_geometry.h"
-#include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/simulation/scene_generator.h"
 #include "urban_detection/core/simulation/simulation_config.h"
 
@@ -96,8 +96,7 @@ std::size_t expectSameAsReference(HierarchicalGridDetector* det, const LabeledCl
   }
   EXPECT_EQ(differ, 0u) << what << ": first differing object " << first << " ("
                         << (first < n ? objects[first].indices.size() : 0) << " points vs "
-                        << (first < n ? expected[first].indices.size() : 0)
-                        << " in the reference)";
+                        << (first < n ? expected[first].indices.size() : 0) << " in the reference)";
   // Same partition whatever the order, to tell an order problem from a rule problem.
   if (differ != 0 || objects.size() != expected.size()) {
     EXPECT_EQ(test::partitionOf(objects), test::partitionOf(expected)) << what << ": partition";
@@ -174,9 +173,8 @@ std::vector<HierarchicalGridDetectorParams> variants() {
 HierarchicalGridDetectorParams shippedParams() {
   HierarchicalGridDetectorParams p;
   std::string err;
-  EXPECT_TRUE(core::loadPipelineParamsYaml(std::string(UD_SOURCE_DIR) +
-                                               "/config/hierarchical_grid.yaml",
-                                           nullptr, &p, nullptr, &err))
+  EXPECT_TRUE(core::loadPipelineParamsYaml(
+      std::string(UD_SOURCE_DIR) + "/config/hierarchical_grid.yaml", nullptr, &p, nullptr, &err))
       << err;
   return p;
 }
@@ -187,23 +185,48 @@ HierarchicalGridDetectorParams shippedParams() {
 class SceneMaker {
  public:
   SceneMaker(unsigned seed, const HierarchicalGridDetectorParams& p)
-      : rng_(seed), p_(p), edge_(static_cast<float>(
-                               std::ceil(p.grid_half_extent_m / p.coarse_cell_m) * p.coarse_cell_m)) {}
+      : rng_(seed),
+        p_(p),
+        edge_(static_cast<float>(std::ceil(p.grid_half_extent_m / p.coarse_cell_m) *
+                                 p.coarse_cell_m)) {}
 
   LabeledCloud make() {
     const int elements = 4 + pick(20);
     for (int e = 0; e < elements; ++e) {
       switch (pick(10)) {
-        case 0: blob(); break;
-        case 1: if (pick(3) == 0) car(); else blob(); break;
-        case 2: roofRing(); break;
-        case 3: farSparse(); break;
-        case 4: onBorders(); break;
-        case 5: atGridEdge(); break;
-        case 6: invalid(); break;
-        case 7: straddling(); break;
-        case 8: nearSensor(); break;
-        default: scatter(); break;
+        case 0:
+          blob();
+          break;
+        case 1:
+          if (pick(3) == 0)
+            car();
+          else
+            blob();
+          break;
+        case 2:
+          roofRing();
+          break;
+        case 3:
+          farSparse();
+          break;
+        case 4:
+          onBorders();
+          break;
+        case 5:
+          atGridEdge();
+          break;
+        case 6:
+          invalid();
+          break;
+        case 7:
+          straddling();
+          break;
+        case 8:
+          nearSensor();
+          break;
+        default:
+          scatter();
+          break;
       }
     }
     // Half of the scenes in a shuffled order (ids follow the first point; the weighted sums
@@ -310,10 +333,18 @@ class SceneMaker {
       if (k % 19 == 0) u = std::nextafter(edge_, 0.0f);
       const float v = along + uni(-1.0f, 1.0f), z = k == 0 ? top : uni(-1.6f, top);
       switch (side) {
-        case 0: add(u, v, z); break;
-        case 1: add(-u, v, z); break;
-        case 2: add(v, u, z); break;
-        default: add(v, -u, z); break;
+        case 0:
+          add(u, v, z);
+          break;
+        case 1:
+          add(-u, v, z);
+          break;
+        case 2:
+          add(v, u, z);
+          break;
+        default:
+          add(v, -u, z);
+          break;
       }
     }
   }
@@ -322,8 +353,8 @@ class SceneMaker {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const float inf = std::numeric_limits<float>::infinity();
     const float big = static_cast<float>(p_.max_abs_z_m) * 1.5f;
-    const float bad[][3] = {{nan, 1, 0}, {1, nan, 0}, {1, 2, nan}, {inf, 0, 0},
-                            {0, -inf, 0}, {3, 3, inf}, {3, 3, big}, {5, -2, -big},
+    const float bad[][3] = {{nan, 1, 0},   {1, nan, 0},     {1, 2, nan}, {inf, 0, 0},
+                            {0, -inf, 0},  {3, 3, inf},     {3, 3, big}, {5, -2, -big},
                             {1e30f, 1, 0}, {-1e9f, 1e9f, 0}};
     for (int k = 0; k < 1 + pick(10); ++k) {
       const float* b = bad[pick(10)];
@@ -510,7 +541,8 @@ TEST(HierarchicalReference, SemanticKittiScansMatchTheReference) {
     objects += expectSameAsReference(&shipped, foreground, files[f]);
     if (f % 10 == 0) {
       for (std::size_t k = 0; k < others.size(); ++k) {
-        expectSameAsReference(others[k].get(), foreground, files[f] + " variant " + std::to_string(k));
+        expectSameAsReference(others[k].get(), foreground,
+                              files[f] + " variant " + std::to_string(k));
       }
     }
     if (HasFailure()) return;

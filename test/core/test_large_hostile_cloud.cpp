@@ -13,9 +13,9 @@
 #include <random>
 #include <vector>
 
-#include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
 
 namespace urban_detection {
 namespace {
@@ -57,7 +57,8 @@ Scene buildScene() {
   }
   // Post: 3000 points in a 10 cm column 0.3-1.0 m above the road, all in one 0.5 m grid cell.
   for (int k = 0; k < 3000; ++k) {
-    add(&s, -8.2f + 0.001f * static_cast<float>(k % 100), -8.2f + 0.01f * static_cast<float>(k % 10),
+    add(&s, -8.2f + 0.001f * static_cast<float>(k % 100),
+        -8.2f + 0.01f * static_cast<float>(k % 10),
         kGroundZ + 0.3f + 0.7f * static_cast<float>(k) / 3000.0f, kTagPost);
   }
   // Hostile points: NaN, +-inf, 1e30 and far outside the grid, 10000 of each kind.
@@ -139,8 +140,8 @@ TEST(LargeHostileCloud, TwoMillionPointsSegmentAndDetectExactly) {
   std::vector<core::DetectedObject> objects;
   core::HierarchicalGridDetector grid;
   grid.detect(foreground, &objects);
-  EXPECT_EQ(partition(objects), expected_objects) << "hierarchical grid: " << objects.size()
-                                                  << " objects";
+  EXPECT_EQ(partition(objects), expected_objects)
+      << "hierarchical grid: " << objects.size() << " objects";
   core::KdTreeDetector kdtree;
   kdtree.detect(foreground, &objects);
   EXPECT_EQ(partition(objects), expected_objects) << "kd-tree: " << objects.size() << " objects";

@@ -8,11 +8,11 @@
 #include <map>
 #include <set>
 
-#include "urban_detection/core/simulation/ground_truth.h"
+#include "test_files.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/simulation/ground_truth.h"
 #include "urban_detection/core/simulation/lidar_simulator.h"
 #include "urban_detection/core/simulation/simulation_config.h"
-#include "test_files.h"
 
 namespace ud = urban_detection::core;
 using Eigen::Vector3d;
@@ -26,9 +26,8 @@ ud::SimulationConfig demoConfig() {
 }
 
 std::unique_ptr<ud::LidarSimulator> makeSim(const ud::SimulationConfig& c) {
-  return std::make_unique<ud::LidarSimulator>(ud::generateScene(c.scene, c.drive), c.scene,
-                                              c.drive, ud::Calibration::nominalHdl64eS2(),
-                                              c.sensor);
+  return std::make_unique<ud::LidarSimulator>(ud::generateScene(c.scene, c.drive), c.scene, c.drive,
+                                              ud::Calibration::nominalHdl64eS2(), c.sensor);
 }
 
 // Decodes a revolution the way PacketToCloud does (packet time relative to the scan stamp).
@@ -39,8 +38,7 @@ void decodeRevolution(const ud::SimRevolution& rev, const ud::PacketDecoder& dec
   for (std::size_t i = 0; i < rev.packets.size(); ++i) {
     ud::DecodeStats stats;
     ASSERT_EQ(decoder.decode(rev.packets[i].data(), rev.packets[i].size(),
-                             rev.packet_stamps_s[i] - rev.stamp_s, cloud, &stats, lasers,
-                             azimuths),
+                             rev.packet_stamps_s[i] - rev.stamp_s, cloud, &stats, lasers, azimuths),
               ud::PacketStatus::kOk);
   }
 }
@@ -268,8 +266,9 @@ TEST(LidarSimulator, IntensitiesSpreadByMaterial) {
       b.n += 1, b.sum += p.intensity, b.sq += p.intensity * p.intensity;
     }
   }
-  for (auto cls : {ud::ObjectClass::kCar, ud::ObjectClass::kPedestrian, ud::ObjectClass::kVegetation,
-                   ud::ObjectClass::kTerrain, ud::ObjectClass::kWall, ud::ObjectClass::kGround}) {
+  for (auto cls :
+       {ud::ObjectClass::kCar, ud::ObjectClass::kPedestrian, ud::ObjectClass::kVegetation,
+        ud::ObjectClass::kTerrain, ud::ObjectClass::kWall, ud::ObjectClass::kGround}) {
     ASSERT_GT(acc[cls].n, 200) << ud::toString(cls);
   }
   const double car = acc[ud::ObjectClass::kCar].sd(), veg = acc[ud::ObjectClass::kVegetation].sd();
@@ -443,9 +442,9 @@ TEST(LidarSimulator, RejectsInvalidSensorParams) {
            [](ud::SimSensorParams* s) { s->dropout_probability = 1.5; }}) {
     ud::SimSensorParams s = c.sensor;
     mutate(&s);
-    EXPECT_THROW(ud::LidarSimulator(ud::Scene(), c.scene, c.drive,
-                                    ud::Calibration::nominalHdl64eS2(), s),
-                 std::invalid_argument);
+    EXPECT_THROW(
+        ud::LidarSimulator(ud::Scene(), c.scene, c.drive, ud::Calibration::nominalHdl64eS2(), s),
+        std::invalid_argument);
   }
 }
 
@@ -490,7 +489,8 @@ TEST(GroundTruthFile, RoundTripAndCorruptFiles) {
   std::ifstream in(path, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string cut = ud_test::tempPath("gt_cut.udgt");
-  std::ofstream(cut, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size() - 100));
+  std::ofstream(cut, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size() - 100));
   ud::GroundTruthReader r(cut);
   ud::GroundTruthFrame f;
   EXPECT_EQ(r.next(&f), ud::GroundTruthReader::Result::kFrame);

@@ -13,11 +13,11 @@
 
 #include <gtest/gtest.h>
 
+#include "synthetic_scans.h"
+#include "test_files.h"
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_features.h"
 #include "urban_detection/core/params/params_yaml.h"
-#include "synthetic_scans.h"
-#include "test_files.h"
 
 namespace core = urban_detection::core;
 using urban_detection::LabeledCloud;
@@ -88,7 +88,7 @@ TEST(ObjectFeatures, VerticalPlaneHasKnownGeometryAndIntensity) {
   EXPECT_NEAR(f[core::kFeatProfile0] + f[core::kFeatProfile1] + f[core::kFeatProfile2] +
                   f[core::kFeatProfile3],
               1.0, 1e-5);
-  EXPECT_NEAR(f[core::kFeatBelow05], 5.0 / 16.0, 1e-4);   // rows at 0.0 .. 0.4 m
+  EXPECT_NEAR(f[core::kFeatBelow05], 5.0 / 16.0, 1e-4);  // rows at 0.0 .. 0.4 m
   EXPECT_NEAR(f[core::kFeatAbove15], 0.0, 1e-4);
   EXPECT_NEAR(f[core::kFeatIntensityMean], 20.0, 0.05);
   EXPECT_NEAR(f[core::kFeatIntensityStd], 10.0, 0.05);
@@ -124,10 +124,18 @@ TEST(ObjectFeatures, SelectRanksEqualsTheSortedValues) {
     std::vector<float> values(n);
     for (float& v : values) {
       switch (trial % 4) {
-        case 0: v = static_cast<float>(rng() % 256); break;
-        case 1: v = std::uniform_real_distribution<float>(0.0f, 255.0f)(rng); break;
-        case 2: v = std::uniform_real_distribution<float>(-50.0f, 400.0f)(rng); break;
-        default: v = static_cast<float>(rng() % 3) * 0.25f + 7.0f; break;
+        case 0:
+          v = static_cast<float>(rng() % 256);
+          break;
+        case 1:
+          v = std::uniform_real_distribution<float>(0.0f, 255.0f)(rng);
+          break;
+        case 2:
+          v = std::uniform_real_distribution<float>(-50.0f, 400.0f)(rng);
+          break;
+        default:
+          v = static_cast<float>(rng() % 3) * 0.25f + 7.0f;
+          break;
       }
     }
     std::vector<std::size_t> ranks = {static_cast<std::size_t>(0.1 * n),
@@ -176,11 +184,10 @@ namespace {
 void toyData(std::vector<core::ObjectFeatureVector>* x, std::vector<core::ObjectCategory>* y) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  const core::ObjectCategory cats[] = {core::ObjectCategory::kNonObject,
-                                       core::ObjectCategory::kVehicle,
-                                       core::ObjectCategory::kPedestrian,
-                                       core::ObjectCategory::kCyclist,
-                                       core::ObjectCategory::kOtherObject};
+  const core::ObjectCategory cats[] = {
+      core::ObjectCategory::kNonObject, core::ObjectCategory::kVehicle,
+      core::ObjectCategory::kPedestrian, core::ObjectCategory::kCyclist,
+      core::ObjectCategory::kOtherObject};
   for (int i = 0; i < 400; ++i) {
     const int c = i % 5;
     core::ObjectFeatureVector f;
@@ -449,9 +456,8 @@ TEST(ObjectClassifier, YamlSectionResolvesTheModelBesideTheFile) {
 TEST(ObjectClassifier, ShippedConfigNamesTheShippedModel) {
   core::ObjectClassifierParams p;
   std::string err;
-  ASSERT_TRUE(core::loadObjectClassifierParamsYaml(std::string(UD_SOURCE_DIR) +
-                                                       "/config/classification.yaml",
-                                                   &p, &err))
+  ASSERT_TRUE(core::loadObjectClassifierParamsYaml(
+      std::string(UD_SOURCE_DIR) + "/config/classification.yaml", &p, &err))
       << err;
   EXPECT_TRUE(p.enabled);
   const core::ObjectClassifierModel m = core::ObjectClassifierModel::load(p.model_path);

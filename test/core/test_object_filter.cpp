@@ -7,17 +7,17 @@
 #include <functional>
 #include <limits>
 #include <random>
-#include <string>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
-#include "urban_detection/core/classification/object_filter.h"
-#include "urban_detection/core/params/params_yaml.h"
 #include "synthetic_scans.h"
 #include "test_files.h"
+#include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/params/params_yaml.h"
 
 namespace core = urban_detection::core;
 using urban_detection::LabeledCloud;
@@ -269,8 +269,8 @@ TEST(ObjectFilter, UniformMaterialRuleIsOffByDefaultAndKeepsMixedObjects) {
       scan(box({8.0, -6.0, -1.73}, {8.6, -2.0, -0.5}), -40, -10, -14, 0, &s.fg, 0.09, 0.4, 90.0f));
   s.objects.push_back(
       scan(box({8.0, 5.0, -1.6}, {12.2, 6.8, -0.3}), 25, 45, -14, 0, &s.fg, 0.09, 0.4, 20.0f));
-  s.objects.push_back(scan(box({40.0, -1.0, -1.73}, {40.6, 1.0, -0.5}), -2, 2, -8, 0, &s.fg, 0.09,
-                           0.4, 90.0f));
+  s.objects.push_back(
+      scan(box({40.0, -1.0, -1.73}, {40.6, 1.0, -0.5}), -2, 2, -8, 0, &s.fg, 0.09, 0.4, 90.0f));
   for (std::size_t k = 0; k < s.fg.size(); ++k) {
     s.fg.points[k].intensity += (k % 2 ? 10.0f : -10.0f);
   }

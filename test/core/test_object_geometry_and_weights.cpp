@@ -20,8 +20,9 @@ namespace urban_detection {
 namespace {
 
 TEST(ObjectGeometry, HullOfASquareWithInteriorPoints) {
-  std::vector<Eigen::Vector2f> pts = {{0, 0}, {2, 0}, {2, 2}, {0, 2}, {1, 1}, {0.5f, 1.5f},
-                                      {1, 0}, {2, 2}};  // an edge point and a duplicate
+  std::vector<Eigen::Vector2f> pts = {
+      {0, 0}, {2, 0},       {2, 2}, {0, 2},
+      {1, 1}, {0.5f, 1.5f}, {1, 0}, {2, 2}};  // an edge point and a duplicate
   std::vector<Eigen::Vector2f> hull;
   core::convexHull2d(&pts, &hull);
   ASSERT_EQ(hull.size(), 4u);
@@ -558,8 +559,8 @@ TEST(DistanceWeight, WeightIsOneNearClampedFarAndInverseOfTheFittedDensity) {
   const core::DistanceWeight w(p);
   EXPECT_DOUBLE_EQ(w.exact(0.0), 1.0);
   EXPECT_NEAR(w.exact(50.0), 1.0 / 0.5, 1e-12);
-  EXPECT_DOUBLE_EQ(w.exact(79.0), 4.0);          // 1 / 0.21 clamped
-  EXPECT_NEAR(w(50.0f), 2.0f, 2.0f * 0.0006f);   // table: half a 5 cm step of distance
+  EXPECT_DOUBLE_EQ(w.exact(79.0), 4.0);         // 1 / 0.21 clamped
+  EXPECT_NEAR(w(50.0f), 2.0f, 2.0f * 0.0006f);  // table: half a 5 cm step of distance
   p.log_fit = true;
   p.coefficients = {0.0, -0.05};  // f(d) = exp(-0.05 d), normalised at d0 = 10 m
   p.full_density_distance_m = 10.0;

@@ -27,8 +27,8 @@ class FieldTable : public ::testing::Test {};
 using Structs =
     ::testing::Types<GridSegmenterParams, HoughWallRefinerParams, HierarchicalGridDetectorParams,
                      DistanceWeightParams, FarObjectMergerParams, KdTreeDetectorParams,
-                     ObjectFilterParams, ObjectClassifierParams, TrackerParams,
-                     CameraFusionParams, ImageLabelTransferParams>;
+                     ObjectFilterParams, ObjectClassifierParams, TrackerParams, CameraFusionParams,
+                     ImageLabelTransferParams>;
 TYPED_TEST_SUITE(FieldTable, Structs);
 
 // Unique names, a description each, finite ordered ranges around the in-class default.
@@ -99,15 +99,13 @@ TYPED_TEST(FieldTable, ValidateRefusesEveryFieldOutsideItsRange) {
 TEST(FieldTables, NestedStructsAreNamedWithTheirPrefix) {
   std::set<std::string> names;
   const HierarchicalGridDetectorParams hier;
-  forEachField(hier,
-               [&](const FieldInfo& info, const auto&) { names.insert(info.name); });
+  forEachField(hier, [&](const FieldInfo& info, const auto&) { names.insert(info.name); });
   EXPECT_TRUE(names.count("psi_max_m"));
   EXPECT_TRUE(names.count("weight/coefficients"));
   EXPECT_TRUE(names.count("far_merge/max_gap_m"));
   names.clear();
   const GridSegmenterParams seg;
-  forEachField(seg,
-               [&](const FieldInfo& info, const auto&) { names.insert(info.name); });
+  forEachField(seg, [&](const FieldInfo& info, const auto&) { names.insert(info.name); });
   EXPECT_TRUE(names.count("hough/votes"));
   EXPECT_FALSE(names.count("votes"));
 }
@@ -187,7 +185,8 @@ TEST(FieldTables, YamlReaderTakesEveryTableKeyAndRejectsOthers) {
   EXPECT_EQ(p.weight.coefficients, (std::vector<double>{1.0, 0.5}));
   fs::remove(f);
 
-  const std::string stray = writeTemp("stray.yaml", "hierarchical_grid:\n  far_merge:\n    gap: 1\n");
+  const std::string stray =
+      writeTemp("stray.yaml", "hierarchical_grid:\n  far_merge:\n    gap: 1\n");
   EXPECT_FALSE(loadHierarchicalGridParamsYaml(stray, &p, &err));
   EXPECT_NE(err.find("far_merge/gap: unknown parameter"), std::string::npos) << err;
   const std::string flat = writeTemp("flat.yaml", "hierarchical_grid:\n  weight: 3\n");

@@ -94,9 +94,9 @@ TEST(ParamsYaml, DetectionFileAndAutoDetection) {
   EXPECT_DOUBLE_EQ(seg.cell_size_m, 0.4);
   EXPECT_DOUBLE_EQ(hier.coarse_cell_m, 0.5);
   // A combined file.
-  const std::string c = writeTemp(
-      "h.yaml", "segmentation:\n  cell_size_m: 0.6\ndetection:\n  kdtree:\n"
-                "    min_cluster_size: 9\n");
+  const std::string c = writeTemp("h.yaml",
+                                  "segmentation:\n  cell_size_m: 0.6\ndetection:\n  kdtree:\n"
+                                  "    min_cluster_size: 9\n");
   ASSERT_TRUE(loadPipelineParamsYaml(c, &seg, &hier, &kd, &err)) << err;
   EXPECT_DOUBLE_EQ(seg.cell_size_m, 0.6);
   EXPECT_EQ(kd.min_cluster_size, 9);

@@ -11,16 +11,18 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/sensor/hdl64e_packet.h"
-#include "urban_detection/core/sensor/pcap_io.h"
 #include "spin_packets.h"
 #include "test_files.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/pcap_io.h"
 
 namespace uc = urban_detection::core;
 
 namespace {
 
-std::string tempPath(const std::string& name) { return ud_test::tempPath("pcap_" + name); }
+std::string tempPath(const std::string& name) {
+  return ud_test::tempPath("pcap_" + name);
+}
 
 // Packets of a sensor looking at a 10 m cylinder, azimuth advancing 0.2 deg per firing.
 std::vector<uc::RawPacket> makePackets(int count) {
@@ -323,7 +325,7 @@ std::string writeSpin(const std::string& name, double first_az_deg, int packets,
     if (garbage_and_stray && i == kPacketsPerRev + 100) {
       uc::RawPacket garbage;
       garbage.fill(0x5A);
-      writer.write(garbage, t);                                      // invalid
+      writer.write(garbage, t);                                  // invalid
       writer.write(spin[static_cast<std::size_t>(i + 170)], t);  // 180 deg ahead: a stray
     }
   }

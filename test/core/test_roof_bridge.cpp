@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "detection_test_utils.h"
-#include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
 
 namespace urban_detection {
 namespace {

@@ -9,9 +9,9 @@
 
 #include <gtest/gtest.h>
 
+#include "test_files.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/sensor/kitti_io.h"
-#include "test_files.h"
 
 namespace urban_detection {
 namespace {

@@ -64,12 +64,24 @@ CloudXYZIRT syntheticStreet(unsigned seed, std::size_t invalid_from = 0) {
   for (std::size_t i = 0; i < cloud.size(); i += 97) {
     if (i < invalid_from) continue;
     switch ((i / 97) % 6) {
-      case 0: cloud[i].x = nan; break;
-      case 1: cloud[i].z = inf; break;
-      case 2: cloud[i].z = -inf; break;
-      case 3: cloud[i].z = nan; break;
-      case 4: cloud[i].y = 500.0f; break;
-      default: cloud[i].z = 80.0f; break;
+      case 0:
+        cloud[i].x = nan;
+        break;
+      case 1:
+        cloud[i].z = inf;
+        break;
+      case 2:
+        cloud[i].z = -inf;
+        break;
+      case 3:
+        cloud[i].z = nan;
+        break;
+      case 4:
+        cloud[i].y = 500.0f;
+        break;
+      default:
+        cloud[i].z = 80.0f;
+        break;
     }
   }
   return cloud;
@@ -206,8 +218,12 @@ namespace {
 // integer division for every index, checked at each row boundary (where rounding would show)
 // for small, default and large grids (2000 x 2000 cells).
 TEST(SimpleGridIndex, RowAndColumnEqualIntegerDivisionAtEveryRowBoundary) {
-  for (const auto& geometry : {std::pair<double, double>{1.0, 3.0}, {0.5, 80.0}, {0.4, 50.0},
-                               {0.25, 250.0}, {0.05, 20.0}, {0.3, 97.3}}) {
+  for (const auto& geometry : {std::pair<double, double>{1.0, 3.0},
+                               {0.5, 80.0},
+                               {0.4, 50.0},
+                               {0.25, 250.0},
+                               {0.05, 20.0},
+                               {0.3, 97.3}}) {
     core::SimpleGridParams p;
     p.cell_size_m = geometry.first;
     p.max_range_m = geometry.second;

@@ -4,11 +4,11 @@
 
 #include <cstdio>
 
-#include "urban_detection/core/simulation/ground_truth.h"
+#include "test_files.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/sensor/pcap_io.h"
+#include "urban_detection/core/simulation/ground_truth.h"
 #include "urban_detection/core/simulation/simulation_config.h"
-#include "test_files.h"
 
 namespace ud = urban_detection::core;
 

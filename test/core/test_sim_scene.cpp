@@ -221,7 +221,8 @@ TEST_F(GeneratedScene, HardCasesOfTheDetectionPaperArePresent) {
     for (const ud::SceneObject& b : scene_.objects) {
       if (b.instance_id <= a.instance_id || b.velocity.norm() > 0) continue;
       const double g = gapXY(ba, scene_.objectBounds(b.instance_id, 0.0));
-      if (is(a, ud::ObjectClass::kCar) && is(b, ud::ObjectClass::kCar) && g < 0.6) close_cars = true;
+      if (is(a, ud::ObjectClass::kCar) && is(b, ud::ObjectClass::kCar) && g < 0.6)
+        close_cars = true;
       if (((is(a, ud::ObjectClass::kCar) && is(b, ud::ObjectClass::kPedestrian)) ||
            (is(b, ud::ObjectClass::kCar) && is(a, ud::ObjectClass::kPedestrian))) &&
           g < 0.6) {
@@ -324,10 +325,11 @@ TEST(SimConfig, DemoDriveFileParsesAndTyposAreRejected) {
   EXPECT_NO_THROW(ud::parseSimulationConfig(""));
   // The vegetation block mirrors VegetationParams, with the same checks.
   EXPECT_TRUE(c.scene.vegetation.enabled);
-  EXPECT_DOUBLE_EQ(c.scene.vegetation.hedge_transmission, ud::VegetationParams().hedge_transmission);
-  EXPECT_DOUBLE_EQ(
-      ud::parseSimulationConfig("scene: {vegetation: {crown_transmission: 0.7}}").scene.vegetation.crown_transmission,
-      0.7);
+  EXPECT_DOUBLE_EQ(c.scene.vegetation.hedge_transmission,
+                   ud::VegetationParams().hedge_transmission);
+  EXPECT_DOUBLE_EQ(ud::parseSimulationConfig("scene: {vegetation: {crown_transmission: 0.7}}")
+                       .scene.vegetation.crown_transmission,
+                   0.7);
   EXPECT_THROW(ud::parseSimulationConfig("scene: {vegetation: {hedge_trasmission: 0.1}}"),
                std::invalid_argument);
   try {
@@ -336,9 +338,10 @@ TEST(SimConfig, DemoDriveFileParsesAndTyposAreRejected) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("bush_transmission"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(ud::parseSimulationConfig(
-                   "scene: {vegetation: {canopy_clearance_min_m: 3.0, canopy_clearance_max_m: 2.0}}"),
-               std::invalid_argument);
+  EXPECT_THROW(
+      ud::parseSimulationConfig(
+          "scene: {vegetation: {canopy_clearance_min_m: 3.0, canopy_clearance_max_m: 2.0}}"),
+      std::invalid_argument);
 }
 
 // ---- vegetation (issue 23) ---------------------------------------------------------------------
@@ -353,7 +356,9 @@ bool isTree(const ud::Scene& s, const ud::SceneObject& o) {
 }
 
 // Lowest point of an unrotated-in-z-axis ellipsoid or box (all the generator makes).
-double lowestZ(const ud::Primitive& p) { return p.bounds().min().z(); }
+double lowestZ(const ud::Primitive& p) {
+  return p.bounds().min().z();
+}
 
 }  // namespace
 
@@ -393,8 +398,9 @@ TEST_F(GeneratedScene, DefaultStreetHasHedgesBushesVergesGardensAndLowCanopies) 
         EXPECT_GE(above, v.canopy_clearance_min_m - 1e-9);
         EXPECT_LE(above, v.canopy_clearance_max_m + 1e-9);
         // ... and it reaches at most canopy_overhang_max_m from the trunk.
-        const double reach = std::hypot(p.center.x() - o.position.x(), p.center.y() - o.position.y()) +
-                             p.half_extents.x();
+        const double reach =
+            std::hypot(p.center.x() - o.position.x(), p.center.y() - o.position.y()) +
+            p.half_extents.x();
         EXPECT_LE(reach, v.canopy_overhang_max_m + 1e-9);
       }
       continue;
@@ -428,7 +434,8 @@ TEST_F(GeneratedScene, CanopiesOverhangCarsAndPedestriansButNeverSwallowThem) {
   int cars = 0, cars_under = 0, peds = 0, peds_under = 0;
   const double t_end = drive_.duration();
   for (const ud::SceneObject& o : scene_.objects) {
-    const bool car = o.object_class == ud::ObjectClass::kCar || o.object_class == ud::ObjectClass::kVan;
+    const bool car =
+        o.object_class == ud::ObjectClass::kCar || o.object_class == ud::ObjectClass::kVan;
     const bool ped = o.object_class == ud::ObjectClass::kPedestrian;
     if (!(car && o.velocity.isZero()) && !ped) continue;
     bool under = false;

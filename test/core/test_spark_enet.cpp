@@ -11,8 +11,8 @@
 #include <random>
 #include <thread>
 
-#include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/spark/camera_fusion.h"
+#include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/spark/kitti_spark_eval.h"
 #include "urban_detection/core/spark/latest_slot.h"
 #include "urban_detection/core/spark/spark_segmenter.h"

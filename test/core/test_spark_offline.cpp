@@ -25,7 +25,6 @@ namespace {
 using core::CapturePathParams;
 using core::OrthoCamera;
 
-
 TEST(SparkCapture, PosesEveryIntervalAlongThePolyline) {
   CapturePathParams p;
   p.path = {{0, 0, 2}, {10, 0, 2}, {10, 10, 2}};

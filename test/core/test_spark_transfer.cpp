@@ -14,8 +14,8 @@
 
 #include "spark_test_model.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
-#include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/sensor/kitti_io.h"
+#include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/spark/spark_segmenter.h"
 
 namespace urban_detection {

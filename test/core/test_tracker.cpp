@@ -8,8 +8,8 @@
 #include <random>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "urban_detection/core/tracking/hungarian.h"
 #include "urban_detection/core/tracking/tracker.h"
@@ -103,8 +103,8 @@ TEST(Tracker, BirthAfterNHitsDeathAfterMMisses) {
   for (int k = 0; k < p.birth_hits; ++k, t += kDt) {
     tracker.update({box(10, 0)}, Eigen::Isometry3d::Identity(), t);
     ASSERT_EQ(tracker.tracks().size(), 1u);
-    EXPECT_EQ(tracker.tracks()[0].state, k + 1 < p.birth_hits ? core::TrackState::kTentative
-                                                              : core::TrackState::kConfirmed)
+    EXPECT_EQ(tracker.tracks()[0].state,
+              k + 1 < p.birth_hits ? core::TrackState::kTentative : core::TrackState::kConfirmed)
         << "hit " << k + 1;
   }
   const std::uint32_t id = tracker.tracks()[0].id;
@@ -134,7 +134,8 @@ TEST(Tracker, BirthAfterNHitsDeathAfterMMisses) {
 TEST(Tracker, LostTrackRecoveredKeepsItsId) {
   core::Tracker tracker(fast());
   double t = 0.0;
-  for (int k = 0; k < 5; ++k, t += kDt) tracker.update({box(10, 0)}, Eigen::Isometry3d::Identity(), t);
+  for (int k = 0; k < 5; ++k, t += kDt)
+    tracker.update({box(10, 0)}, Eigen::Isometry3d::Identity(), t);
   const std::uint32_t id = tracker.tracks()[0].id;
   tracker.update({}, Eigen::Isometry3d::Identity(), t += kDt);
   EXPECT_EQ(tracker.tracks()[0].state, core::TrackState::kLost);
@@ -179,7 +180,8 @@ TEST(Tracker, StaticObjectFromMovingSensorHasNoVelocity) {
 TEST(Tracker, ManyObjectsKeepTheirIds) {
   core::Tracker tracker(fast());
   std::vector<core::DetectedObject> objects;
-  for (int k = 0; k < 100; ++k) objects.push_back(box(6.0 * (k % 10), 4.0 * (k / 10), 0.0, 4.0, 1.8));
+  for (int k = 0; k < 100; ++k)
+    objects.push_back(box(6.0 * (k % 10), 4.0 * (k / 10), 0.0, 4.0, 1.8));
   for (int r = 0; r < 10; ++r) tracker.update(objects, Eigen::Isometry3d::Identity(), r * kDt);
   ASSERT_EQ(tracker.tracks().size(), 100u);
   for (const core::Track& t : tracker.tracks()) {
@@ -293,7 +295,8 @@ TEST(Hungarian, OptimalOnSmallMatricesAgainstBruteForce) {
     }
     EXPECT_EQ(pairs, std::min(rows, cols));
     EXPECT_NEAR(total, check, 1e-9);
-    EXPECT_NEAR(total, bruteForce(c, rows, cols), 1e-9) << rows << "x" << cols << " trial " << trial;
+    EXPECT_NEAR(total, bruteForce(c, rows, cols), 1e-9)
+        << rows << "x" << cols << " trial " << trial;
   }
   std::vector<int> a;
   EXPECT_EQ(core::solveAssignment({}, 0, 3, &a), 0.0);

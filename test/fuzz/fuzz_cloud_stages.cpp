@@ -27,9 +27,9 @@
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include "fuzz_common.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
 
 namespace ud = urban_detection;
 namespace core = urban_detection::core;
@@ -155,7 +155,8 @@ void checkObjects(const ud::LabeledCloud& input, const std::vector<core::Detecte
       UD_FUZZ_CHECK(p.z >= o.min_pt.z() - eps && p.z <= o.max_pt.z() + eps);
     }
     UD_FUZZ_CHECK(o.centroid.allFinite() && o.min_pt.allFinite() && o.max_pt.allFinite());
-    UD_FUZZ_CHECK(o.obb_center.allFinite() && o.obb_size.allFinite() && std::isfinite(o.obb_yaw_rad));
+    UD_FUZZ_CHECK(o.obb_center.allFinite() && o.obb_size.allFinite() &&
+                  std::isfinite(o.obb_yaw_rad));
     for (int a = 0; a < 3; ++a) {
       const float eps = 1e-3f * (1.0f + std::fabs(o.centroid[a]));
       UD_FUZZ_CHECK(o.min_pt[a] <= o.centroid[a] + eps && o.centroid[a] <= o.max_pt[a] + eps);
@@ -240,10 +241,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (int a = 0; a < 3; ++a) {
       const std::int16_t v = in.i16();
       switch ((mode >> (2 * a)) & 3) {
-        case 0: *xyz[a] = v * 0.01f; break;
-        case 1: *xyz[a] = v * 0.001f; break;
-        case 2: *xyz[a] = special(static_cast<std::uint16_t>(v)); break;
-        default: *xyz[a] = prev[a]; break;
+        case 0:
+          *xyz[a] = v * 0.01f;
+          break;
+        case 1:
+          *xyz[a] = v * 0.001f;
+          break;
+        case 2:
+          *xyz[a] = special(static_cast<std::uint16_t>(v));
+          break;
+        default:
+          *xyz[a] = prev[a];
+          break;
       }
       prev[a] = *xyz[a];
     }

@@ -24,7 +24,9 @@ class ByteReader {
 
   std::uint8_t u8() { return pos_ < size_ ? data_[pos_++] : 0; }
   std::uint16_t u16() { return static_cast<std::uint16_t>(u8() | (u8() << 8)); }
-  std::uint32_t u32() { return static_cast<std::uint32_t>(u16()) | (static_cast<std::uint32_t>(u16()) << 16); }
+  std::uint32_t u32() {
+    return static_cast<std::uint32_t>(u16()) | (static_cast<std::uint32_t>(u16()) << 16);
+  }
   std::int16_t i16() {
     const std::uint16_t v = u16();
     std::int16_t s;
@@ -97,8 +99,8 @@ class ScratchFile {
   std::fprintf(stderr, "fuzz invariant violated: %s\n", what);
   std::abort();
 }
-#define UD_FUZZ_CHECK(cond) \
-  do {                      \
+#define UD_FUZZ_CHECK(cond)                            \
+  do {                                                 \
     if (!(cond)) ::urban_detection::fuzz::fail(#cond); \
   } while (0)
 

@@ -33,7 +33,7 @@ constexpr std::size_t kSerializedPacket = 8 + core::kPacketSize;  // time + uint
 // left can never be satisfied; reject it here as the message length would (see the report:
 // this is ros::serialization behaviour, not ours).
 bool countFits(const std::uint8_t* data, std::size_t size) {
-  std::size_t off = 12;  // header.seq, header.stamp
+  std::size_t off = 12;             // header.seq, header.stamp
   if (size < off + 4) return true;  // the deserialiser will throw on its own
   std::uint32_t len;
   std::memcpy(&len, data + off, 4);
@@ -129,8 +129,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       UD_FUZZ_CHECK(!rev->packets.empty() &&
                     rev->packets.size() <= ud::ScanAssembler::kMaxPacketsPerScan);
       UD_FUZZ_CHECK(rev->header.stamp == (convention == ud::ScanStamp::kLastPacket
-                                               ? rev->packets.back().stamp
-                                               : rev->packets.front().stamp));
+                                              ? rev->packets.back().stamp
+                                              : rev->packets.front().stamp));
     }
   }
   return 0;

@@ -47,8 +47,12 @@ void append(Bytes* b, const void* p, std::size_t n) {
   const auto* c = static_cast<const std::uint8_t*>(p);
   b->insert(b->end(), c, c + n);
 }
-void le16(Bytes* b, std::uint16_t v) { append(b, &v, 2); }  // x86: little endian
-void le32(Bytes* b, std::uint32_t v) { append(b, &v, 4); }
+void le16(Bytes* b, std::uint16_t v) {
+  append(b, &v, 2);
+}  // x86: little endian
+void le32(Bytes* b, std::uint32_t v) {
+  append(b, &v, 4);
+}
 Bytes readFile(const std::string& path) {
   Bytes b;
   std::FILE* f = std::fopen(path.c_str(), "rb");
@@ -115,7 +119,8 @@ void pcapSeeds(const core::PacketEncoder& enc) {
   const std::string tmp = g_out + "/.tmp.pcap";
   {
     core::PcapWriter w(tmp);
-    for (int k = 0; k < 3; ++k) w.write(streetPacket(enc, 35000 + 400 * k, 9, 5000 + 288 * k), 1.5e9 + k * 288e-6);
+    for (int k = 0; k < 3; ++k)
+      w.write(streetPacket(enc, 35000 + 400 * k, 9, 5000 + 288 * k), 1.5e9 + k * 288e-6);
   }
   const Bytes eth = readFile(tmp);
   std::remove(tmp.c_str());
@@ -125,8 +130,8 @@ void pcapSeeds(const core::PacketEncoder& enc) {
   // Hand-built captures of the other link types the reader parses.
   const core::RawPacket p = streetPacket(enc, 1200, 9, 7000);
   auto ipUdp = [&](Bytes* b) {
-    const std::uint8_t ip[20] = {0x45, 0, 0x04, 0xD2, 0, 0, 0x40, 0, 64, 17, 0, 0,
-                                 192, 168, 3, 43, 255, 255, 255, 255};  // total 1234
+    const std::uint8_t ip[20] = {0x45, 0, 0x04, 0xD2, 0, 0,  0x40, 0,   64,  17,
+                                 0,    0, 192,  168,  3, 43, 255,  255, 255, 255};  // total 1234
     append(b, ip, 20);
     const std::uint8_t udp[8] = {0x09, 0x40, 0x09, 0x40, 0x04, 0xBE, 0, 0};  // 2368, len 1214
     append(b, udp, 8);
@@ -156,8 +161,8 @@ void pcapSeeds(const core::PacketEncoder& enc) {
   Bytes raw;
   ipUdp(&raw);
   put(t, "raw_ipv4", capture(101, raw));
-  Bytes vlan = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x60, 0x76, 0x88, 0, 0, 1,
-                0x81, 0x00, 0x00, 0x05, 0x08, 0x00};
+  Bytes vlan = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x60, 0x76, 0x88,
+                0,    0,    1,    0x81, 0x00, 0x00, 0x05, 0x08, 0x00};
   ipUdp(&vlan);
   put(t, "ethernet_vlan", capture(1, vlan));
 }
@@ -174,10 +179,10 @@ std::string yamlOf(const core::Calibration& cal, bool two_pt) {
       s << ", dist_correction_x: " << c.dist_correction_x_m
         << ", dist_correction_y: " << c.dist_correction_y_m
         << ", two_pt_correction_available: true, vert_offset_correction: "
-        << c.vert_offset_correction_m << ", horiz_offset_correction: "
-        << c.horiz_offset_correction_m << ", focal_distance: " << c.focal_distance
-        << ", focal_slope: " << c.focal_slope << ", min_intensity: " << c.min_intensity
-        << ", max_intensity: " << c.max_intensity;
+        << c.vert_offset_correction_m
+        << ", horiz_offset_correction: " << c.horiz_offset_correction_m
+        << ", focal_distance: " << c.focal_distance << ", focal_slope: " << c.focal_slope
+        << ", min_intensity: " << c.min_intensity << ", max_intensity: " << c.max_intensity;
     }
     s << "}\n";
   }

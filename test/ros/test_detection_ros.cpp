@@ -47,7 +47,7 @@ TEST(DetectionConversions, ObjectFieldsAndHeader) {
   EXPECT_EQ(o.point_count, 3u);
   EXPECT_EQ(o.indices, (std::vector<std::uint32_t>{7, 3, 11}));
   EXPECT_DOUBLE_EQ(o.centroid.y, 2.0);
-  EXPECT_DOUBLE_EQ(o.aabb_pose.position.x, 2.0);   // (0 + 4) / 2
+  EXPECT_DOUBLE_EQ(o.aabb_pose.position.x, 2.0);    // (0 + 4) / 2
   EXPECT_FLOAT_EQ(o.aabb_pose.position.z, -0.95f);  // (-1.7 - 0.2) / 2
   EXPECT_DOUBLE_EQ(o.aabb_pose.orientation.w, 1.0);
   EXPECT_FLOAT_EQ(o.aabb_dimensions.z, 1.5f);

@@ -6,8 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <type_traits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
@@ -86,8 +86,7 @@ TYPED_TEST(ConfigFields, RoundTripThroughAConfigKeepsEveryListedField) {
   int touched = 0;
   core::forEachField(changed, [&](const core::FieldInfo& info, auto& field) {
     using T = std::decay_t<decltype(field)>;
-    if (std::find(listed.begin(), listed.end(), ros_conv::configName(info.name)) ==
-        listed.end()) {
+    if (std::find(listed.begin(), listed.end(), ros_conv::configName(info.name)) == listed.end()) {
       return;
     }
     if constexpr (std::is_same_v<T, bool>) {
@@ -101,8 +100,7 @@ TYPED_TEST(ConfigFields, RoundTripThroughAConfigKeepsEveryListedField) {
   const Params back = ros_conv::fromConfig(ros_conv::toConfig<Config>(changed), Params{});
   core::forEachField(changed, [&](const core::FieldInfo& info, const auto& field) {
     core::forEachField(back, [&](const core::FieldInfo& other, const auto& value) {
-      if constexpr (std::is_same_v<std::decay_t<decltype(field)>,
-                                   std::decay_t<decltype(value)>>) {
+      if constexpr (std::is_same_v<std::decay_t<decltype(field)>, std::decay_t<decltype(value)>>) {
         if (other.name == info.name) {
           EXPECT_EQ(value, field) << info.name;
         }

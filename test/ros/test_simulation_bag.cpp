@@ -11,10 +11,10 @@
 #include <rosbag/view.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "../core/test_files.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/simulation/simulation_config.h"
 #include "urban_detection/ros/simulation_conversions.h"
-#include "../core/test_files.h"
 
 namespace ud = urban_detection;
 

@@ -12,8 +12,8 @@
 #include "urban_detection/core/simulation/scene_generator.h"
 #include "urban_detection/core/simulation/simulation_config.h"
 
-#include "urban_detection/ros/velodyne_scan.h"
 #include "../core/spin_packets.h"
+#include "urban_detection/ros/velodyne_scan.h"
 
 namespace urban_detection {
 namespace {
@@ -169,8 +169,7 @@ void compareOnSimulatedDrive(ScanStamp convention) {
   core::SimulationConfig c =
       core::loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
   const core::Calibration cal = core::loadCalibration(c.calibration_file);
-  core::LidarSimulator sim(core::generateScene(c.scene, c.drive), c.scene, c.drive, cal,
-                           c.sensor);
+  core::LidarSimulator sim(core::generateScene(c.scene, c.drive), c.scene, c.drive, cal, c.sensor);
   const core::PacketDecoder decoder(cal, core::DecoderParams());
   ScanAssembler assembler(0.0, "velodyne", 700, convention);
   StreamingScanDecoder streamer(&decoder, 0.0, "velodyne", 700, convention);
@@ -200,9 +199,8 @@ void compareOnSimulatedDrive(ScanStamp convention) {
       EXPECT_EQ(streamed->header.frame_id, "velodyne");
       EXPECT_EQ(streamed->header.seq, scan->header.seq);
       EXPECT_EQ(streamed->header.stamp, pcl_conversions::toPCL(scan->header.stamp));  // [us]
-      const ros::Time expected = convention == ScanStamp::kLastPacket
-                                     ? scan->packets.back().stamp
-                                     : scan->packets.front().stamp;
+      const ros::Time expected = convention == ScanStamp::kLastPacket ? scan->packets.back().stamp
+                                                                      : scan->packets.front().stamp;
       EXPECT_EQ(scan->header.stamp, expected);
       EXPECT_EQ(streamer.lastPackets(), scan->packets.size());
       ++compared;

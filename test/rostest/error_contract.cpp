@@ -16,8 +16,8 @@
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/PointCloud2.h>
-#include <urban_detection/VelodyneScan.h>
 #include <unistd.h>
+#include <urban_detection/VelodyneScan.h>
 
 #include <chrono>
 #include <cmath>
@@ -29,11 +29,11 @@
 #include <thread>
 #include <vector>
 
-#include "urban_detection/core/sensor/hdl64e_packet.h"
-#include "urban_detection/core/sensor/pcap_io.h"
-#include "urban_detection/core/common/segment_class.h"
 #include "../core/spin_packets.h"
 #include "rostest_util.h"
+#include "urban_detection/core/common/segment_class.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/sensor/pcap_io.h"
 
 namespace urban_detection {
 namespace {
@@ -92,15 +92,17 @@ TEST(ErrorContract, CloudWithoutXyzIsReportedOnceAndCounted) {
   sensor_msgs::PointCloud2 good;
   pcl::toROSMsg(*street(), good);
   pub.publish(good);
-  ASSERT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex);
-    return outputs == 1;
-  }, 10.0)) << "the good cloud after the bad ones was not processed";
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.value("ec_fields/input", "rejected_inputs") == rejected;
-  }, 5.0));
-  EXPECT_EQ(rosout.count(rosgraph_msgs::Log::ERROR,
-                         "without x, y and z fields (fields: intensity)"), 1);
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return outputs == 1;
+      },
+      10.0))
+      << "the good cloud after the bad ones was not processed";
+  EXPECT_TRUE(waitFor(
+      [&] { return diagnostics.value("ec_fields/input", "rejected_inputs") == rejected; }, 5.0));
+  EXPECT_EQ(
+      rosout.count(rosgraph_msgs::Log::ERROR, "without x, y and z fields (fields: intensity)"), 1);
 }
 
 TEST(ErrorContract, NonFinitePointsAreLabelledUnknownAndCounted) {
@@ -128,15 +130,18 @@ TEST(ErrorContract, NonFinitePointsAreLabelledUnknownAndCounted) {
   std::vector<std::size_t> bad;  // every 97th point gets one non-finite coordinate
   for (std::size_t i = 5; i < cloud->size(); i += 97) {
     PointXYZIRT& p = (*cloud)[i];
-    (bad.size() % 3 == 0 ? p.x : bad.size() % 3 == 1 ? p.y : p.z) =
-        bad.size() % 2 ? nan : (bad.size() % 4 == 0 ? inf : -inf);
+    (bad.size() % 3 == 0   ? p.x
+     : bad.size() % 3 == 1 ? p.y
+                           : p.z) = bad.size() % 2 ? nan : (bad.size() % 4 == 0 ? inf : -inf);
     bad.push_back(i);
   }
   pub.publish(cloud);
-  ASSERT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex);
-    return labeled && foreground;
-  }, 10.0));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return labeled && foreground;
+      },
+      10.0));
   std::lock_guard<std::mutex> lock(mutex);
   ASSERT_EQ(labeled->size(), cloud->size());
   for (const std::size_t i : bad) {
@@ -146,9 +151,13 @@ TEST(ErrorContract, NonFinitePointsAreLabelledUnknownAndCounted) {
   for (const LabeledPoint& q : *foreground) {
     EXPECT_TRUE(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) << q.index;
   }
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.value("ec_nan/seg", "non_finite_points") == static_cast<long>(bad.size());
-  }, 5.0)) << bad.size();
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return diagnostics.value("ec_nan/seg", "non_finite_points") ==
+               static_cast<long>(bad.size());
+      },
+      5.0))
+      << bad.size();
 }
 
 TEST(ErrorContract, TruncatedPcapStopsTheReplayWithOneClearError) {
@@ -177,20 +186,21 @@ TEST(ErrorContract, TruncatedPcapStopsTheReplayWithOneClearError) {
   ros::NodeHandle nh("/ec_pcap");
   std::mutex mutex;
   std::vector<std::size_t> sizes;
-  ros::Subscriber sub = nh.subscribe<VelodyneScan>(
-      "velodyne_packets", 10, [&](const VelodyneScan::ConstPtr& scan) {
+  ros::Subscriber sub =
+      nh.subscribe<VelodyneScan>("velodyne_packets", 10, [&](const VelodyneScan::ConstPtr& scan) {
         std::lock_guard<std::mutex> lock(mutex);
         sizes.push_back(scan->packets.size());
       });
   ASSERT_TRUE(manager.load("/ec_pcap/source", "urban_detection/PacketSource", {}, {}));
-  EXPECT_TRUE(waitFor([&] {
-    return rosout.count(rosgraph_msgs::Log::ERROR, "is truncated after " +
-                                                       std::to_string(packets.size() - 1) +
-                                                       " packets; replay stops") == 1;
-  }, 10.0));
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.value("ec_pcap/source", "truncated_captures") == 1;
-  }, 5.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return rosout.count(rosgraph_msgs::Log::ERROR, "is truncated after " +
+                                                           std::to_string(packets.size() - 1) +
+                                                           " packets; replay stops") == 1;
+      },
+      10.0));
+  EXPECT_TRUE(
+      waitFor([&] { return diagnostics.value("ec_pcap/source", "truncated_captures") == 1; }, 5.0));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   std::lock_guard<std::mutex> lock(mutex);
   EXPECT_EQ(sizes, (std::vector<std::size_t>{60, 60, 60}));

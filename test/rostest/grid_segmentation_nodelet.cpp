@@ -1,18 +1,18 @@
 // rostest: CloudInput + the GridSegmentation nodelet segment a KITTI-style PointCloud2 (x y z
-// intensity, no ring/time, published on points_in) of a synthetic street, publishes labelled and foreground clouds whose indices
-// match the input, and survives a malformed message.
+// intensity, no ring/time, published on points_in) of a synthetic street, publishes labelled and
+// foreground clouds whose indices match the input, and survives a malformed message.
 #include "urban_detection/core/common/point_types.h"
 
 #include <cmath>
 #include <mutex>
 #include <vector>
 
-#include <boost/shared_ptr.hpp>
 #include <gtest/gtest.h>
 #include <pcl_conversions/pcl_conversions.h>
 #include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <boost/shared_ptr.hpp>
 
 #include "urban_detection/core/common/segment_class.h"
 
@@ -63,9 +63,9 @@ class Listener {
 TEST(GridSegmentationNodelet, SegmentsKittiStylePointCloud2) {
   ros::NodeHandle nh;
   Listener listener;
-  ros::Subscriber s1 = nh.subscribe("segmentation/labeled_points", 2, &Listener::labeled, &listener);
-  ros::Subscriber s2 =
-      nh.subscribe("segmentation/foreground", 2, &Listener::foreground, &listener);
+  ros::Subscriber s1 =
+      nh.subscribe("segmentation/labeled_points", 2, &Listener::labeled, &listener);
+  ros::Subscriber s2 = nh.subscribe("segmentation/foreground", 2, &Listener::foreground, &listener);
   ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("points_in", 2);
   ros::AsyncSpinner spinner(1);
   spinner.start();

@@ -27,16 +27,16 @@
 #include <thread>
 #include <vector>
 
-#include "urban_detection/DetectedObjectArray.h"
-#include "urban_detection/VelodyneScan.h"
-#include <boost/make_shared.hpp>
 #include <pcl_conversions/pcl_conversions.h>
 #include <pcl_ros/point_cloud.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <boost/make_shared.hpp>
+#include "rostest_util.h"
+#include "urban_detection/DetectedObjectArray.h"
+#include "urban_detection/VelodyneScan.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/sensor/pcap_io.h"
 #include "urban_detection/core/simulation/simulation_config.h"
-#include "rostest_util.h"
 
 namespace urban_detection {
 namespace {
@@ -146,8 +146,8 @@ Revolutions replay(const std::string& ns, const std::string& pcap) {
       "objects", 50, [&](const DetectedObjectArray::ConstPtr& msg) {
         std::vector<std::array<double, 4>> boxes;
         for (const DetectedObject& o : msg->objects) {
-          boxes.push_back({o.centroid.x, o.centroid.y, o.centroid.z,
-                           static_cast<double>(o.point_count)});
+          boxes.push_back(
+              {o.centroid.x, o.centroid.y, o.centroid.z, static_cast<double>(o.point_count)});
         }
         std::sort(boxes.begin(), boxes.end());
         std::lock_guard<std::mutex> lock(mutex);
@@ -219,11 +219,14 @@ TEST(HostileStreams, AnotherModelsPacketsGiveNoRevolutionAndAWarning) {
   RosoutWatcher rosout;
   const Revolutions vlp = replay("/hs_vlp16", writePcap(Alteration::kVlp16));
   EXPECT_TRUE(vlp.objects.empty()) << vlp.objects.size() << " revolutions published";
-  EXPECT_TRUE(waitFor([&] {
-    return rosout.count(rosgraph_msgs::Log::WARN, "refusing packets of a VLP-16 (strongest "
-                                                  "return): this package decodes HDL-64E "
-                                                  "packets only") >= 1;
-  }, 5.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return rosout.count(rosgraph_msgs::Log::WARN,
+                            "refusing packets of a VLP-16 (strongest "
+                            "return): this package decodes HDL-64E "
+                            "packets only") >= 1;
+      },
+      5.0));
 }
 
 // A: a VelodyneScan far larger than a revolution is refused undecoded with an ERROR, and the
@@ -256,16 +259,21 @@ TEST(HostileStreams, OversizedScanIsRefusedAndTheNextOneConverted) {
     return scan;
   };
   pub.publish(scanOf(0, 20000));
-  ASSERT_TRUE(waitFor([&] {
-    return rosout.count(rosgraph_msgs::Log::ERROR,
-                        "refusing a VelodyneScan of 20000 packets (max_packets_per_scan 2085)") == 1;
-  }, 10.0));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return rosout.count(
+                   rosgraph_msgs::Log::ERROR,
+                   "refusing a VelodyneScan of 20000 packets (max_packets_per_scan 2085)") == 1;
+      },
+      10.0));
   const ros::WallTime sent = ros::WallTime::now();
   pub.publish(scanOf(s.revolution_start[1], s.revolution_start[2] - s.revolution_start[1]));
-  ASSERT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex);
-    return clouds.size() == 1;
-  }, 5.0));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return clouds.size() == 1;
+      },
+      5.0));
   EXPECT_LT((ros::WallTime::now() - sent).toSec(), 1.0);
   std::lock_guard<std::mutex> lock(mutex);
   EXPECT_GT(clouds[0], 50000u);
@@ -280,11 +288,11 @@ TEST(HostileStreams, OversizedCloudIsRefusedBeforeConversion) {
   ros::Publisher pub = nh.advertise<sensor_msgs::PointCloud2>("points_in", 5);
   std::mutex mutex;
   std::size_t clouds = 0;
-  ros::Subscriber sub = nh.subscribe<CloudXYZIRT>(
-      "velodyne_points", 5, [&](const boost::shared_ptr<const CloudXYZIRT>&) {
-        std::lock_guard<std::mutex> lock(mutex);
-        ++clouds;
-      });
+  ros::Subscriber sub = nh.subscribe<CloudXYZIRT>("velodyne_points", 5,
+                                                  [&](const boost::shared_ptr<const CloudXYZIRT>&) {
+                                                    std::lock_guard<std::mutex> lock(mutex);
+                                                    ++clouds;
+                                                  });
   ASSERT_TRUE(manager.load("/hs_cloud/cloud_input", "urban_detection/CloudInput", {}, {}));
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
   CloudXYZIRT small;
@@ -294,17 +302,21 @@ TEST(HostileStreams, OversizedCloudIsRefusedBeforeConversion) {
   huge.width = 4000000000u;  // claims 4e9 points, carries 100
   huge.row_step = 0;
   pub.publish(huge);
-  ASSERT_TRUE(waitFor([&] {
-    return rosout.count(rosgraph_msgs::Log::ERROR,
-                        "refusing a PointCloud2 of 4000000000 points (max_points 800640)") == 1;
-  }, 10.0));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return rosout.count(rosgraph_msgs::Log::ERROR,
+                            "refusing a PointCloud2 of 4000000000 points (max_points 800640)") == 1;
+      },
+      10.0));
   sensor_msgs::PointCloud2 good;
   pcl::toROSMsg(small, good);
   pub.publish(good);
-  EXPECT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex);
-    return clouds == 1;
-  }, 5.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return clouds == 1;
+      },
+      5.0));
 }
 
 }  // namespace

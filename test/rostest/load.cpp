@@ -30,9 +30,9 @@
 #include <thread>
 #include <vector>
 
-#include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "../core/spin_packets.h"
 #include "rostest_util.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 
 namespace urban_detection {
 namespace {
@@ -66,12 +66,12 @@ TEST(Load, UdpFloodIsCountedAndOutputRecovers) {
 
   std::mutex mutex;
   std::vector<std::pair<double, std::size_t>> scans;  // (wall time [s], packets)
-  std::vector<double> clouds;                          // wall time [s]
+  std::vector<double> clouds;                         // wall time [s]
   const auto t0 = Clock::now();
   auto since = [&t0] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
   ros::NodeHandle nh("/flood");
-  ros::Subscriber scan_sub = nh.subscribe<VelodyneScan>(
-      "velodyne_packets", 100, [&](const VelodyneScan::ConstPtr& scan) {
+  ros::Subscriber scan_sub =
+      nh.subscribe<VelodyneScan>("velodyne_packets", 100, [&](const VelodyneScan::ConstPtr& scan) {
         std::lock_guard<std::mutex> lock(mutex);
         scans.emplace_back(since(), scan->packets.size());
       });
@@ -96,8 +96,8 @@ TEST(Load, UdpFloodIsCountedAndOutputRecovers) {
   double normal_start = 0.0;
   long drops_before_window = -1;  // kernel drops reported when the window starts
   const auto send_start = Clock::now();
-  for (const auto& [duration_s, factor] : {std::pair<double, double>{flood_s, 5.0},
-                                           std::pair<double, double>{normal_s, 1.0}}) {
+  for (const auto& [duration_s, factor] :
+       {std::pair<double, double>{flood_s, 5.0}, std::pair<double, double>{normal_s, 1.0}}) {
     if (factor == 1.0) normal_start = since();
     const auto phase_start = Clock::now();
     const std::uint64_t phase_first = sent;
@@ -123,11 +123,14 @@ TEST(Load, UdpFloodIsCountedAndOutputRecovers) {
   // Every datagram is accounted for: received by PacketSource or dropped by the kernel (the
   // drop count travels with the datagrams received after the drops).
   long received = -1, dropped = -1;
-  EXPECT_TRUE(waitFor([&] {
-    received = diagnostics.value("flood/packet_source", "packets");
-    dropped = diagnostics.value("flood/packet_source", "kernel_dropped_packets");
-    return received >= 0 && dropped >= 0 && received + dropped == static_cast<long>(sent);
-  }, 10.0)) << "sent " << sent << ", received " << received << ", kernel drops " << dropped;
+  EXPECT_TRUE(waitFor(
+      [&] {
+        received = diagnostics.value("flood/packet_source", "packets");
+        dropped = diagnostics.value("flood/packet_source", "kernel_dropped_packets");
+        return received >= 0 && dropped >= 0 && received + dropped == static_cast<long>(sent);
+      },
+      10.0))
+      << "sent " << sent << ", received " << received << ", kernel drops " << dropped;
   if (dropped > 0) {
     EXPECT_TRUE(diagnostics.sawWarning("flood/packet_source", "kernel_dropped_packets"));
   }
@@ -195,9 +198,9 @@ TEST(Load, OutputBelowTheSensorRateIsAWarning) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   close(fd);
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.sawWarning("slow/packet_source", "below the sensor's 10.0 Hz");
-  }, 3.0));
+  EXPECT_TRUE(waitFor(
+      [&] { return diagnostics.sawWarning("slow/packet_source", "below the sensor's 10.0 Hz"); },
+      3.0));
 }
 
 // ------------------------------------------------------------------------------------------
@@ -210,7 +213,8 @@ boost::shared_ptr<CloudXYZIRT> makeCloud(std::size_t points) {
       PointXYZIRT p;
       p.x = -30.0f + 60.0f * static_cast<float>(i) / static_cast<float>(side);
       p.y = -30.0f + 60.0f * static_cast<float>(j) / static_cast<float>(side);
-      const bool box = std::fmod(std::fabs(p.x), 10.0f) < 1.5f && std::fmod(std::fabs(p.y), 10.0f) < 1.5f;
+      const bool box =
+          std::fmod(std::fabs(p.x), 10.0f) < 1.5f && std::fmod(std::fabs(p.y), 10.0f) < 1.5f;
       p.z = box ? -0.5f : -1.73f;
       p.intensity = 10.0f;
       p.ring = static_cast<std::uint16_t>(j % 64);
@@ -253,15 +257,21 @@ TEST(Load, BurstFasterThanSegmentationNewestRevolutionWins) {
   // revolution before the gap for the gap to be visible to it (a fast segmenter could
   // otherwise receive only the newest one and have nothing to count).
   pub.publish(clouds.front());
-  ASSERT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex);
-    return !seqs.empty();
-  }, 20.0)) << "the first revolution was not processed";
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return !seqs.empty();
+      },
+      20.0))
+      << "the first revolution was not processed";
   for (std::size_t i = 1; i < clouds.size(); ++i) pub.publish(clouds[i]);
-  ASSERT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex);
-    return !seqs.empty() && seqs.back() == burst;
-  }, 20.0)) << "the newest revolution of the burst was not processed";
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return !seqs.empty() && seqs.back() == burst;
+      },
+      20.0))
+      << "the newest revolution of the burst was not processed";
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   std::vector<std::uint32_t> got;
   {
@@ -278,13 +288,15 @@ TEST(Load, BurstFasterThanSegmentationNewestRevolutionWins) {
   // Seen by the stage: got.front() .. burst; everything in between it never processed.
   const long skipped = static_cast<long>(burst - got.front() + 1 - got.size());
   EXPECT_GT(skipped, 0);
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.value("burst/grid_segmentation", "skipped_revolutions") == skipped;
-  }, 5.0)) << "expected " << skipped << " got "
-           << diagnostics.value("burst/grid_segmentation", "skipped_revolutions");
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.sawWarning("burst/grid_segmentation", "skipped");
-  }, 5.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return diagnostics.value("burst/grid_segmentation", "skipped_revolutions") == skipped;
+      },
+      5.0))
+      << "expected " << skipped << " got "
+      << diagnostics.value("burst/grid_segmentation", "skipped_revolutions");
+  EXPECT_TRUE(
+      waitFor([&] { return diagnostics.sawWarning("burst/grid_segmentation", "skipped"); }, 5.0));
 
   // Back to the sensor's pace (10 Hz): every revolution is processed, no new skips.
   for (std::uint32_t seq = burst + 1; seq <= burst + 10; ++seq) {
@@ -293,14 +305,19 @@ TEST(Load, BurstFasterThanSegmentationNewestRevolutionWins) {
     pub.publish(cloud);
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
-  EXPECT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex);
-    return seqs.size() == got.size() + 10 && seqs.back() == burst + 10;
-  }, 10.0)) << "revolutions at the normal rate were lost";
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.value("burst/grid_segmentation", "revolutions") ==
-           static_cast<long>(got.size() + 10);
-  }, 5.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return seqs.size() == got.size() + 10 && seqs.back() == burst + 10;
+      },
+      10.0))
+      << "revolutions at the normal rate were lost";
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return diagnostics.value("burst/grid_segmentation", "revolutions") ==
+               static_cast<long>(got.size() + 10);
+      },
+      5.0));
   EXPECT_EQ(diagnostics.value("burst/grid_segmentation", "skipped_revolutions"), skipped);
   std::fprintf(stderr, "burst: %u published at once, %zu processed, %ld skipped\n", burst,
                got.size(), skipped);

@@ -27,11 +27,11 @@
 #include <thread>
 #include <vector>
 
+#include "../core/spin_packets.h"
+#include "rostest_util.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/sensor/pcap_io.h"
 #include "urban_detection/ros/velodyne_scan.h"
-#include "../core/spin_packets.h"
-#include "rostest_util.h"
 
 namespace urban_detection {
 namespace {
@@ -42,7 +42,7 @@ using rostest_util::freeUdpPort;
 using rostest_util::RosoutWatcher;
 using rostest_util::waitFor;
 
-constexpr int kPacketsPerRevolution = 60;  // a coarse but valid spin: 1 deg between firings
+constexpr int kPacketsPerRevolution = 60;     // a coarse but valid spin: 1 deg between firings
 constexpr std::uint16_t kDistanceRaw = 5000;  // 10 m at 2 mm per unit: inside every range
 constexpr std::size_t kReturnsPerPacket = 384;
 
@@ -124,17 +124,19 @@ TEST(PacketToCloud, ZeroCopyInsideTheManagerAndPerPacketTransform) {
   ros::Publisher pub = nh.advertise<VelodyneScan>("velodyne_packets", 5);
   Collector<CloudXYZIRT> same_type;
   Collector<sensor_msgs::PointCloud2> serialised;
-  ros::Subscriber sub1 = nh.subscribe("velodyne_points", 5, &Collector<CloudXYZIRT>::callback,
-                                      &same_type);
-  ros::Subscriber sub2 = nh.subscribe(
-      "velodyne_points", 5, &Collector<sensor_msgs::PointCloud2>::callback, &serialised);
+  ros::Subscriber sub1 =
+      nh.subscribe("velodyne_points", 5, &Collector<CloudXYZIRT>::callback, &same_type);
+  ros::Subscriber sub2 = nh.subscribe("velodyne_points", 5,
+                                      &Collector<sensor_msgs::PointCloud2>::callback, &serialised);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
 
   const auto scan = makeScan(makePackets(kPacketsPerRevolution, 0.5), ros::Time(100.0), 0.0);
-  ASSERT_TRUE(waitFor([&] {
-    if (same_type.size() == 0) pub.publish(scan);  // retried until tf_static has arrived
-    return same_type.size() > 0 && serialised.size() > 0;
-  }, 10.0));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        if (same_type.size() == 0) pub.publish(scan);  // retried until tf_static has arrived
+        return same_type.size() > 0 && serialised.size() > 0;
+      },
+      10.0));
 
   const auto cloud = same_type.at(0);
   EXPECT_EQ(cloud->header.frame_id, "base_link");
@@ -213,11 +215,13 @@ TEST(PacketToCloud, DropsBadPacketsWholeAndCountsThem) {
   pub.publish(empty);
   EXPECT_EQ(clouds.at(0)->size(), 2 * kReturnsPerPacket);
   EXPECT_EQ(clouds.at(1)->size(), 7 * kReturnsPerPacket);
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.value("badscan/packet_to_cloud", "bad_packets") == 3 &&
-           diagnostics.value("badscan/packet_to_cloud", "empty_scans") == 1 &&
-           diagnostics.value("badscan/packet_to_cloud", "skipped_revolutions") == 2;
-  }, 10.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return diagnostics.value("badscan/packet_to_cloud", "bad_packets") == 3 &&
+               diagnostics.value("badscan/packet_to_cloud", "empty_scans") == 1 &&
+               diagnostics.value("badscan/packet_to_cloud", "skipped_revolutions") == 2;
+      },
+      10.0));
   ros::Duration(0.3).sleep();
   EXPECT_EQ(clouds.size(), 2u);  // the empty scan produced no cloud
 }
@@ -241,17 +245,19 @@ TEST(PacketToCloud, BadParametersAndCalibrationFailInitClearly) {
   ros::param::set("/badcal/packet_to_cloud/calibration", calibration);
   manager.load("/badcal/packet_to_cloud", "urban_detection/PacketToCloud", {}, {});
 
-  EXPECT_TRUE(waitFor([&] {
-    return rosout.contains(rosgraph_msgs::Log::FATAL, "max_range") &&
-           rosout.contains(rosgraph_msgs::Log::FATAL, "accepted [0.1, 250] m") &&
-           rosout.contains(rosgraph_msgs::Log::FATAL, calibration) &&
-           rosout.contains(rosgraph_msgs::Log::FATAL, "laser 0") &&
-           rosout.contains(rosgraph_msgs::Log::FATAL, "field 'rot_correction'");
-  }, 10.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return rosout.contains(rosgraph_msgs::Log::FATAL, "max_range") &&
+               rosout.contains(rosgraph_msgs::Log::FATAL, "accepted [0.1, 250] m") &&
+               rosout.contains(rosgraph_msgs::Log::FATAL, calibration) &&
+               rosout.contains(rosgraph_msgs::Log::FATAL, "laser 0") &&
+               rosout.contains(rosgraph_msgs::Log::FATAL, "field 'rot_correction'");
+      },
+      10.0));
   for (const char* ns : {"/badparam", "/badrange", "/badcal"}) {
     Collector<CloudXYZIRT> clouds;
-    ros::Subscriber sub = ros::NodeHandle(ns).subscribe(
-        "velodyne_points", 1, &Collector<CloudXYZIRT>::callback, &clouds);
+    ros::Subscriber sub = ros::NodeHandle(ns).subscribe("velodyne_points", 1,
+                                                        &Collector<CloudXYZIRT>::callback, &clouds);
     ros::Duration(0.5).sleep();
     EXPECT_EQ(sub.getNumPublishers(), 0u) << ns;
   }
@@ -326,9 +332,8 @@ TEST(PacketSource, StreamingDecodePublishesTheRevolutionsCloud) {
       nh.subscribe("velodyne_points", 10, &Collector<CloudXYZIRT>::callback, &clouds);
   ros::Subscriber sub_points2 =
       nh.subscribe("velodyne_points", 10, &Collector<CloudXYZIRT>::callback, &clouds2);
-  ASSERT_TRUE(waitFor([&] {
-    return sub.getNumPublishers() == 1 && sub_points.getNumPublishers() == 1;
-  }, 10.0));
+  ASSERT_TRUE(waitFor(
+      [&] { return sub.getNumPublishers() == 1 && sub_points.getNumPublishers() == 1; }, 10.0));
 
   std::vector<core::RawPacket> packets = makePackets(30, 180.5);
   const std::vector<core::RawPacket> whole = makePackets(kPacketsPerRevolution, 0.5);
@@ -338,9 +343,8 @@ TEST(PacketSource, StreamingDecodePublishesTheRevolutionsCloud) {
   UdpSender sender(port);
   for (const auto& p : packets) sender.send(p.data(), p.size());
 
-  ASSERT_TRUE(waitFor([&] {
-    return scans.size() >= 1 && clouds.size() >= 1 && clouds2.size() >= 1;
-  }, 10.0));
+  ASSERT_TRUE(waitFor(
+      [&] { return scans.size() >= 1 && clouds.size() >= 1 && clouds2.size() >= 1; }, 10.0));
   const auto scan = scans.at(0);
   const auto cloud = clouds.at(0);
   EXPECT_EQ(cloud.get(), clouds2.at(0).get()) << "the cloud was copied on the way";
@@ -373,8 +377,8 @@ TEST(GridSegmentation, ReceivesTheCloudItselfInsideTheManager) {
   ASSERT_TRUE(manager.load("/zcseg/grid_segmentation", "urban_detection/GridSegmentation", {}, {}));
   ros::Publisher pub = nh.advertise<CloudXYZIRT>("velodyne_points", 2);
   Collector<LabeledCloud> foreground;
-  ros::Subscriber sub = nh.subscribe("segmentation/foreground", 5,
-                                     &Collector<LabeledCloud>::callback, &foreground);
+  ros::Subscriber sub =
+      nh.subscribe("segmentation/foreground", 5, &Collector<LabeledCloud>::callback, &foreground);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
 
   // A flat street with one box (a car) 10 m ahead: foreground is the box.
@@ -407,10 +411,12 @@ TEST(GridSegmentation, ReceivesTheCloudItselfInsideTheManager) {
     }
   }
   cloud->sensor_origin_ = Eigen::Vector4f(7.f, 8.f, 9.f, 0.f);
-  ASSERT_TRUE(waitFor([&] {
-    pub.publish(boost::shared_ptr<const CloudXYZIRT>(cloud));
-    return foreground.size() > 0;
-  }, 10.0));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        pub.publish(boost::shared_ptr<const CloudXYZIRT>(cloud));
+        return foreground.size() > 0;
+      },
+      10.0));
   const auto fg = foreground.at(0);
   ASSERT_GT(fg->size(), 50u);
   EXPECT_FLOAT_EQ(fg->sensor_origin_.x(), 7.f);
@@ -425,10 +431,12 @@ TEST(GridSegmentation, ReceivesTheCloudItselfInsideTheManager) {
   sensor_msgs::PointCloud2 msg;
   pcl::toROSMsg(*cloud, msg);
   const std::size_t before = foreground.size();
-  ASSERT_TRUE(waitFor([&] {
-    pub2.publish(msg);
-    return foreground.size() > before;
-  }, 10.0));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        pub2.publish(msg);
+        return foreground.size() > before;
+      },
+      10.0));
   const auto copied = foreground.at(foreground.size() - 1);
   EXPECT_EQ(copied->size(), fg->size());
   EXPECT_FLOAT_EQ(copied->sensor_origin_.x(), 0.f);
@@ -464,8 +472,10 @@ TEST(GridSegmentation, RevolutionsPassedWhileUnsubscribedAreNotSkipped) {
     for (int i = 0; i < n; ++i) {
       const std::size_t before = out ? out->size() : 0;
       pub.publish(make(++seq));
-      if (out) ASSERT_TRUE(waitFor([&] { return out->size() > before; }, 5.0)) << seq;
-      else ros::WallDuration(0.01).sleep();
+      if (out)
+        ASSERT_TRUE(waitFor([&] { return out->size() > before; }, 5.0)) << seq;
+      else
+        ros::WallDuration(0.01).sleep();
     }
   };
   {
@@ -478,16 +488,19 @@ TEST(GridSegmentation, RevolutionsPassedWhileUnsubscribedAreNotSkipped) {
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 0; }, 10.0));
   feed(nullptr, 40);  // nobody listens: the stage is unsubscribed
   Collector<LabeledCloud> labeled;
-  ros::Subscriber sub = nh.subscribe("segmentation/labeled_points", 20,
-                                     &Collector<LabeledCloud>::callback, &labeled);
+  ros::Subscriber sub =
+      nh.subscribe("segmentation/labeled_points", 20, &Collector<LabeledCloud>::callback, &labeled);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() == 1; }, 10.0));
   feed(&labeled, 5);
   seq += 3;  // three revolutions lost while it listens
   feed(&labeled, 2);
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.value("lazyseq/grid_segmentation", "revolutions") == 12 &&
-           diagnostics.value("lazyseq/grid_segmentation", "skipped_revolutions") == 3;
-  }, 10.0)) << "skipped " << diagnostics.value("lazyseq/grid_segmentation", "skipped_revolutions");
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return diagnostics.value("lazyseq/grid_segmentation", "revolutions") == 12 &&
+               diagnostics.value("lazyseq/grid_segmentation", "skipped_revolutions") == 3;
+      },
+      10.0))
+      << "skipped " << diagnostics.value("lazyseq/grid_segmentation", "skipped_revolutions");
 }
 
 // Datagrams of the wrong size or from another sender never crash the source, never enter a
@@ -522,19 +535,21 @@ TEST(PacketSource, BadUdpDatagramsAreDroppedAndCounted) {
   for (std::size_t s = 0; s < 2; ++s) {
     EXPECT_EQ(scans.at(s)->packets.size(), static_cast<std::size_t>(kPacketsPerRevolution));
   }
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.value("badudp/packet_source", "bad_size_packets") == bad &&
-           diagnostics.value("badudp/packet_source", "partial_revolutions_dropped") == 1 &&
-           diagnostics.value("badudp/packet_source", "other_sender_packets") == foreign &&
-           diagnostics.value("badudp/packet_source", "packets") ==
-               static_cast<long>(packets.size());
-  }, 10.0)) << "bad " << bad << " foreign " << foreign;
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return diagnostics.value("badudp/packet_source", "bad_size_packets") == bad &&
+               diagnostics.value("badudp/packet_source", "partial_revolutions_dropped") == 1 &&
+               diagnostics.value("badudp/packet_source", "other_sender_packets") == foreign &&
+               diagnostics.value("badudp/packet_source", "packets") ==
+                   static_cast<long>(packets.size());
+      },
+      10.0))
+      << "bad " << bad << " foreign " << foreign;
 }
 
 // pcap written with PcapWriter -> PacketSource replay (half speed) -> PacketToCloud -> clouds.
 TEST(PacketSource, PcapReplayThroughPacketToCloud) {
-  const std::string pcap = "/tmp/urban_detection_test_replay_" + std::to_string(getpid()) +
-                           ".pcap";
+  const std::string pcap = "/tmp/urban_detection_test_replay_" + std::to_string(getpid()) + ".pcap";
   const double packet_period_s = 0.1 / kPacketsPerRevolution;  // 600 rpm
   const double t0 = 1700000000.0;
   {
@@ -583,7 +598,8 @@ TEST(PacketSource, PcapReplayThroughPacketToCloud) {
     EXPECT_LT(max_time, 59 * packet_period_s + 0.0004);
     if (i > 0) {  // stamps keep the recorded spacing whatever the replay rate
       const double dt_s = (pcl_conversions::fromPCL(cloud->header.stamp) -
-                           pcl_conversions::fromPCL(clouds.at(i - 1)->header.stamp)).toSec();
+                           pcl_conversions::fromPCL(clouds.at(i - 1)->header.stamp))
+                              .toSec();
       EXPECT_NEAR(dt_s, 0.1, 1e-4);
     }
   }
@@ -640,16 +656,21 @@ TEST(PacketSource, BadParametersFailInitClearly) {
   manager.load("/badip/packet_source", "urban_detection/PacketSource", {}, {});
   ros::param::set("/nopcap/packet_source/pcap", "/nonexistent/drive.pcap");
   manager.load("/nopcap/packet_source", "urban_detection/PacketSource", {}, {});
-  EXPECT_TRUE(waitFor([&] {
-    return rosout.contains(rosgraph_msgs::Log::FATAL, "'/badsrc/packet_source/port' = 70000") &&
-           rosout.contains(rosgraph_msgs::Log::FATAL, "192.168.1") &&
-           rosout.contains(rosgraph_msgs::Log::FATAL, "/nonexistent/drive.pcap");
-  }, 10.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return rosout.contains(rosgraph_msgs::Log::FATAL, "'/badsrc/packet_source/port' = 70000") &&
+               rosout.contains(rosgraph_msgs::Log::FATAL, "192.168.1") &&
+               rosout.contains(rosgraph_msgs::Log::FATAL, "/nonexistent/drive.pcap");
+      },
+      10.0));
   // The same text on /diagnostics, at ERROR (not "waiting for input").
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.sawError("badsrc/packet_source", "'/badsrc/packet_source/port' = 70000") &&
-           diagnostics.sawError("nopcap/packet_source", "/nonexistent/drive.pcap");
-  }, 5.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return diagnostics.sawError("badsrc/packet_source",
+                                    "'/badsrc/packet_source/port' = 70000") &&
+               diagnostics.sawError("nopcap/packet_source", "/nonexistent/drive.pcap");
+      },
+      5.0));
 }
 
 // A value of the wrong type is refused, never replaced by the default (issue 25): strings where
@@ -662,18 +683,24 @@ TEST(GridSegmentation, WrongParameterTypesFailInitClearly) {
   ros::param::set("/segint/grid_segmentation/min_points_per_cell", std::string("5e0"));
   manager.load("/segint/grid_segmentation", "urban_detection/GridSegmentation", {}, {});
   DiagnosticsWatcher diagnostics;
-  EXPECT_TRUE(waitFor([&] {
-    return diagnostics.sawError("segstr/grid_segmentation",
-                                "parameter '/segstr/grid_segmentation/cell_size_m' must be a "
-                                "number");
-  }, 10.0));
-  EXPECT_TRUE(waitFor([&] {
-    return rosout.contains(rosgraph_msgs::Log::FATAL,
-                           "parameter '/segstr/grid_segmentation/cell_size_m' must be a number") &&
-           rosout.contains(rosgraph_msgs::Log::FATAL,
-                           "parameter '/segint/grid_segmentation/min_points_per_cell' must be an "
-                           "integer");
-  }, 10.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return diagnostics.sawError("segstr/grid_segmentation",
+                                    "parameter '/segstr/grid_segmentation/cell_size_m' must be a "
+                                    "number");
+      },
+      10.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return rosout.contains(
+                   rosgraph_msgs::Log::FATAL,
+                   "parameter '/segstr/grid_segmentation/cell_size_m' must be a number") &&
+               rosout.contains(
+                   rosgraph_msgs::Log::FATAL,
+                   "parameter '/segint/grid_segmentation/min_points_per_cell' must be an "
+                   "integer");
+      },
+      10.0));
 }
 
 }  // namespace

@@ -52,11 +52,11 @@ DetectedObject object(std::uint32_t id, double x, double y, const std::string& l
 struct Harness {
   explicit Harness(const std::string& ns) : nh(ns) {
     pub = nh.advertise<DetectedObjectArray>("objects", 20);
-    tracks_sub = nh.subscribe<TrackedObjectArray>(
-        "objects/tracked", 50, [this](const TrackedObjectArray::ConstPtr& m) {
-          std::lock_guard<std::mutex> lock(mutex);
-          tracks.push_back(*m);
-        });
+    tracks_sub = nh.subscribe<TrackedObjectArray>("objects/tracked", 50,
+                                                  [this](const TrackedObjectArray::ConstPtr& m) {
+                                                    std::lock_guard<std::mutex> lock(mutex);
+                                                    tracks.push_back(*m);
+                                                  });
     markers_sub = nh.subscribe<visualization_msgs::MarkerArray>(
         "objects/tracked/markers", 50, [this](const visualization_msgs::MarkerArray::ConstPtr& m) {
           std::lock_guard<std::mutex> lock(mutex);
@@ -194,7 +194,8 @@ TEST(ObjectTracker, IdsStableAndDeleteMarkersAfterDeath) {
   bad.obb_pose.position.x = std::numeric_limits<double>::quiet_NaN();
   ASSERT_TRUE(h.send({bad, object(1, 12.0, -4.0, "vehicle")}, t += 0.1, seq++));
   EXPECT_TRUE(find(h.lastTracks(), parked_id));
-  EXPECT_TRUE(waitFor([&] { return rosout.contains(rosgraph_msgs::Log::ERROR, "non-finite"); }, 5.0));
+  EXPECT_TRUE(
+      waitFor([&] { return rosout.contains(rosgraph_msgs::Log::ERROR, "non-finite"); }, 5.0));
   ASSERT_TRUE(h.send({}, t += 0.1, seq++));
 
   // A gate out of range is refused as a whole, naming the parameter.
@@ -250,8 +251,9 @@ TEST(ObjectTracker, BadStartParameterIdlesWithOneFatal) {
   ASSERT_TRUE(manager.load("/ot_bad/tracker", "urban_detection/ObjectTracker", {}, {}));
   EXPECT_TRUE(waitFor(
       [&] {
-        return rosout.contains(rosgraph_msgs::Log::FATAL,
-                               "parameter '/ot_bad/tracker/tracker/birth_hits' = 0 is out of range");
+        return rosout.contains(
+            rosgraph_msgs::Log::FATAL,
+            "parameter '/ot_bad/tracker/tracker/birth_hits' = 0 is out of range");
       },
       10.0));
 }

@@ -31,8 +31,8 @@
 #include <thread>
 #include <vector>
 
-#include "urban_detection/core/common/segment_class.h"
 #include "rostest_util.h"
+#include "urban_detection/core/common/segment_class.h"
 
 namespace urban_detection {
 namespace {
@@ -82,7 +82,9 @@ int intOf(const dynamic_reconfigure::Config& c, const std::string& name) {
 }
 
 // The configuration a server is using (an empty update changes nothing and answers it).
-dynamic_reconfigure::Config current(const std::string& ns) { return setParameters(ns, {}, {}); }
+dynamic_reconfigure::Config current(const std::string& ns) {
+  return setParameters(ns, {}, {});
+}
 
 double doubleOf(const dynamic_reconfigure::Config& c, const std::string& name) {
   for (const auto& p : c.doubles) {
@@ -169,20 +171,21 @@ TEST(Reconfigure, KdTreeRejectsInvalidSetsAndOutOfRangeValues) {
   const double tolerance = doubleOf(before, "cluster_tolerance_m");
   const int min_size = intOf(before, "min_cluster_size");
   // min_cluster_size > max_cluster_size: refused, previous values kept.
-  EXPECT_FALSE(
-      trySetParameters(ns, {{"min_cluster_size", 2000}, {"max_cluster_size", 1000}}, {}));
+  EXPECT_FALSE(trySetParameters(ns, {{"min_cluster_size", 2000}, {"max_cluster_size", 1000}}, {}));
   dynamic_reconfigure::Config c = current(ns);
   EXPECT_EQ(intOf(c, "min_cluster_size"), min_size);
   EXPECT_EQ(intOf(c, "max_cluster_size"), intOf(before, "max_cluster_size"));
-  EXPECT_TRUE(waitFor([&] {
-    return rosout.contains(rosgraph_msgs::Log::ERROR, "max_cluster_size must be >= "
-                                                      "min_cluster_size");
-  }, 5.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return rosout.contains(rosgraph_msgs::Log::ERROR,
+                               "max_cluster_size must be >= "
+                               "min_cluster_size");
+      },
+      5.0));
   // 50 m is outside [0.01, 10] m: not clamped to 10 but refused with the valid value sent with
   // it, each time it is sent; the error names parameter and range.
   for (int i = 0; i < 2; ++i) {
-    EXPECT_FALSE(
-        trySetParameters(ns, {{"min_cluster_size", 20}}, {{"cluster_tolerance_m", 50.0}}));
+    EXPECT_FALSE(trySetParameters(ns, {{"min_cluster_size", 20}}, {{"cluster_tolerance_m", 50.0}}));
     c = current(ns);
     EXPECT_DOUBLE_EQ(doubleOf(c, "cluster_tolerance_m"), tolerance);
     EXPECT_EQ(intOf(c, "min_cluster_size"), min_size);
@@ -276,8 +279,9 @@ TEST(Reconfigure, ClassifierThresholdIsTunableAndOutOfRangeIsRefused) {
   EXPECT_TRUE(waitFor(
       [&] {
         return rosout.contains(rosgraph_msgs::Log::ERROR,
-                               "'" + ns + "/min_object_probability' = 1.5 is out of range: "
-                               "accepted [-1, 1]");
+                               "'" + ns +
+                                   "/min_object_probability' = 1.5 is out of range: "
+                                   "accepted [-1, 1]");
       },
       5.0));
 }
@@ -326,24 +330,27 @@ TEST(Reconfigure, CommandLineToolsFailOnARefusedValueAndShowTheReason) {
   for (const Case& k : cases) {
     ASSERT_TRUE(ros::service::waitForService(k.ns + "/set_parameters", 10000)) << k.ns;
     const double before = doubleOf(current(k.ns), k.name);
-    const auto [dynparam_status, dynparam_output] = runCommand(
-        "timeout 60 rosrun dynamic_reconfigure dynparam set " + k.ns + " " + k.name + " " +
-        k.value);
+    const auto [dynparam_status, dynparam_output] =
+        runCommand("timeout 60 rosrun dynamic_reconfigure dynparam set " + k.ns + " " + k.name +
+                   " " + k.value);
     EXPECT_NE(dynparam_status, 0) << "dynparam set " << k.ns << " " << k.name << " " << k.value
-                                  << ":\n" << dynparam_output;
+                                  << ":\n"
+                                  << dynparam_output;
     EXPECT_NE(dynparam_output.find("service call failed"), std::string::npos) << dynparam_output;
-    const auto [service_status, service_output] = runCommand(
-        "timeout 60 rosservice call " + k.ns + "/set_parameters \"{config: {doubles: [{name: " +
-        k.name + ", value: " + k.value + "}]}}\"");
+    const auto [service_status, service_output] =
+        runCommand("timeout 60 rosservice call " + k.ns +
+                   "/set_parameters \"{config: {doubles: [{name: " + k.name +
+                   ", value: " + k.value + "}]}}\"");
     EXPECT_NE(service_status, 0) << service_output;
-    EXPECT_NE(service_output.find(k.error), std::string::npos)
-        << "rosservice call output:\n" << service_output << "\nexpected:\n" << k.error;
+    EXPECT_NE(service_output.find(k.error), std::string::npos) << "rosservice call output:\n"
+                                                               << service_output << "\nexpected:\n"
+                                                               << k.error;
     EXPECT_DOUBLE_EQ(doubleOf(current(k.ns), k.name), before) << k.ns << " " << k.name;
   }
   // An accepted value: exit 0, in force.
-  const auto [status, output] =
-      runCommand("timeout 60 rosrun dynamic_reconfigure dynparam set /dp_seg/segmentation "
-                 "sensor_height_m 1.8");
+  const auto [status, output] = runCommand(
+      "timeout 60 rosrun dynamic_reconfigure dynparam set /dp_seg/segmentation "
+      "sensor_height_m 1.8");
   EXPECT_EQ(status, 0) << output;
   EXPECT_DOUBLE_EQ(doubleOf(current("/dp_seg/segmentation"), "sensor_height_m"), 1.8);
 }
@@ -396,19 +403,21 @@ TEST(Reconfigure, OutOfRangeParametersAtStartFailNamingParameterAndRange) {
   manager.load("/bad_kd/detector", "urban_detection/KdTreeDetector", {}, {});
   manager.load("/bad_mk/markers", "urban_detection/ObjectMarkers", {}, {});
   manager.load("/bad_seg/segmentation", "urban_detection/GridSegmentation", {}, {});
-  EXPECT_TRUE(waitFor([&] {
-    return rosout.contains(rosgraph_msgs::Log::FATAL,
-                           "'/bad_hg/detector/hierarchical_grid/psi_max_m' = 500 is out of "
-                           "range: accepted [0, 100] m") &&
-           rosout.contains(rosgraph_msgs::Log::FATAL,
-                           "'/bad_kd/detector/kdtree/min_cluster_size' = 0 is out of range") &&
-           rosout.contains(rosgraph_msgs::Log::FATAL,
-                           "'/bad_mk/markers/markers/box_alpha' = 1.5 is out of range: "
-                           "accepted [0, 1]") &&
-           rosout.contains(rosgraph_msgs::Log::FATAL,
-                           "'/bad_seg/segmentation/queue_size' = 0 is out of range: "
-                           "accepted [1, 100] messages");
-  }, 10.0));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return rosout.contains(rosgraph_msgs::Log::FATAL,
+                               "'/bad_hg/detector/hierarchical_grid/psi_max_m' = 500 is out of "
+                               "range: accepted [0, 100] m") &&
+               rosout.contains(rosgraph_msgs::Log::FATAL,
+                               "'/bad_kd/detector/kdtree/min_cluster_size' = 0 is out of range") &&
+               rosout.contains(rosgraph_msgs::Log::FATAL,
+                               "'/bad_mk/markers/markers/box_alpha' = 1.5 is out of range: "
+                               "accepted [0, 1]") &&
+               rosout.contains(rosgraph_msgs::Log::FATAL,
+                               "'/bad_seg/segmentation/queue_size' = 0 is out of range: "
+                               "accepted [1, 100] messages");
+      },
+      10.0));
   // The manager (this process) keeps running; the nodelets advertise nothing.
   ros::master::V_TopicInfo topics;
   ASSERT_TRUE(ros::master::getTopics(topics));

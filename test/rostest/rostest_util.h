@@ -7,8 +7,8 @@
 #include <arpa/inet.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
-#include <ros/ros.h>
 #include <netinet/in.h>
+#include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 #include <sys/socket.h>
 #include <unistd.h>

@@ -29,15 +29,15 @@ TEST(SimulatedSensorNodelet, PublishesScansGroundTruthAndTf) {
       "velodyne_packets", 10, [&](const ud::VelodyneScanConstPtr& scan) {
         ud::CloudXYZIRT cloud;
         for (const auto& p : scan->packets) {
-          decoder.decode(p.data.data(), p.data.size(), (p.stamp - scan->packets.front().stamp).toSec(),
-                         &cloud, nullptr);
+          decoder.decode(p.data.data(), p.data.size(),
+                         (p.stamp - scan->packets.front().stamp).toSec(), &cloud, nullptr);
         }
         std::lock_guard<std::mutex> lock(m);
         decoded[scan->header.stamp.toSec()] = cloud.size();
         scan_wall_times.push_back(ros::WallTime::now().toSec());
       });
-  ros::Subscriber s2 = nh.subscribe<ud::GroundTruth>(
-      "ground_truth", 10, [&](const ud::GroundTruthConstPtr& gt) {
+  ros::Subscriber s2 =
+      nh.subscribe<ud::GroundTruth>("ground_truth", 10, [&](const ud::GroundTruthConstPtr& gt) {
         std::lock_guard<std::mutex> lock(m);
         labels[gt->header.stamp.toSec()] = gt->instance_ids.size();
       });

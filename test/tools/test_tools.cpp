@@ -6,10 +6,10 @@
 // the simulator's seeded drive, so it is deterministic.
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <iterator>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <fstream>
+#include <iterator>
 
 #include <boost/property_tree/json_parser.hpp>
 #include <boost/property_tree/ptree.hpp>
@@ -66,8 +66,8 @@ class ToolsTest : public ::testing::Test {
   // Runs the bench on the simulated drive with `options`; its JSON output is in *json.
   static void bench(const std::string& name, const std::string& options, pt::ptree* json) {
     const std::string path = dir_ + "/" + name + ".json";
-    ASSERT_EQ(0, run(kTools + "/urban_detection_bench --pcap " + dir_ + "/drive.pcap" +
-                         configs() + " " + options + " --json " + path,
+    ASSERT_EQ(0, run(kTools + "/urban_detection_bench --pcap " + dir_ + "/drive.pcap" + configs() +
+                         " " + options + " --json " + path,
                      dir_ + "/" + name + ".log"));
     *json = readJson(path);
   }
@@ -94,8 +94,8 @@ TEST(ParamsTool, DocsParametersIsCurrent) {
     std::ifstream in(path);
     return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   };
-  const std::string printed = slurp(out), page = slurp(std::string(UD_SOURCE_DIR) +
-                                                        "/docs/parameters.md");
+  const std::string printed = slurp(out),
+                    page = slurp(std::string(UD_SOURCE_DIR) + "/docs/parameters.md");
   fs::remove(out);
   EXPECT_NE(printed.find("`hough/votes`"), std::string::npos);
   EXPECT_NE(printed.find("`far_merge/max_gap_m`"), std::string::npos);
@@ -131,9 +131,8 @@ TEST_F(ToolsTest, BenchMeasuresTheKdTreeOnTheSameRevolutions) {
   EXPECT_GT(b.get<double>("mean_objects_kdtree"), 0.0);
   // The shipped unsorted search, and beside it PCL's default sorted one on the same foregrounds.
   expectStage(b, "kdtree_detection_pcl_default");
-  const double ratio_default =
-      b.get<double>("stages.kdtree_detection_pcl_default.median_ms") /
-      b.get<double>("stages.hierarchical_detection.median_ms");
+  const double ratio_default = b.get<double>("stages.kdtree_detection_pcl_default.median_ms") /
+                               b.get<double>("stages.hierarchical_detection.median_ms");
   EXPECT_NEAR(ratio_default, b.get<double>("hier_vs_kdtree_pcl_default_speedup"),
               1e-3 * ratio_default);
 }
@@ -227,8 +226,9 @@ TEST_F(ToolsTest, SegEvalRejectsBadArgumentsAndMissingFiles) {
   const std::string tool = kTools + "/urban_detection_seg_eval";
   EXPECT_EQ(2, run(tool + " --sim " + dir_ + "/drive.gt", dir_ + "/se_bad1.log"));
   EXPECT_EQ(2, run(tool + " --frobnicate", dir_ + "/se_bad2.log"));
-  EXPECT_EQ(2, run(tool + " --sim " + dir_ + "/drive.gt --pcap " + dir_ +
-                       "/drive.pcap --max-frames 0", dir_ + "/se_bad3.log"));
+  EXPECT_EQ(2,
+            run(tool + " --sim " + dir_ + "/drive.gt --pcap " + dir_ + "/drive.pcap --max-frames 0",
+                dir_ + "/se_bad3.log"));
   EXPECT_EQ(1, run(tool + " --sim " + dir_ + "/missing.gt --pcap " + dir_ + "/drive.pcap",
                    dir_ + "/se_bad4.log"));
 }
@@ -253,7 +253,8 @@ TEST_F(ToolsTest, EvalTrackingWritesClearMotAndBenchTimesTheTracker) {
     EXPECT_GT(gt, 0.0) << who;
     EXPECT_EQ(r.get<double>("matches") + r.get<double>("misses"), gt) << who;
     const double mota = 1.0 - (r.get<double>("misses") + r.get<double>("false_positives") +
-                               r.get<double>("id_switches")) / gt;
+                               r.get<double>("id_switches")) /
+                                  gt;
     EXPECT_NEAR(r.get<double>("mota"), mota, 1e-4) << who;
     EXPECT_LE(r.get<double>("mota"), r.get<double>("recall") + 1e-9) << who;
   }

@@ -28,18 +28,18 @@
 #include <unordered_map>
 #include <vector>
 
-#include <boost/shared_ptr.hpp>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+#include <boost/shared_ptr.hpp>
 
 #include "urban_detection/ObjectClassifierConfig.h"
 #include "urban_detection/core/classification/object_classifier.h"
-#include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/detection/object_detector.h"
+#include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/stage_thread.h"
 #include "urban_detection/ros/validated_reconfigure.h"
-#include "urban_detection/ros/lazy_outputs.h"
 
 namespace urban_detection {
 
@@ -72,8 +72,8 @@ class DetectorNodelet : public nodelet::Nodelet {
   int queue_size_ = 2;
   int thread_nice_ = 0;
   std::unique_ptr<ros_conv::StageThread> thread_;  // runs foregroundCb
-  std::vector<core::DetectedObject> objects_;   // reused between frames
-  std::vector<core::DetectedObject> rejected_;  // non-objects of the classifier
+  std::vector<core::DetectedObject> objects_;      // reused between frames
+  std::vector<core::DetectedObject> rejected_;     // non-objects of the classifier
   std::unordered_map<std::uint32_t, std::uint32_t> id_of_index_;
   std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher objects_pub_, points_pub_, rejected_pub_;

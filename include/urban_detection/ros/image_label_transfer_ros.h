@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "urban_detection/DetectedObjectArray.h"
-#include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/spark/camera_fusion.h"
+#include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/spark/spark_segmenter.h"
 
 namespace urban_detection {

@@ -14,8 +14,8 @@
 #include <std_msgs/Header.h>
 
 #include "urban_detection/DetectedObjectArray.h"
-#include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/detection/object_detector.h"
 
 namespace urban_detection {
 namespace ros_conv {

@@ -18,9 +18,9 @@ namespace ros_conv {
 
 /// Marker options, mirrored in config/markers.yaml.
 struct ObjectMarkerParams {
-  bool show_ids = true;     // [-] add a text marker with the object id (and class if known)
-  double box_alpha = 0.45;  // [0..1] box opacity
-  double text_size_m = 0.6; // [m] height of the id text
+  bool show_ids = true;          // [-] add a text marker with the object id (and class if known)
+  double box_alpha = 0.45;       // [0..1] box opacity
+  double text_size_m = 0.6;      // [m] height of the id text
   double min_box_size_m = 0.05;  // [m] box dimensions are at least this (flat objects stay visible)
   bool colour_by_class = true;   // [-] classified objects take their class colour, others the id's
 };

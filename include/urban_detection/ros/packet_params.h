@@ -16,25 +16,25 @@ namespace urban_detection {
 
 /// urban_detection/PacketSource: live UDP socket or pcap replay -> VelodyneScan per revolution.
 struct PacketSourceParams {
-  int port = 2368;                       // [1..65535] UDP port of the sensor's data packets
-  std::string device_ip;                 // IPv4 sender to accept; empty = any sender
-  int rcvbuf_bytes = 8 * 1024 * 1024;    // [bytes] socket receive buffer (bursts, slow readers)
-  std::string pcap;                      // replay this capture instead of the socket (param `pcap`)
-  double rate = 1.0;                     // [-] replay speed factor; 0 = as fast as possible
-  bool loop = false;                     // replay the capture forever
-  bool use_pcap_time = false;            // stamp with capture time instead of "now"-based time
-  double cut_angle_deg = 0.0;            // [deg] azimuth where one revolution ends (param `cut_angle`)
-  double rpm = 600.0;                    // [rev/min] 300..1200 spin rate: expected revolution rate
-                                         //     and size (revolutions are still cut by azimuth)
-  std::string frame_id = "velodyne";     // header.frame_id of the scans
-  int queue_size = 10;                   // [messages] publisher queue
-  bool timestamp_first_packet = false;   // header.stamp = first packet's stamp (velodyne_driver's
-                                         //     parameter); false: the last packet's
+  int port = 2368;                     // [1..65535] UDP port of the sensor's data packets
+  std::string device_ip;               // IPv4 sender to accept; empty = any sender
+  int rcvbuf_bytes = 8 * 1024 * 1024;  // [bytes] socket receive buffer (bursts, slow readers)
+  std::string pcap;                    // replay this capture instead of the socket (param `pcap`)
+  double rate = 1.0;                   // [-] replay speed factor; 0 = as fast as possible
+  bool loop = false;                   // replay the capture forever
+  bool use_pcap_time = false;          // stamp with capture time instead of "now"-based time
+  double cut_angle_deg = 0.0;         // [deg] azimuth where one revolution ends (param `cut_angle`)
+  double rpm = 600.0;                 // [rev/min] 300..1200 spin rate: expected revolution rate
+                                      //     and size (revolutions are still cut by azimuth)
+  std::string frame_id = "velodyne";  // header.frame_id of the scans
+  int queue_size = 10;                // [messages] publisher queue
+  bool timestamp_first_packet = false;  // header.stamp = first packet's stamp (velodyne_driver's
+                                        //     parameter); false: the last packet's
   // Streaming decoding (`velodyne_points` published by this nodelet, lazily): each packet is
   // decoded as it arrives, so a revolution's cloud is out one packet after its last packet.
-  bool decode = false;                   // advertise velodyne_points and decode while listened
-  std::string calibration;               // YAML or db.xml calibration; empty = nominal HDL-64E S2
-  core::DecoderParams decoder;           // params `min_range`, `max_range` [m]
+  bool decode = false;          // advertise velodyne_points and decode while listened
+  std::string calibration;      // YAML or db.xml calibration; empty = nominal HDL-64E S2
+  core::DecoderParams decoder;  // params `min_range`, `max_range` [m]
 
   /// Revolutions per second the sensor (or the replay at `rate`) should deliver [Hz].
   double expectedRevolutionRateHz() const;

@@ -39,8 +39,8 @@ void checkRange(const std::string& name, T value, T min, T max, const std::strin
 /// checks the range. A parameter of the wrong type is an error, not silently ignored.
 void loadParam(const ros::NodeHandle& nh, const std::string& name, double* value, double min,
                double max, const std::string& unit = "");
-void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value, int min,
-               int max, const std::string& unit = "");
+void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value, int min, int max,
+               const std::string& unit = "");
 void loadParam(const ros::NodeHandle& nh, const std::string& name, bool* value);
 void loadParam(const ros::NodeHandle& nh, const std::string& name, std::string* value);
 /// Type-checked only (for structs whose ranges are checked as a whole afterwards).
@@ -68,8 +68,9 @@ std::string checkFields(const ros::NodeHandle& nh, const Params& params) {
 /// error, not ignored), then checkFields(): throws ParamError with the first problem.
 template <class Params>
 void loadFields(const ros::NodeHandle& nh, Params* params) {
-  core::forEachField(*params,
-                     [&nh](const core::FieldInfo& info, auto& field) { loadParam(nh, info.name, &field); });
+  core::forEachField(*params, [&nh](const core::FieldInfo& info, auto& field) {
+    loadParam(nh, info.name, &field);
+  });
   const std::string error = checkFields(nh, *params);
   if (!error.empty()) throw ParamError(error);
 }

@@ -37,9 +37,9 @@ class TunableDetectorNodelet : public DetectorNodelet {
   }
 
   void startReconfigure(const ros::NodeHandle& /*pnh*/) override {
-    reconfigure_ = std::make_unique<Reconfigure>(
-        params_nh_, ros_conv::toConfig<Config>(params_),
-        [this](const Config& config) { return apply(config); });
+    reconfigure_ =
+        std::make_unique<Reconfigure>(params_nh_, ros_conv::toConfig<Config>(params_),
+                                      [this](const Config& config) { return apply(config); });
   }
 
  private:
@@ -52,7 +52,7 @@ class TunableDetectorNodelet : public DetectorNodelet {
     return "";
   }
 
-  Params params_;       // in force
+  Params params_;              // in force
   ros::NodeHandle params_nh_;  // ~<Traits::kNamespace>
   std::unique_ptr<Reconfigure> reconfigure_;
 };

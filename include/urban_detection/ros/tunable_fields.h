@@ -67,7 +67,8 @@ Config toConfig(const Params& params) {
   Config config = Config::__getDefault__();
   dynamic_reconfigure::Config msg;
   config.__toMessage__(msg);
-  detail::forEachConfigured(msg, params, [](auto& entry, const auto& field) { entry.value = field; });
+  detail::forEachConfigured(msg, params,
+                            [](auto& entry, const auto& field) { entry.value = field; });
   config.__fromMessage__(msg);
   return config;
 }

@@ -6,7 +6,8 @@
 /// callback runs, silently changing what the user asked for. The .cfg files therefore declare
 /// no ranges: every value reaches the `apply` function, which checks the complete set with the
 /// start-up loader's own checks (checkFields(): the field table's ranges, validate()'s
-/// cross-field conditions) and refuses it as a whole when one value is out of range or a combination is invalid.
+/// cross-field conditions) and refuses it as a whole when one value is out of range or a
+/// combination is invalid.
 ///
 /// A refused set fails the `~set_parameters` call with the reason (naming the parameter and the
 /// accepted range, outOfRangeMessage()'s wording), so `dynparam set`, `rosservice call` and

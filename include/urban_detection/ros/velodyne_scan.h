@@ -16,8 +16,8 @@
 #include <functional>
 #include <string>
 
-#include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 
 namespace urban_detection {
 
@@ -38,14 +38,15 @@ class ScanAssembler {
  public:
   /// Safety limit when the azimuth never crosses the cut angle (sensor not spinning, garbage
   /// azimuths): the packets gathered so far are dropped and counted in forcedCuts().
-  static constexpr std::size_t kMaxPacketsPerScan = core::RevolutionBoundary::kMaxPacketsPerRevolution;
+  static constexpr std::size_t kMaxPacketsPerScan =
+      core::RevolutionBoundary::kMaxPacketsPerRevolution;
 
   /// `cut_angle_deg` [deg, 0..360]; `frame_id` goes into every scan's header;
   /// `expected_packets` (0: unknown) sizes the first revolution's buffer (later ones take the
   /// size of the previous revolution) and is what lastSizeProblem() checks against; the cut
   /// stays by azimuth whatever the expectation.
-  ScanAssembler(double cut_angle_deg, const std::string& frame_id,
-                std::size_t expected_packets = 0, ScanStamp stamp = ScanStamp::kLastPacket);
+  ScanAssembler(double cut_angle_deg, const std::string& frame_id, std::size_t expected_packets = 0,
+                ScanStamp stamp = ScanStamp::kLastPacket);
 
   /// Adds a packet received at `stamp`. Returns the finished revolution when this packet
   /// starts a new one (the packet then opens the next scan), otherwise null. The scan's
@@ -78,13 +79,13 @@ class ScanAssembler {
   std::size_t expected_packets_ = 700;  // capacity hint: size of the previous revolution
   std::size_t nominal_packets_ = 0;     // the expected count (rate check; 0 = unknown)
   std::size_t last_packets_ = 0;
-  std::uint32_t revolutions_ = 0;       // returned so far (header.seq)
+  std::uint32_t revolutions_ = 0;  // returned so far (header.seq)
 };
 
 /// Counters of decodeScan().
 struct ScanDecodeStats {
-  core::DecodeStats decode;          // accumulated over the packets of the scan
-  std::size_t tf_failures = 0;       // packets dropped because their transform was unavailable
+  core::DecodeStats decode;     // accumulated over the packets of the scan
+  std::size_t tf_failures = 0;  // packets dropped because their transform was unavailable
   core::PacketStatus last_bad_status = core::PacketStatus::kOk;  // why the last bad packet failed
 };
 
@@ -104,8 +105,8 @@ void decodeScan(const core::PacketDecoder& decoder, const VelodyneScan& scan,
 /// and appends its points to `cloud` (transformed by `transform` unless it is null): the step
 /// decodeScan() repeats over a scan and StreamingScanDecoder runs as each packet arrives.
 void decodePacket(const core::PacketDecoder& decoder, const std::uint8_t* data, std::size_t size,
-                  const ros::Time& stamp, const ros::Time& start,
-                  const Eigen::Affine3f* transform, CloudXYZIRT* cloud, ScanDecodeStats* stats);
+                  const ros::Time& stamp, const ros::Time& start, const Eigen::Affine3f* transform,
+                  CloudXYZIRT* cloud, ScanDecodeStats* stats);
 
 /// PacketSource's streaming path: decodes each packet as it arrives into the cloud of the open
 /// revolution, cut exactly as ScanAssembler cuts (the same core::RevolutionBoundary), so that

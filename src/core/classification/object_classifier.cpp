@@ -48,15 +48,27 @@ bool parseObjectCategory(const std::string& name, ObjectCategory* c) {
 }
 
 ObjectCategory categoryOfClassName(const std::string& name) {
-  static const char* const kVehicles[] = {
-      "car", "truck", "bus", "other-vehicle", "on-rails", "moving-car", "moving-bus",
-      "moving-truck", "moving-other-vehicle", "moving-on-rails", "Car", "Van", "Truck", "Tram",
-      "van", "vehicle"};
+  static const char* const kVehicles[] = {"car",
+                                          "truck",
+                                          "bus",
+                                          "other-vehicle",
+                                          "on-rails",
+                                          "moving-car",
+                                          "moving-bus",
+                                          "moving-truck",
+                                          "moving-other-vehicle",
+                                          "moving-on-rails",
+                                          "Car",
+                                          "Van",
+                                          "Truck",
+                                          "Tram",
+                                          "van",
+                                          "vehicle"};
   static const char* const kPedestrians[] = {"person", "moving-person", "Pedestrian",
                                              "Person_sitting", "pedestrian"};
-  static const char* const kCyclists[] = {"bicyclist", "motorcyclist", "bicycle", "motorcycle",
-                                          "moving-bicyclist", "moving-motorcyclist", "Cyclist",
-                                          "cyclist"};
+  static const char* const kCyclists[] = {"bicyclist",  "motorcyclist",     "bicycle",
+                                          "motorcycle", "moving-bicyclist", "moving-motorcyclist",
+                                          "Cyclist",    "cyclist"};
   static const char* const kOthers[] = {"other-object", "Misc", "bin", "bench", "other_object"};
   for (const char* n : kVehicles) {
     if (name == n) return ObjectCategory::kVehicle;
@@ -84,9 +96,9 @@ std::string validate(const ClassifierTrainingParams& p) {
           "in [1, 100000]");
   require(p.active_var_count >= 0 && p.active_var_count <= kNumObjectFeatures, "active_var_count",
           "in [0, number of features]");
-  require(std::isfinite(p.object_threshold) && p.object_threshold >= 0.0 &&
-              p.object_threshold <= 1.0,
-          "object_threshold", "in [0, 1]");
+  require(
+      std::isfinite(p.object_threshold) && p.object_threshold >= 0.0 && p.object_threshold <= 1.0,
+      "object_threshold", "in [0, 1]");
   return error;
 }
 
@@ -104,20 +116,24 @@ std::string validate(const ObjectClassifierParams& p) {
 ObjectClassifierModel::ObjectClassifierModel() = default;
 ObjectClassifierModel::~ObjectClassifierModel() = default;
 ObjectClassifierModel::ObjectClassifierModel(ObjectClassifierModel&&) noexcept = default;
-ObjectClassifierModel& ObjectClassifierModel::operator=(ObjectClassifierModel&&) noexcept =
-    default;
+ObjectClassifierModel& ObjectClassifierModel::operator=(ObjectClassifierModel&&) noexcept = default;
 
-bool ObjectClassifierModel::trained() const { return forest_ && forest_->isTrained(); }
+bool ObjectClassifierModel::trained() const {
+  return forest_ && forest_->isTrained();
+}
 
 int ObjectClassifierModel::trees() const {
   return trained() ? static_cast<int>(forest_->getRoots().size()) : 0;
 }
 
-int ObjectClassifierModel::usedFeatures() const { return featureCount(use_intensity_); }
+int ObjectClassifierModel::usedFeatures() const {
+  return featureCount(use_intensity_);
+}
 
-ObjectClassifierModel ObjectClassifierModel::train(
-    const std::vector<ObjectFeatureVector>& features, const std::vector<ObjectCategory>& classes,
-    const ClassifierTrainingParams& params, const ObjectFeatureParams& feature_params) {
+ObjectClassifierModel ObjectClassifierModel::train(const std::vector<ObjectFeatureVector>& features,
+                                                   const std::vector<ObjectCategory>& classes,
+                                                   const ClassifierTrainingParams& params,
+                                                   const ObjectFeatureParams& feature_params) {
   std::string error = validate(params);
   if (error.empty()) error = validate(feature_params);
   if (!error.empty()) throw std::invalid_argument("classifier training: " + error);
@@ -152,9 +168,9 @@ ObjectClassifierModel ObjectClassifierModel::train(
   const cv::Mat responses(static_cast<int>(labels.size()), 1, CV_32S, labels.data());
   cv::Mat var_type(1, used + 1, CV_8U, cv::Scalar(cv::ml::VAR_ORDERED));
   var_type.at<std::uint8_t>(0, used) = cv::ml::VAR_CATEGORICAL;
-  const cv::Ptr<cv::ml::TrainData> data = cv::ml::TrainData::create(
-      samples, cv::ml::ROW_SAMPLE, responses, cv::noArray(), cv::noArray(), cv::noArray(),
-      var_type);
+  const cv::Ptr<cv::ml::TrainData> data =
+      cv::ml::TrainData::create(samples, cv::ml::ROW_SAMPLE, responses, cv::noArray(),
+                                cv::noArray(), cv::noArray(), var_type);
   cv::Ptr<cv::ml::RTrees> forest = cv::ml::RTrees::create();
   forest->setMaxDepth(params.max_depth);
   forest->setMinSampleCount(params.min_sample_count);
@@ -184,18 +200,22 @@ void ObjectClassifierModel::save(const std::string& path) const {
     fs << "description" << description_;
     fs << "object_threshold" << object_threshold_;
     fs << "use_intensity" << static_cast<int>(use_intensity_);
-    fs << "feature_params" << "{"
+    fs << "feature_params"
+       << "{"
        << "sensor_height_m" << feature_params_.sensor_height_m << "row_gap_deg"
        << feature_params_.row_gap_deg << "max_azimuth_gap_deg"
        << feature_params_.max_azimuth_gap_deg << "jump_m" << feature_params_.jump_m
        << "azimuth_resolution_deg" << feature_params_.azimuth_resolution_deg << "}";
-    fs << "features" << "[";
+    fs << "features"
+       << "[";
     for (int k = 0; k < usedFeatures(); ++k) fs << featureName(k);
     fs << "]";
-    fs << "classes" << "[";
+    fs << "classes"
+       << "[";
     for (int c = 0; c < kNumObjectCategories; ++c) fs << toString(static_cast<ObjectCategory>(c));
     fs << "]";
-    fs << "forest" << "{";
+    fs << "forest"
+       << "{";
     forest_->write(fs);
     fs << "}";
     fs.release();

@@ -13,17 +13,41 @@ namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
 
-const char* const kFeatureNames[kNumObjectFeatures] = {
-    "points",          "points_at_10m",      "range_m",         "length_m",
-    "width_m",         "height_m",           "footprint_m2",    "bottom_m",
-    "top_m",           "mean_above_bottom_m", "std_z_m",        "linearity",
-    "planarity",       "scattering",         "normal_z",        "principal_z",
-    "xy_elongation",   "profile_0",          "profile_1",       "profile_2",
-    "profile_3",       "below_0_5m",         "above_1_5m",      "rows",
-    "points_per_row",  "azimuth_fill",       "row_neighbours",  "jump_fraction",
-    "mean_second_diff_m", "intensity_mean",  "intensity_std",   "intensity_q10",
-    "intensity_q50",   "intensity_q90",      "intensity_max"};
-
+const char* const kFeatureNames[kNumObjectFeatures] = {"points",
+                                                       "points_at_10m",
+                                                       "range_m",
+                                                       "length_m",
+                                                       "width_m",
+                                                       "height_m",
+                                                       "footprint_m2",
+                                                       "bottom_m",
+                                                       "top_m",
+                                                       "mean_above_bottom_m",
+                                                       "std_z_m",
+                                                       "linearity",
+                                                       "planarity",
+                                                       "scattering",
+                                                       "normal_z",
+                                                       "principal_z",
+                                                       "xy_elongation",
+                                                       "profile_0",
+                                                       "profile_1",
+                                                       "profile_2",
+                                                       "profile_3",
+                                                       "below_0_5m",
+                                                       "above_1_5m",
+                                                       "rows",
+                                                       "points_per_row",
+                                                       "azimuth_fill",
+                                                       "row_neighbours",
+                                                       "jump_fraction",
+                                                       "mean_second_diff_m",
+                                                       "intensity_mean",
+                                                       "intensity_std",
+                                                       "intensity_q10",
+                                                       "intensity_q50",
+                                                       "intensity_q90",
+                                                       "intensity_max"};
 
 // Intensity buckets of the quantile selection, monotone in the value: below 0, one per unit of
 // [0, 256) (an HDL-64E reports integer intensities, so a bucket usually holds one value), 256
@@ -35,8 +59,8 @@ inline int intensityBucket(float v) {
 
 }  // namespace
 
-void selectRanks(const std::vector<float>& values, const std::size_t* ranks, int count,
-                 float* out, std::vector<float>* scratch) {
+void selectRanks(const std::vector<float>& values, const std::size_t* ranks, int count, float* out,
+                 std::vector<float>* scratch) {
   std::uint32_t start[kIntensityBuckets + 1] = {};
   for (const float v : values) ++start[intensityBucket(v) + 1];
   for (int b = 1; b <= kIntensityBuckets; ++b) start[b] += start[b - 1];
@@ -63,9 +87,9 @@ std::string validate(const ObjectFeatureParams& p) {
   auto require = [&error](bool ok, const char* field, const char* range) {
     if (!ok && error.empty()) error = std::string(field) + " must be " + range;
   };
-  require(std::isfinite(p.sensor_height_m) && p.sensor_height_m >= -10.0 &&
-              p.sensor_height_m <= 10.0,
-          "sensor_height_m", "in [-10, 10] m");
+  require(
+      std::isfinite(p.sensor_height_m) && p.sensor_height_m >= -10.0 && p.sensor_height_m <= 10.0,
+      "sensor_height_m", "in [-10, 10] m");
   require(std::isfinite(p.row_gap_deg) && p.row_gap_deg > 0.0 && p.row_gap_deg <= 5.0,
           "row_gap_deg", "in (0, 5] deg");
   require(std::isfinite(p.max_azimuth_gap_deg) && p.max_azimuth_gap_deg > 0.0 &&
@@ -168,7 +192,8 @@ ObjectFeatureVector ObjectFeatureExtractor::compute(const LabeledCloud& foregrou
     f[kFeatPrincipalZ] = static_cast<float>(std::abs(eig.eigenvectors()(2, 2)));
     const double a = cov(0, 0), b = cov(0, 1), c = cov(1, 1);
     const double mid = 0.5 * (a + c), dev = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
-    if (mid + dev > 1e-12) f[kFeatXyElongation] = static_cast<float>(1.0 - (mid - dev) / (mid + dev));
+    if (mid + dev > 1e-12)
+      f[kFeatXyElongation] = static_cast<float>(1.0 - (mid - dev) / (mid + dev));
   }
 
   // Vertical profile.
@@ -220,7 +245,7 @@ ObjectFeatureVector ObjectFeatureExtractor::compute(const LabeledCloud& foregrou
   while (begin < n) {
     std::size_t end = begin + 1;
     if (bins <= kMaxBins) {
-      while (bin_start_[bin + 1] == bin_start_[bin]) ++bin;  // skip empty bins
+      while (bin_start_[bin + 1] == bin_start_[bin]) ++bin;               // skip empty bins
       while (bin < bins && bin_start_[bin + 1] > bin_start_[bin]) ++bin;  // the run
       end = bin_start_[bin];
     } else {

@@ -18,7 +18,9 @@ std::string validate(const ObjectFilterParams& p) {
   return checkFieldRanges(p);
 }
 
-ObjectFilter::ObjectFilter(const ObjectFilterParams& params) { setParams(params); }
+ObjectFilter::ObjectFilter(const ObjectFilterParams& params) {
+  setParams(params);
+}
 
 void ObjectFilter::setParams(const ObjectFilterParams& params) {
   const std::string error = validate(params);

@@ -6,8 +6,8 @@
 namespace urban_detection {
 namespace core {
 
-void countCells(const LabeledCloud& cloud, double cell_m, double half_extent_m,
-                std::size_t t_min, CellCounts* counts) {
+void countCells(const LabeledCloud& cloud, double cell_m, double half_extent_m, std::size_t t_min,
+                CellCounts* counts) {
   counts->cell_m = cell_m;
   if (!(cell_m > 0.0) || !(half_extent_m > 0.0)) return;
   // One cell of margin on each side so the empty rim of border cells is always inside.

@@ -23,7 +23,9 @@ constexpr int kForward[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
 constexpr double kMaxDenseCells = 64.0 * 1024 * 1024;
 
 // The psi test of two sub-cells through their keys (header of weighDensities()).
-inline bool withinPsi(float za, float zb, float psi_max) { return std::fabs(za - zb) <= psi_max; }
+inline bool withinPsi(float za, float zb, float psi_max) {
+  return std::fabs(za - zb) <= psi_max;
+}
 
 // Union-find root with path halving; inline, it runs for every link tried.
 inline std::int32_t findRoot(std::int32_t* parent, std::int32_t i) {
@@ -59,9 +61,8 @@ const HierarchicalGridDetectorParams& checked(const HierarchicalGridDetectorPara
 
 std::string validate(const HierarchicalGridDetectorParams& p) {
   std::string error = checkFieldRanges(p);
-  if (error.empty() &&
-      std::pow(2.0 * std::ceil(p.grid_half_extent_m / p.coarse_cell_m) * p.xi, 2) >
-          kMaxDenseCells) {
+  if (error.empty() && std::pow(2.0 * std::ceil(p.grid_half_extent_m / p.coarse_cell_m) * p.xi, 2) >
+                           kMaxDenseCells) {
     error = "grid_half_extent_m / (coarse_cell_m / xi) gives more than " +
             std::to_string(kMaxDenseCells) +
             " sub-cells; enlarge coarse_cell_m or reduce grid_half_extent_m";
@@ -365,7 +366,7 @@ std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground)
       const __m128i ok_i = _mm_castps_si128(ok);
       const __m128i cell =
           _mm_or_si128(_mm_and_si128(_mm_add_epi32(_mm_add_epi32(prod, ix), v_pad), ok_i),
-                                        _mm_andnot_si128(ok_i, _mm_set1_epi32(-1)));
+                       _mm_andnot_si128(ok_i, _mm_set1_epi32(-1)));
       _mm_storeu_si128(reinterpret_cast<__m128i*>(point_cell + i), cell);
       // (Entry -1 lies before the map; a prefetch never faults.)
       for (int j = 0; j < 4; ++j) __builtin_prefetch(slot_map_base + point_cell[i + j]);
@@ -496,9 +497,9 @@ void HierarchicalGridDetector::weighDensities() {
     const int table = d2 > gap_range2 ? 2 : d2 > bridge_range2 ? 1 : 0;
     const int bin = directionBin(x, y);
     const int len = probe_row_len_[table];
-    dense_.probe_of[s] = ProbeRow{probe_row_begin_[table] + bin * len, len,
-                            d2 < dcell * dcell ? std::uint64_t{0xf}
-                                               : probe_mask_[table * kDirectionBins + bin]};
+    dense_.probe_of[s] = ProbeRow{
+        probe_row_begin_[table] + bin * len, len,
+        d2 < dcell * dcell ? std::uint64_t{0xf} : probe_mask_[table * kDirectionBins + bin]};
     if (rho[s] >= thr) {
       dense_.occupied[s] = 1;
       const std::int32_t cell = dense_.cell[s];
@@ -681,8 +682,7 @@ std::size_t HierarchicalGridDetector::filterComponents(std::int32_t ncomp) {
 // the way, so the cloud is read once, sequentially. The objects vector is resized, not cleared,
 // so the index vectors keep their capacity between frames.
 void HierarchicalGridDetector::emitObjects(const LabeledCloud& foreground, std::int32_t ncomp,
-                                           std::size_t nobj,
-                                           std::vector<DetectedObject>* objects) {
+                                           std::size_t nobj, std::vector<DetectedObject>* objects) {
   const std::size_t n = foreground.points.size();
   const std::int32_t nds = static_cast<std::int32_t>(dense_.cell.size());
   objects->resize(nobj);
@@ -698,7 +698,8 @@ void HierarchicalGridDetector::emitObjects(const LabeledCloud& foreground, std::
     objects_.index_out[k] = (*objects)[k].indices.data();
   }
   objects_.xy.resize(objects_.begin[nobj]);
-  for (std::size_t k = 0; k < nobj; ++k) objects_.xy_out[k] = objects_.xy.data() + objects_.begin[k];
+  for (std::size_t k = 0; k < nobj; ++k)
+    objects_.xy_out[k] = objects_.xy.data() + objects_.begin[k];
   objects_.moments.assign(nobj, ObjectMoments());
   // Output object per sub-cell slot + 1 (slot -1, a point in no sub-cell, gives -1).
   comps_.slot_object.resize(nds + 1);

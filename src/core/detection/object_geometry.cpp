@@ -46,7 +46,9 @@ constexpr std::uint64_t kNoPoint = 0xffffffffu;
 inline std::uint64_t highKey(std::uint32_t i, std::uint32_t ord) {
   return static_cast<std::uint64_t>(ord) << 32 | static_cast<std::uint32_t>(~i);
 }
-inline std::uint32_t pointOf(std::uint64_t key) { return ~static_cast<std::uint32_t>(key); }
+inline std::uint32_t pointOf(std::uint64_t key) {
+  return ~static_cast<std::uint32_t>(key);
+}
 
 // A column: its low and high keys side by side.
 struct ColumnKeys {

@@ -65,8 +65,7 @@ bool KittiCalibration::project(const Eigen::Vector3d& p_velo, double* u, double*
   return std::isfinite(*u) && std::isfinite(*v);
 }
 
-bool readKittiCalibration(const std::string& path, KittiCalibration* calib,
-                          std::string* error) {
+bool readKittiCalibration(const std::string& path, KittiCalibration* calib, std::string* error) {
   std::ifstream in(path);
   if (!in) {
     setError(error, "cannot open " + path);
@@ -86,8 +85,8 @@ bool readKittiCalibration(const std::string& path, KittiCalibration* calib,
   auto need = [&](const char* key, std::size_t count) -> const std::vector<double>* {
     auto it = rows.find(key);
     if (it == rows.end() || it->second.size() != count) {
-      setError(error, path + ": missing or malformed " + key + " (need " +
-                          std::to_string(count) + " numbers)");
+      setError(error, path + ": missing or malformed " + key + " (need " + std::to_string(count) +
+                          " numbers)");
       return nullptr;
     }
     for (double x : it->second) {
@@ -131,8 +130,7 @@ bool parseKittiLabelLine(const std::string& line, KittiLabel* label) {
   return true;
 }
 
-bool readKittiLabels(const std::string& path, std::vector<KittiLabel>* labels,
-                     std::string* error) {
+bool readKittiLabels(const std::string& path, std::vector<KittiLabel>* labels, std::string* error) {
   std::ifstream in(path);
   if (!in) {
     setError(error, "cannot open " + path);
@@ -249,8 +247,8 @@ bool readPngSize(const std::string& path, int* width_px, int* height_px) {
   static const unsigned char kSig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (std::memcmp(h, kSig, 8) != 0 || std::memcmp(h + 12, "IHDR", 4) != 0) return false;
   auto be32 = [](const unsigned char* b) {
-    return (std::uint32_t(b[0]) << 24) | (std::uint32_t(b[1]) << 16) |
-           (std::uint32_t(b[2]) << 8) | std::uint32_t(b[3]);
+    return (std::uint32_t(b[0]) << 24) | (std::uint32_t(b[1]) << 16) | (std::uint32_t(b[2]) << 8) |
+           std::uint32_t(b[3]);
   };
   const std::uint32_t w = be32(h + 16), hh = be32(h + 20);
   if (w == 0 || hh == 0 || w > 100000 || hh > 100000) return false;
@@ -264,13 +262,31 @@ bool readPngSize(const std::string& path, int* width_px, int* height_px) {
 
 SemanticKittiCategory semanticKittiCategory(std::uint16_t c) {
   switch (c) {
-    case 10: case 11: case 13: case 15: case 16: case 18: case 20:  // vehicles
-    case 30: case 31: case 32:                                       // person, riders
-    case 252: case 253: case 254: case 255: case 256: case 257: case 258: case 259:  // moving
+    case 10:
+    case 11:
+    case 13:
+    case 15:
+    case 16:
+    case 18:
+    case 20:  // vehicles
+    case 30:
+    case 31:
+    case 32:  // person, riders
+    case 252:
+    case 253:
+    case 254:
+    case 255:
+    case 256:
+    case 257:
+    case 258:
+    case 259:  // moving
       return SemanticKittiCategory::kThing;
-    case 0: case 1:             // unlabeled, outlier
-    case 71: case 80: case 81:  // trunk, pole, traffic-sign
-    case 99:                    // other-object
+    case 0:
+    case 1:  // unlabeled, outlier
+    case 71:
+    case 80:
+    case 81:  // trunk, pole, traffic-sign
+    case 99:  // other-object
       return SemanticKittiCategory::kDontCare;
     default:  // building 50, fence 51, other-structure 52, vegetation 70, ground 40-49/60/72
       return SemanticKittiCategory::kBackground;
@@ -279,47 +295,81 @@ SemanticKittiCategory semanticKittiCategory(std::uint16_t c) {
 
 std::string semanticKittiClassName(std::uint16_t c) {
   switch (c) {
-    case 0: return "unlabeled";
-    case 1: return "outlier";
-    case 10: return "car";
-    case 11: return "bicycle";
-    case 13: return "bus";
-    case 15: return "motorcycle";
-    case 16: return "on-rails";
-    case 18: return "truck";
-    case 20: return "other-vehicle";
-    case 30: return "person";
-    case 31: return "bicyclist";
-    case 32: return "motorcyclist";
-    case 40: return "road";
-    case 44: return "parking";
-    case 48: return "sidewalk";
-    case 49: return "other-ground";
-    case 50: return "building";
-    case 51: return "fence";
-    case 52: return "other-structure";
-    case 60: return "lane-marking";
-    case 70: return "vegetation";
-    case 71: return "trunk";
-    case 72: return "terrain";
-    case 80: return "pole";
-    case 81: return "traffic-sign";
-    case 99: return "other-object";
-    case 252: return "moving-car";
-    case 253: return "moving-bicyclist";
-    case 254: return "moving-person";
-    case 255: return "moving-motorcyclist";
-    case 256: return "moving-on-rails";
-    case 257: return "moving-bus";
-    case 258: return "moving-truck";
-    case 259: return "moving-other-vehicle";
-    default: return "class_" + std::to_string(c);
+    case 0:
+      return "unlabeled";
+    case 1:
+      return "outlier";
+    case 10:
+      return "car";
+    case 11:
+      return "bicycle";
+    case 13:
+      return "bus";
+    case 15:
+      return "motorcycle";
+    case 16:
+      return "on-rails";
+    case 18:
+      return "truck";
+    case 20:
+      return "other-vehicle";
+    case 30:
+      return "person";
+    case 31:
+      return "bicyclist";
+    case 32:
+      return "motorcyclist";
+    case 40:
+      return "road";
+    case 44:
+      return "parking";
+    case 48:
+      return "sidewalk";
+    case 49:
+      return "other-ground";
+    case 50:
+      return "building";
+    case 51:
+      return "fence";
+    case 52:
+      return "other-structure";
+    case 60:
+      return "lane-marking";
+    case 70:
+      return "vegetation";
+    case 71:
+      return "trunk";
+    case 72:
+      return "terrain";
+    case 80:
+      return "pole";
+    case 81:
+      return "traffic-sign";
+    case 99:
+      return "other-object";
+    case 252:
+      return "moving-car";
+    case 253:
+      return "moving-bicyclist";
+    case 254:
+      return "moving-person";
+    case 255:
+      return "moving-motorcyclist";
+    case 256:
+      return "moving-on-rails";
+    case 257:
+      return "moving-bus";
+    case 258:
+      return "moving-truck";
+    case 259:
+      return "moving-other-vehicle";
+    default:
+      return "class_" + std::to_string(c);
   }
 }
 
 void buildSemanticKittiGroundTruth(const std::vector<std::uint32_t>& labels,
-                                   const SemanticKittiGroundTruthParams& params,
-                                   EvalFrame* gt) {
+                                   const SemanticKittiGroundTruthParams& params, EvalFrame* gt) {
   gt->reset(labels.size());
   std::map<std::uint32_t, std::int32_t> object_of_label;  // full label (class|instance) -> GT
   for (std::size_t i = 0; i < labels.size(); ++i) {
@@ -387,8 +437,7 @@ void buildSimulatedGroundTruth(const GroundTruthFrame& frame,
   gt->finalize(params.min_points);
 }
 
-SimulatedDriveReader::SimulatedDriveReader(const std::string& pcap_path,
-                                           const std::string& gt_path,
+SimulatedDriveReader::SimulatedDriveReader(const std::string& pcap_path, const std::string& gt_path,
                                            const Calibration& calibration, double cut_angle_deg,
                                            const DecoderParams& decoder_params)
     : pcap_(pcap_path, cut_angle_deg), gt_reader_(gt_path), decoder_(calibration, decoder_params) {}

@@ -114,8 +114,8 @@ void DetectionEvaluator::evaluate(const EvalFrame& gt,
     std::uint32_t inter;
   };
   std::vector<Overlap> overlaps;
-  std::vector<std::size_t> scored(num_det, 0);        // scored points of each detection
-  std::vector<std::size_t> dont_care(num_det, 0);     // don't-care or ignored-GT points
+  std::vector<std::size_t> scored(num_det, 0);     // scored points of each detection
+  std::vector<std::size_t> dont_care(num_det, 0);  // don't-care or ignored-GT points
   gt_hits_.assign(num_gt, 0);
 
   for (std::size_t d = 0; d < num_det; ++d) {
@@ -134,8 +134,8 @@ void DetectionEvaluator::evaluate(const EvalFrame& gt,
       }
     }
     for (const std::int32_t g : touched_) {
-      overlaps.push_back({static_cast<std::uint32_t>(d), static_cast<std::uint32_t>(g),
-                          gt_hits_[g]});
+      overlaps.push_back(
+          {static_cast<std::uint32_t>(d), static_cast<std::uint32_t>(g), gt_hits_[g]});
       gt_hits_[g] = 0;
     }
   }

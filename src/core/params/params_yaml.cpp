@@ -30,31 +30,31 @@ bool applyFields(const YAML::Node& node, const std::string& where, Params* param
       groups.insert(info.name.substr(0, slash));
     }
   });
-  std::function<bool(const YAML::Node&, const std::string&)> walk =
-      [&](const YAML::Node& map, const std::string& prefix) {
-        if (!map.IsMap()) {
-          *error = where + prefix + "expected a map of parameters";
+  std::function<bool(const YAML::Node&, const std::string&)> walk = [&](const YAML::Node& map,
+                                                                        const std::string& prefix) {
+    if (!map.IsMap()) {
+      *error = where + prefix + "expected a map of parameters";
+      return false;
+    }
+    for (const auto& kv : map) {
+      const std::string name = prefix + kv.first.as<std::string>();
+      const auto setter = setters.find(name);
+      if (setter != setters.end()) {
+        try {
+          setter->second(kv.second);
+        } catch (const YAML::Exception& e) {
+          *error = where + name + ": wrong type (" + e.what() + ")";
           return false;
         }
-        for (const auto& kv : map) {
-          const std::string name = prefix + kv.first.as<std::string>();
-          const auto setter = setters.find(name);
-          if (setter != setters.end()) {
-            try {
-              setter->second(kv.second);
-            } catch (const YAML::Exception& e) {
-              *error = where + name + ": wrong type (" + e.what() + ")";
-              return false;
-            }
-          } else if (groups.count(name)) {
-            if (!walk(kv.second, name + "/")) return false;
-          } else {
-            *error = where + name + ": unknown parameter";
-            return false;
-          }
-        }
-        return true;
-      };
+      } else if (groups.count(name)) {
+        if (!walk(kv.second, name + "/")) return false;
+      } else {
+        *error = where + name + ": unknown parameter";
+        return false;
+      }
+    }
+    return true;
+  };
   if (!walk(node, "")) return false;
   const std::string invalid = validate(*params);
   if (!invalid.empty()) *error = where + invalid;
@@ -74,7 +74,8 @@ bool loadRoot(const std::string& path, const std::string& section, YAML::Node* r
 }
 
 // A detector file (config/hierarchical_grid.yaml, config/kdtree.yaml): `hierarchical_grid:` and
-// `kdtree:` maps (other top-level keys are left to the ROS layer, e.g. marker settings, and ignored here).
+// `kdtree:` maps (other top-level keys are left to the ROS layer, e.g. marker settings, and ignored
+// here).
 bool applyDetection(const YAML::Node& root, const std::string& where,
                     HierarchicalGridDetectorParams* hier, KdTreeDetectorParams* kd,
                     std::string* error) {
@@ -133,8 +134,8 @@ bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& sec
   return applyFields(root, path + ": ", p, error);
 }
 
-bool loadHierarchicalGridParamsYaml(const std::string& path,
-                                    HierarchicalGridDetectorParams* params, std::string* error) {
+bool loadHierarchicalGridParamsYaml(const std::string& path, HierarchicalGridDetectorParams* params,
+                                    std::string* error) {
   YAML::Node root;
   if (!loadRoot(path, "", &root, error)) return false;
   return applyDetection(root, path + ": ", params, nullptr, error);
@@ -165,8 +166,7 @@ bool loadPipelineParamsYaml(const std::string& path, GridSegmenterParams* segmen
     return !root["detection"] ||
            applyDetection(root["detection"], where + "detection/", hierarchical, kdtree, error);
   }
-  if (root["hierarchical_grid"] || root["kdtree"] || root["object_filter"] ||
-      root["classifier"]) {
+  if (root["hierarchical_grid"] || root["kdtree"] || root["object_filter"] || root["classifier"]) {
     return applyDetection(root, where, hierarchical, kdtree, error);
   }
   return !segmentation || applyFields(root, where, segmentation, error);

@@ -27,7 +27,9 @@ constexpr int kDc[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
 
 }  // namespace
 
-std::string validate(const GridSegmenterParams& p) { return checkFieldRanges(p); }
+std::string validate(const GridSegmenterParams& p) {
+  return checkFieldRanges(p);
+}
 
 GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
     : params_(params), grid_(gridParamsOf(params)), hough_(params.hough) {
@@ -49,8 +51,8 @@ GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
 }
 
 void GridSegmenter::setParams(const GridSegmenterParams& params) {
-  const bool geometry_changed = params.cell_size_m != params_.cell_size_m ||
-                                params.max_range_m != params_.max_range_m;
+  const bool geometry_changed =
+      params.cell_size_m != params_.cell_size_m || params.max_range_m != params_.max_range_m;
   params_ = params;
   hough_.setParams(params.hough);
   if (geometry_changed) *this = GridSegmenter(params);
@@ -72,7 +74,8 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
               static_cast<float>(params_.max_abs_height_m));
   stats_.cells_occupied = static_cast<std::uint32_t>(grid_.occupiedCells().size());
 
-  const std::uint32_t min_pts = static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
+  const std::uint32_t min_pts =
+      static_cast<std::uint32_t>(std::max(1, params_.min_points_per_cell));
   const ConstArrayView<std::int32_t> occupied = grid_.occupiedCells();
   const ConstArrayView<GridCell> stats = grid_.occupiedStats();
   // Per cell: clutter, or dense (and flat); per slot: the elevation the terrain growing
@@ -213,7 +216,7 @@ void GridSegmenter::growGround() {
   const std::size_t bit_words = bit_words_;
   auto markTerrain = [bits, bit_words](int r, int k) {
     bits[static_cast<std::size_t>(r) * bit_words + ((k + 64) >> 6)] |= std::uint64_t{1}
-                                                                      << ((k + 64) & 63);
+                                                                       << ((k + 64) & 63);
   };
   // Each cell is queued and touched at most once per frame: both buffers hold numCells().
   QueueEntry* queue = grow_queue_.data();

@@ -8,7 +8,9 @@
 namespace urban_detection {
 namespace core {
 
-std::string validate(const HoughWallRefinerParams& p) { return checkFieldRanges(p); }
+std::string validate(const HoughWallRefinerParams& p) {
+  return checkFieldRanges(p);
+}
 
 HoughWallRefiner::HoughWallRefiner(const HoughWallRefinerParams& params) : params_(params) {}
 
@@ -103,8 +105,7 @@ HoughWallStats HoughWallRefiner::refine(int rows, int cols, double cell_size_m,
     const std::size_t n = line_px_.size();
     const double min_mixed_len = params_.min_mixed_wall_length_m / cell_size_m;
     auto length = [&](std::size_t a, std::size_t b) {
-      return std::hypot(line_px_[b].col - line_px_[a].col, line_px_[b].row - line_px_[a].row) +
-             1.0;
+      return std::hypot(line_px_[b].col - line_px_[a].col, line_px_[b].row - line_px_[a].row) + 1.0;
     };
     // Runs of pixels in [from, to] with `member` set, bridging gaps up to gap_cells; calls
     // `take(start, last, occupied, support)` for each.

@@ -253,10 +253,10 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
       const __m128 fr = _mm_mul_ps(_mm_sub_ps(y, org4), inv4);
       const __m128 h = _mm_add_ps(z, off4);
       _mm_storeu_ps(pz + i, h);
-      const __m128 ok = _mm_and_ps(
-          _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(fc, zero4), _mm_cmplt_ps(fc, side4)),
-                     _mm_and_ps(_mm_cmpge_ps(fr, zero4), _mm_cmplt_ps(fr, side4))),
-          _mm_cmple_ps(_mm_andnot_ps(sign4, h), maxh4));
+      const __m128 ok =
+          _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpge_ps(fc, zero4), _mm_cmplt_ps(fc, side4)),
+                                _mm_and_ps(_mm_cmpge_ps(fr, zero4), _mm_cmplt_ps(fr, side4))),
+                     _mm_cmple_ps(_mm_andnot_ps(sign4, h), maxh4));
       const __m128i valid = _mm_castps_si128(ok);
       // row * side + col in 32-bit lanes with SSE2 only (no pmulld): two 32x32->64 products.
       const __m128i r = _mm_cvttps_epi32(fr), k = _mm_cvttps_epi32(fc);

@@ -94,7 +94,9 @@ const char* toString(PacketStatus status) {
   return "unknown status";
 }
 
-double firingTimeOffset(int firing) { return firing * kFiringPeriodS; }
+double firingTimeOffset(int firing) {
+  return firing * kFiringPeriodS;
+}
 
 std::uint16_t blockAzimuth(const std::uint8_t* data, int block) {
   return readU16(data + block * kBlockSize + 2);
@@ -145,16 +147,31 @@ std::string velodyneModelName(const std::uint8_t* data, std::size_t size) {
   const std::uint8_t mode = data[1204], product = data[1205];
   const char* model = nullptr;
   switch (product) {  // factory byte: Velodyne's interface manuals (VLP-16, VLP-32C, HDL-32E)
-    case 0x21: model = "HDL-32E"; break;
-    case 0x22: model = "VLP-16"; break;
-    case 0x24: model = "Puck Hi-Res"; break;
-    case 0x28: model = "VLP-32C"; break;
-    case 0x31: model = "Velarray"; break;
-    case 0xA1: model = "VLS-128"; break;
-    default: break;
+    case 0x21:
+      model = "HDL-32E";
+      break;
+    case 0x22:
+      model = "VLP-16";
+      break;
+    case 0x24:
+      model = "Puck Hi-Res";
+      break;
+    case 0x28:
+      model = "VLP-32C";
+      break;
+    case 0x31:
+      model = "Velarray";
+      break;
+    case 0xA1:
+      model = "VLS-128";
+      break;
+    default:
+      break;
   }
-  const char* returns = mode == 0x37 ? "strongest return" : mode == 0x38 ? "last return"
-                        : mode == 0x39 ? "dual return" : nullptr;
+  const char* returns = mode == 0x37   ? "strongest return"
+                        : mode == 0x38 ? "last return"
+                        : mode == 0x39 ? "dual return"
+                                       : nullptr;
   char bytes[64];
   std::snprintf(bytes, sizeof(bytes), "factory bytes 0x%02X 0x%02X", mode, product);
   if (!model) return std::string("an unknown model (") + bytes + ")";
@@ -464,8 +481,8 @@ RevolutionCutter::RevolutionCutter(double cut_angle_deg) {
 }
 
 bool RevolutionCutter::crosses(int from, int to) const {
-  const int advance = (to - from + 36000) % 36000;       // rotation from `from` to `to`
-  const int to_cut = (cut_ - from + 36000) % 36000;      // rotation from `from` to the cut
+  const int advance = (to - from + 36000) % 36000;        // rotation from `from` to `to`
+  const int to_cut = (cut_ - from + 36000) % 36000;       // rotation from `from` to the cut
   return advance > 0 && to_cut > 0 && to_cut <= advance;  // cut in (from, to]
 }
 
@@ -476,7 +493,7 @@ RevolutionCutter::Step RevolutionCutter::step(std::uint16_t first_block_azimuth)
     return Step::kStep;
   }
   const int advance = (az - last_ + 36000) % 36000;  // forward rotation from the head
-  if (advance <= kMaxStep) {                          // a step (0: the head stands still)
+  if (advance <= kMaxStep) {                         // a step (0: the head stands still)
     candidate_ = -1;
     const bool cut = crosses(last_, az);
     last_ = az;

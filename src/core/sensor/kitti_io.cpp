@@ -92,15 +92,24 @@ bool readPcdXyzi(const std::string& path, CloudXYZIRT* cloud, std::string* error
 std::uint16_t semanticKittiStaticClass(std::uint32_t label) {
   const std::uint16_t c = static_cast<std::uint16_t>(label & 0xFFFFu);
   switch (c) {
-    case 252: return semantic_kitti::kCar;
-    case 253: return semantic_kitti::kBicyclist;
-    case 254: return semantic_kitti::kPerson;
-    case 255: return semantic_kitti::kMotorcyclist;
-    case 256: return semantic_kitti::kOtherVehicle;
-    case 257: return semantic_kitti::kOtherVehicle;
-    case 258: return semantic_kitti::kTruck;
-    case 259: return semantic_kitti::kOtherVehicle;
-    default: return c;
+    case 252:
+      return semantic_kitti::kCar;
+    case 253:
+      return semantic_kitti::kBicyclist;
+    case 254:
+      return semantic_kitti::kPerson;
+    case 255:
+      return semantic_kitti::kMotorcyclist;
+    case 256:
+      return semantic_kitti::kOtherVehicle;
+    case 257:
+      return semantic_kitti::kOtherVehicle;
+    case 258:
+      return semantic_kitti::kTruck;
+    case 259:
+      return semantic_kitti::kOtherVehicle;
+    default:
+      return c;
   }
 }
 

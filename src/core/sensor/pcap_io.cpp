@@ -124,7 +124,9 @@ PcapReader::PcapReader(const std::string& path, int udp_port) : impl_(new Impl) 
   impl_->open();
 }
 
-PcapReader::~PcapReader() { impl_->close(); }
+PcapReader::~PcapReader() {
+  impl_->close();
+}
 
 PcapReader::Result PcapReader::next(PcapPacket* packet) {
   if (impl_->handle == nullptr) return Result::kEnd;
@@ -262,10 +264,14 @@ double ReplayTimeline::next(double capture_s, Anomaly* anomaly) {
 
 const char* toString(ReplayTimeline::Anomaly anomaly) {
   switch (anomaly) {
-    case ReplayTimeline::Anomaly::kNone: return "none";
-    case ReplayTimeline::Anomaly::kBackwards: return "goes back";
-    case ReplayTimeline::Anomaly::kStill: return "stands still";
-    case ReplayTimeline::Anomaly::kJump: return "jumps forward";
+    case ReplayTimeline::Anomaly::kNone:
+      return "none";
+    case ReplayTimeline::Anomaly::kBackwards:
+      return "goes back";
+    case ReplayTimeline::Anomaly::kStill:
+      return "stands still";
+    case ReplayTimeline::Anomaly::kJump:
+      return "jumps forward";
   }
   return "?";
 }
@@ -332,7 +338,8 @@ PcapRevolutionReader::Result PcapRevolutionReader::next(std::vector<PcapPacket>*
       case RevolutionBoundary::Action::kOpen:
         if (first_) {
           const double cut = boundary_.cutAngleDeg();
-          const double past = std::fmod(blockAzimuth(p.data.data(), 0) / 100.0 - cut + 720.0, 360.0);
+          const double past =
+              std::fmod(blockAzimuth(p.data.data(), 0) / 100.0 - cut + 720.0, 360.0);
           first_whole_ = past < kStartToleranceDeg;
         }
         break;

@@ -15,7 +15,9 @@ namespace urban_detection {
 namespace core {
 namespace {
 
-std::string errnoText(const std::string& what) { return what + ": " + std::strerror(errno); }
+std::string errnoText(const std::string& what) {
+  return what + ": " + std::strerror(errno);
+}
 
 }  // namespace
 

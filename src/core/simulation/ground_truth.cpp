@@ -32,9 +32,9 @@ bool get(std::ifstream& i, T* v) {
 
 std::ptrdiff_t findGroundTruthFrame(const std::vector<GroundTruthFrame>& frames, double stamp_s,
                                     double tolerance_s) {
-  const auto it = std::lower_bound(
-      frames.begin(), frames.end(), stamp_s - tolerance_s,
-      [](const GroundTruthFrame& f, double s) { return f.stamp_s < s; });
+  const auto it =
+      std::lower_bound(frames.begin(), frames.end(), stamp_s - tolerance_s,
+                       [](const GroundTruthFrame& f, double s) { return f.stamp_s < s; });
   if (it == frames.end() || std::abs(it->stamp_s - stamp_s) > tolerance_s) return -1;
   return it - frames.begin();
 }
@@ -104,7 +104,9 @@ void GroundTruthWriter::write(const GroundTruthFrame& f) {
   if (!out_) throw GroundTruthError("ground truth: write failed on " + path_);
 }
 
-void GroundTruthWriter::close() { out_.close(); }
+void GroundTruthWriter::close() {
+  out_.close();
+}
 
 GroundTruthReader::GroundTruthReader(const std::string& path)
     : path_(path), in_(path, std::ios::binary) {

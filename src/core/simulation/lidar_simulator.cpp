@@ -98,7 +98,8 @@ LidarSimulator::LidarSimulator(Scene scene, const SceneParams& scene_params,
       float o[3], d[3];
       encoder_.ray(l, az, o, d);
       const double e_o = (turn * base_origin_[l] - Eigen::Vector3d(o[0], o[1], o[2])).norm();
-      const double e_d = (turn * base_dir_[l] - Eigen::Vector3d(d[0], d[1], d[2]).normalized()).norm();
+      const double e_d =
+          (turn * base_dir_[l] - Eigen::Vector3d(d[0], d[1], d[2]).normalized()).norm();
       if (e_o > 1e-5 || e_d > 1e-6) fast_rays_ = false;
     }
   }
@@ -169,7 +170,8 @@ void LidarSimulator::simulateNext(SimRevolution* out) {
   const double rev_s = 60.0 / sensor_.rpm;
   caster_->setTimeWindow(out->start_time_s, out->start_time_s + 1.2 * rev_s);
   // Guard: a revolution never needs more packets than 1.2 turns' worth.
-  const std::size_t max_packets = static_cast<std::size_t>(1.2 * rev_s / (6.0 * firing_period_s_)) + 2;
+  const std::size_t max_packets =
+      static_cast<std::size_t>(1.2 * rev_s / (6.0 * firing_period_s_)) + 2;
   out->packets.reserve(max_packets);
   for (std::size_t n = 0; n < max_packets; ++n) {
     bool starts;
@@ -212,8 +214,8 @@ bool LidarSimulator::throughFoliage(const Eigen::Vector3d& origin, const Eigen::
     }
     // Stopped by a leaf at an exponential depth, at the latest at the back of the volume or at
     // a solid surface inside it (a trunk in a crown, a wall behind a hedge).
-    const double depth = std::min(-std::log(unit(mix(hp + 1))) * p.penetration_m,
-                                  0.98 * (t_out - hit->distance_m));
+    const double depth =
+        std::min(-std::log(unit(mix(hp + 1))) * p.penetration_m, 0.98 * (t_out - hit->distance_m));
     if (depth > kStepM) {
       const double start = hit->distance_m + kStepM;
       const RayHit in = caster_->cast(origin + start * dir, dir, depth, t_s);
@@ -275,7 +277,8 @@ void LidarSimulator::simulatePacket(std::uint64_t packet, SimRevolution* out) {
         ++out->stats.dropped;
         continue;
       }
-      const double range = hit.distance_m + sensor_.range_noise_m * gaussian(mix(h + 1), mix(h + 2));
+      const double range =
+          hit.distance_m + sensor_.range_noise_m * gaussian(mix(h + 1), mix(h + 2));
       if (range < sensor_.min_range_m || range > sensor_.max_range_m) {
         ++out->stats.out_of_range;
         continue;
@@ -296,8 +299,8 @@ void LidarSimulator::simulatePacket(std::uint64_t packet, SimRevolution* out) {
       const double fade = 1.0 / (1.0 + 0.004 * hit.distance_m);
       const double jitter = 0.85 + 0.3 * unit(mix(h + 3));
       const double partial = inside ? 0.5 + 0.5 * unit(mix(h + 6)) : 1.0;
-      fi.intensity[l] = static_cast<std::uint8_t>(
-          std::clamp(255.0 * refl * fade * jitter * partial, 0.0, 255.0));
+      fi.intensity[l] =
+          static_cast<std::uint8_t>(std::clamp(255.0 * refl * fade * jitter * partial, 0.0, 255.0));
       out->instance_ids.push_back(prim.instance_id);
       out->classes.push_back(static_cast<std::uint8_t>(prim.object_class));
       out->world_points.push_back((origin + hit.distance_m * dir).cast<float>());

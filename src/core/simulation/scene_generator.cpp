@@ -71,9 +71,9 @@ Primitive tiltedSlab(double x0, double x1, double y0, double y1, double a, doubl
   p.rotation.col(2) = n;
   const double xm = 0.5 * (x0 + x1), ym = 0.5 * (y0 + y1);
   p.center = Eigen::Vector3d(xm, ym, a + sx * xm + sy * ym) - 0.5 * kSlabThickness * n;
-  p.half_extents = Eigen::Vector3d(0.5 * (x1 - x0) * std::sqrt(1.0 + sx * sx),
-                                   0.5 * (y1 - y0) * std::sqrt(1.0 + sy * sy),
-                                   0.5 * kSlabThickness);
+  p.half_extents =
+      Eigen::Vector3d(0.5 * (x1 - x0) * std::sqrt(1.0 + sx * sx),
+                      0.5 * (y1 - y0) * std::sqrt(1.0 + sy * sy), 0.5 * kSlabThickness);
   p.object_class = ObjectClass::kGround;
   return p;
 }
@@ -164,10 +164,10 @@ class Generator {
       const StreetSection& sec = *sp.s;
       const double w = sec.road_half_width_m;
       // Road: two halves falling from the crown.
-      scene_.addBackground(withMaterial(tiltedSlab(sp.x0, sp.x1, 0.0, w, 0.0, s, -c),
-                                        ObjectClass::kGround, kRoad));
-      scene_.addBackground(withMaterial(tiltedSlab(sp.x0, sp.x1, -w, 0.0, 0.0, s, c),
-                                        ObjectClass::kGround, kRoad));
+      scene_.addBackground(
+          withMaterial(tiltedSlab(sp.x0, sp.x1, 0.0, w, 0.0, s, -c), ObjectClass::kGround, kRoad));
+      scene_.addBackground(
+          withMaterial(tiltedSlab(sp.x0, sp.x1, -w, 0.0, 0.0, s, c), ObjectClass::kGround, kRoad));
       if (sec.type == StreetSection::Type::kIntersection) {
         // Cross road at the main road's edge height, out to the terrain width.
         const double far = w + p_.sections[i].sidewalk_width_m + p_.terrain_width_m;
@@ -200,14 +200,16 @@ class Generator {
     double x = x0;
     while (x < x1 - 1.0) {
       const double len = std::min(rng_.uniform(b.length_min_m, b.length_max_m), x1 - x);
-      const double recess = rng_.chance(b.recess_probability) ? rng_.uniform(0.5, b.recess_max_m) : 0.0;
+      const double recess =
+          rng_.chance(b.recess_probability) ? rng_.uniform(0.5, b.recess_max_m) : 0.0;
       const double height = rng_.uniform(b.height_min_m, b.height_max_m);
       const double y_front = facade + recess;
       const double zb = std::min(ground(x, side * y_front), ground(x + len, side * y_front)) - 1.0;
-      const double zt = std::max(ground(x, side * y_front), ground(x + len, side * y_front)) + height;
-      Primitive wall = makeBox(Eigen::Vector3d(x + 0.5 * len, side * (y_front + 0.5 * b.depth_m),
-                                               0.5 * (zb + zt)),
-                               Eigen::Vector3d(len, b.depth_m, zt - zb), 0.0);
+      const double zt =
+          std::max(ground(x, side * y_front), ground(x + len, side * y_front)) + height;
+      Primitive wall = makeBox(
+          Eigen::Vector3d(x + 0.5 * len, side * (y_front + 0.5 * b.depth_m), 0.5 * (zb + zt)),
+          Eigen::Vector3d(len, b.depth_m, zt - zb), 0.0);
       const float plaster = static_cast<float>(mat_.uniform(0.25, 0.5));
       scene_.addBackground(withClass(wall, ObjectClass::kWall, plaster, kWallSpread.spread));
       facades_.push_back({x, x + len, side * y_front, side, section});
@@ -243,18 +245,18 @@ class Generator {
       parts.push_back(withClass(pl.box(0, 0, 0.3 + 0.5, l, wd, 1.0), cls, refl, kPaintSpread));
       // Upper body: windscreen and front side windows (glass) ahead of a painted box.
       const double lu = l - 0.8, glass = 0.9;
-      parts.push_back(withClass(pl.box(-0.35 - 0.5 * glass, 0, 1.3 + 0.45, lu - glass, wd - 0.1, 0.9),
-                                cls, refl, kPaintSpread));
-      parts.push_back(withMaterial(pl.box(-0.35 + 0.5 * (lu - glass), 0, 1.3 + 0.45, glass,
-                                          wd - 0.1, 0.9),
-                                   cls, kGlass));
+      parts.push_back(
+          withClass(pl.box(-0.35 - 0.5 * glass, 0, 1.3 + 0.45, lu - glass, wd - 0.1, 0.9), cls,
+                    refl, kPaintSpread));
+      parts.push_back(withMaterial(
+          pl.box(-0.35 + 0.5 * (lu - glass), 0, 1.3 + 0.45, glass, wd - 0.1, 0.9), cls, kGlass));
       z_plate = 0.55, z_lamp = 1.0;
     } else {
       l = rng_.uniform(4.0, 4.7), wd = rng_.uniform(1.7, 1.85), h = 1.45;
       parts.push_back(withClass(pl.box(0, 0, 0.25 + 0.35, l, wd, 0.7), cls, refl, kPaintSpread));
       // Cabin: windows (glass) under a painted roof.
-      parts.push_back(withMaterial(pl.box(-0.2, 0, 0.95 + 0.22, 0.55 * l, wd - 0.15, 0.44), cls,
-                                   kGlass));
+      parts.push_back(
+          withMaterial(pl.box(-0.2, 0, 0.95 + 0.22, 0.55 * l, wd - 0.15, 0.44), cls, kGlass));
       parts.push_back(withClass(pl.box(-0.2, 0, 1.39 + 0.03, 0.55 * l, wd - 0.15, 0.06), cls, refl,
                                 kPaintSpread));
       z_plate = 0.45, z_lamp = 0.75;
@@ -264,8 +266,8 @@ class Generator {
       const double fx = end * (0.5 * l + 0.01);
       parts.push_back(withMaterial(pl.box(fx, 0, z_plate, 0.04, 0.52, 0.12), cls, kPlate));
       for (double s : {-1.0, 1.0}) {
-        parts.push_back(withMaterial(pl.box(fx, s * (0.5 * wd - 0.22), z_lamp, 0.04, 0.3, 0.14),
-                                     cls, kLamp));
+        parts.push_back(
+            withMaterial(pl.box(fx, s * (0.5 * wd - 0.22), z_lamp, 0.04, 0.3, 0.14), cls, kLamp));
       }
     }
     return add(cls, x, y, yaw, {l, wd, h}, v, parts);
@@ -275,14 +277,15 @@ class Generator {
                            double scale = -1.0) {
     if (scale <= 0.0) scale = rng_.uniform(0.9, 1.08);
     const Placer pl = placer(x, y, yaw);
-    const float refl = static_cast<float>(rng_.uniform(0.2, 0.6));  // upper clothing
+    const float refl = static_cast<float>(rng_.uniform(0.2, 0.6));   // upper clothing
     const float legs = static_cast<float>(mat_.uniform(0.15, 0.6));  // trousers, skirt
     std::vector<Primitive> parts;
     parts.push_back(withClass(pl.box(0, 0, 0.42 * scale, 0.28 * scale, 0.36 * scale, 0.84 * scale),
                               ObjectClass::kPedestrian, legs, kClothSpread));
     Primitive torso = makeCylinder(pl.at(0, 0, 1.14 * scale), 0.2 * scale, 0.6 * scale);
     parts.push_back(withClass(torso, ObjectClass::kPedestrian, refl, kClothSpread));
-    Primitive head = makeEllipsoid(pl.at(0, 0, 1.57 * scale), Eigen::Vector3d::Constant(0.11 * scale));
+    Primitive head =
+        makeEllipsoid(pl.at(0, 0, 1.57 * scale), Eigen::Vector3d::Constant(0.11 * scale));
     parts.push_back(withMaterial(head, ObjectClass::kPedestrian, kSkin));
     return add(ObjectClass::kPedestrian, x, y, yaw, Eigen::Vector3d(0.4, 0.4, 1.68) * scale, v,
                parts);
@@ -292,8 +295,8 @@ class Generator {
     const Placer pl = placer(x, y, yaw);
     const float refl = static_cast<float>(rng_.uniform(0.2, 0.5));
     std::vector<Primitive> parts;
-    parts.push_back(withMaterial(pl.box(0, 0, 0.5, 1.75, 0.12, 0.95), ObjectClass::kCyclist,
-                                 kBicycle));
+    parts.push_back(
+        withMaterial(pl.box(0, 0, 0.5, 1.75, 0.12, 0.95), ObjectClass::kCyclist, kBicycle));
     parts.push_back(withClass(pl.box(0.05, 0, 0.85, 0.3, 0.32, 0.4), ObjectClass::kCyclist, refl,
                               kClothSpread));
     Primitive torso = makeCylinder(pl.at(-0.05, 0, 1.3), 0.19, 0.55);
@@ -311,7 +314,8 @@ class Generator {
     const double crown_h = rng_.uniform(1.5, 2.5);
     const double trunk_r = rng_.uniform(0.12, 0.2);
     // Street trees stand at the curb: their low lobes hang over the parked cars.
-    return treeObject(x, y, trunk_h, trunk_r, crown_r, crown_h, Eigen::Vector2d(0.0, y > 0 ? -1.0 : 1.0));
+    return treeObject(x, y, trunk_h, trunk_r, crown_r, crown_h,
+                      Eigen::Vector2d(0.0, y > 0 ? -1.0 : 1.0));
   }
 
   // Trunk, crown and (with vegetation) porous lobes; `toward` is the unit xy direction about
@@ -321,12 +325,12 @@ class Generator {
     const VegetationParams& v = p_.vegetation;
     const Placer pl = placer(x, y, 0.0);
     std::vector<Primitive> parts;
-    parts.push_back(withMaterial(makeCylinder(pl.at(0, 0, 0.5 * trunk_h + 0.3), trunk_r,
-                                              trunk_h + 0.6),
-                                 ObjectClass::kTrunk, kBark));
-    Primitive crown = withMaterial(makeEllipsoid(pl.at(0, 0, trunk_h + crown_h),
-                                                 Eigen::Vector3d(crown_r, crown_r, crown_h)),
-                                   ObjectClass::kVegetation, kFoliage);
+    parts.push_back(
+        withMaterial(makeCylinder(pl.at(0, 0, 0.5 * trunk_h + 0.3), trunk_r, trunk_h + 0.6),
+                     ObjectClass::kTrunk, kBark));
+    Primitive crown = withMaterial(
+        makeEllipsoid(pl.at(0, 0, trunk_h + crown_h), Eigen::Vector3d(crown_r, crown_r, crown_h)),
+        ObjectClass::kVegetation, kFoliage);
     if (v.enabled) {
       parts.push_back(porous(crown, v.crown_transmission, v.crown_penetration_m));
       // Lobes: about half lean towards `toward`, the rest anywhere; each reaches at most
@@ -336,14 +340,15 @@ class Generator {
       const double lean = std::atan2(toward.y(), toward.x());
       for (int k = 0; k < n; ++k) {
         const double az = k % 2 == 0 ? lean + veg_.uniform(-0.9, 0.9) : veg_.uniform(-kPi, kPi);
-        const double a = veg_.uniform(0.8, 1.4);    // horizontal semi-axis
-        const double c = veg_.uniform(0.45, 0.8);   // vertical semi-axis
+        const double a = veg_.uniform(0.8, 1.4);   // horizontal semi-axis
+        const double c = veg_.uniform(0.45, 0.8);  // vertical semi-axis
         const double reach = std::max(0.0, v.canopy_overhang_max_m - a);
         const double d = veg_.uniform(std::min(0.5 * crown_r, reach), reach);
         const double lx = x + d * std::cos(az), ly = y + d * std::sin(az);
         const double bottom =
             ground(lx, ly) + veg_.uniform(v.canopy_clearance_min_m, v.canopy_clearance_max_m);
-        Primitive lobe = makeEllipsoid(Eigen::Vector3d(lx, ly, bottom + c), Eigen::Vector3d(a, a, c));
+        Primitive lobe =
+            makeEllipsoid(Eigen::Vector3d(lx, ly, bottom + c), Eigen::Vector3d(a, a, c));
         lobe.rotation = Eigen::AngleAxisd(az, Eigen::Vector3d::UnitZ()).toRotationMatrix();
         lobe.half_extents.y() = a * veg_.uniform(0.7, 1.0);
         parts.push_back(porous(withMaterial(lobe, ObjectClass::kVegetation, kFoliage),
@@ -367,19 +372,19 @@ class Generator {
     parts.push_back(withMaterial(makeCylinder(pl.at(0, 0, 0.5 * h - 0.2), 0.08, h + 0.4),
                                  ObjectClass::kPole, kMetalPost));
     const double arm = y > 0 ? -0.6 : 0.6;  // lamp head over the road
-    parts.push_back(withMaterial(pl.box(0, arm, h - 0.1, 0.35, 1.3, 0.18), ObjectClass::kPole,
-                                 kMetalPost));
+    parts.push_back(
+        withMaterial(pl.box(0, arm, h - 0.1, 0.35, 1.3, 0.18), ObjectClass::kPole, kMetalPost));
     return add(ObjectClass::kPole, x, y, 0.0, {0.35, 1.5, h}, Eigen::Vector3d::Zero(), parts);
   }
 
   std::uint32_t sign(double x, double y) {
     const Placer pl = placer(x, y, 0.0);
     std::vector<Primitive> parts;
-    parts.push_back(withMaterial(makeCylinder(pl.at(0, 0, 1.2), 0.04, 2.8), ObjectClass::kPole,
-                                 kMetalPost));
+    parts.push_back(
+        withMaterial(makeCylinder(pl.at(0, 0, 1.2), 0.04, 2.8), ObjectClass::kPole, kMetalPost));
     // Plate facing the traffic (normal along x), retro-reflective.
-    parts.push_back(withMaterial(pl.box(0.07, 0, 2.35, 0.06, 0.65, 0.65), ObjectClass::kSign,
-                                 kSignPlate));
+    parts.push_back(
+        withMaterial(pl.box(0.07, 0, 2.35, 0.06, 0.65, 0.65), ObjectClass::kSign, kSignPlate));
     return add(ObjectClass::kSign, x, y, 0.0, {0.1, 0.65, 2.7}, Eigen::Vector3d::Zero(), parts);
   }
 
@@ -387,21 +392,22 @@ class Generator {
     const Placer pl = placer(x, y, 0.0);
     std::vector<Primitive> parts;
     const double h = rng_.uniform(0.9, 1.2);
-    parts.push_back(withMaterial(makeCylinder(pl.at(0, 0, 0.5 * h), 0.3, h), ObjectClass::kBin,
-                                 kBinPlastic));
+    parts.push_back(
+        withMaterial(makeCylinder(pl.at(0, 0, 0.5 * h), 0.3, h), ObjectClass::kBin, kBinPlastic));
     return add(ObjectClass::kBin, x, y, 0.0, {0.6, 0.6, h}, Eigen::Vector3d::Zero(), parts);
   }
 
   std::uint32_t bench(double x, double y, double yaw) {
     const Placer pl = placer(x, y, yaw);
     std::vector<Primitive> parts;
-    parts.push_back(withMaterial(pl.box(0, 0, 0.45, 1.8, 0.5, 0.08), ObjectClass::kBench, kBenchWood));
-    parts.push_back(withMaterial(pl.box(0, -0.22, 0.72, 1.8, 0.06, 0.45), ObjectClass::kBench,
-                                 kBenchWood));
-    parts.push_back(withMaterial(pl.box(-0.75, 0, 0.21, 0.08, 0.45, 0.42), ObjectClass::kBench,
-                                 kBenchWood));
-    parts.push_back(withMaterial(pl.box(0.75, 0, 0.21, 0.08, 0.45, 0.42), ObjectClass::kBench,
-                                 kBenchWood));
+    parts.push_back(
+        withMaterial(pl.box(0, 0, 0.45, 1.8, 0.5, 0.08), ObjectClass::kBench, kBenchWood));
+    parts.push_back(
+        withMaterial(pl.box(0, -0.22, 0.72, 1.8, 0.06, 0.45), ObjectClass::kBench, kBenchWood));
+    parts.push_back(
+        withMaterial(pl.box(-0.75, 0, 0.21, 0.08, 0.45, 0.42), ObjectClass::kBench, kBenchWood));
+    parts.push_back(
+        withMaterial(pl.box(0.75, 0, 0.21, 0.08, 0.45, 0.42), ObjectClass::kBench, kBenchWood));
     return add(ObjectClass::kBench, x, y, yaw, {1.8, 0.5, 0.95}, Eigen::Vector3d::Zero(), parts);
   }
 
@@ -511,7 +517,8 @@ class Generator {
     auto pick = [&](double zone_from_curb, double r, double* x, double* y, int* side,
                     const SectionSpan** span) {
       for (int tries = 0; tries < 40; ++tries) {
-        const auto& s = sides[static_cast<std::size_t>(rng_.integer(0, static_cast<int>(sides.size()) - 1))];
+        const auto& s =
+            sides[static_cast<std::size_t>(rng_.integer(0, static_cast<int>(sides.size()) - 1))];
         const double w = s.first->s->road_half_width_m;
         const double xx = rng_.uniform(s.first->x0 + 3.0, s.first->x1 - 3.0);
         const double yy = s.second * (w + zone_from_curb);
@@ -552,7 +559,8 @@ class Generator {
     if (walks.empty()) return;
     int placed = 0;
     while (placed < o.pedestrians) {
-      const SectionSpan& sp = *walks[static_cast<std::size_t>(rng_.integer(0, static_cast<int>(walks.size()) - 1))];
+      const SectionSpan& sp =
+          *walks[static_cast<std::size_t>(rng_.integer(0, static_cast<int>(walks.size()) - 1))];
       const StreetSection& sec = *sp.s;
       const int side = rng_.chance(0.5) ? 1 : -1;
       const int n = rng_.chance(o.group_probability) ? rng_.integer(2, 4) : 1;
@@ -566,7 +574,8 @@ class Generator {
       // Walking lines: one per direction, so that walkers rarely cross each other; furniture
       // stays at the curb and against the facades.
       const double frac = dir > 0 ? 0.45 : 0.75;
-      const double y_walk = side * (sec.road_half_width_m + std::max(0.4, frac * sec.sidewalk_width_m));
+      const double y_walk =
+          side * (sec.road_half_width_m + std::max(0.4, frac * sec.sidewalk_width_m));
       const Eigen::Vector3d vel(dir * v, 0.0, p_.slope * dir * v);
       const bool wide = sec.sidewalk_width_m > 2.0;
       for (int k = 0; k < n && placed < o.pedestrians; ++k, ++placed) {
@@ -619,8 +628,9 @@ class Generator {
         const double top = ground(xm, ym) + step + veg_.uniform(0.0, v.terrain_roughness_m);
         const double sx = p_.slope + veg_.uniform(-max_tilt, max_tilt);
         const double sy = veg_.uniform(-max_tilt, max_tilt);
-        scene_.addBackground(withMaterial(tiltedSlab(ax, bx, ay, by, top - sx * xm - sy * ym, sx, sy),
-                                          ObjectClass::kTerrain, kGrass));
+        scene_.addBackground(
+            withMaterial(tiltedSlab(ax, bx, ay, by, top - sx * xm - sy * ym, sx, sy),
+                         ObjectClass::kTerrain, kGrass));
       }
     }
   }
@@ -639,9 +649,9 @@ class Generator {
       const double az = veg_.uniform(-kPi, kPi);
       // Sunk a little into the ground, the top at hk.
       const double cz = 0.5 * hk - 0.05;
-      Primitive e = makeEllipsoid(
-          Eigen::Vector3d(x + off * std::cos(az), y + off * std::sin(az), gz + cz),
-          Eigen::Vector3d(rk, rk * veg_.uniform(0.75, 1.0), 0.5 * hk + 0.05));
+      Primitive e =
+          makeEllipsoid(Eigen::Vector3d(x + off * std::cos(az), y + off * std::sin(az), gz + cz),
+                        Eigen::Vector3d(rk, rk * veg_.uniform(0.75, 1.0), 0.5 * hk + 0.05));
       e.rotation = Eigen::AngleAxisd(az, Eigen::Vector3d::UnitZ()).toRotationMatrix();
       parts.push_back(porous(withMaterial(e, ObjectClass::kVegetation, kFoliage),
                              v.bush_transmission, v.bush_penetration_m));
@@ -715,13 +725,14 @@ class Generator {
     terrain(x0, x1, side > 0 ? edge : -(edge + depth), side > 0 ? edge + depth : -edge, step);
     double front = edge;  // where the garden's free depth starts
     if (depth >= v.hedge_width_min_m + 0.1 && veg_.chance(v.hedge_probability)) {
-      const double width = std::min(veg_.uniform(v.hedge_width_min_m, v.hedge_width_max_m),
-                                    depth - 0.1);
+      const double width =
+          std::min(veg_.uniform(v.hedge_width_min_m, v.hedge_width_max_m), depth - 0.1);
       const double height = veg_.uniform(v.hedge_height_min_m, v.hedge_height_max_m);
       // Runs between entrance gaps.
       double x = x0 + 0.1;
       while (x < x1 - 0.6) {
-        const double run_end = std::min(x1 - 0.1, x + v.hedge_gap_spacing_m * veg_.uniform(0.5, 1.5));
+        const double run_end =
+            std::min(x1 - 0.1, x + v.hedge_gap_spacing_m * veg_.uniform(0.5, 1.5));
         hedge(x, run_end, edge + 0.05, side, width, height, step);
         x = run_end + veg_.uniform(1.0, 1.6);
       }
@@ -880,7 +891,9 @@ double DriveParams::length() const {
   return l;
 }
 
-double DriveParams::duration() const { return speed_mps > 0.0 ? length() / speed_mps : 0.0; }
+double DriveParams::duration() const {
+  return speed_mps > 0.0 ? length() / speed_mps : 0.0;
+}
 
 void DriveParams::at(double t_s, Eigen::Vector2d* xy, double* yaw_rad) const {
   double s = std::max(0.0, speed_mps * t_s);
@@ -929,7 +942,8 @@ void validate(const SceneParams& p) {
   }
   require(std::abs(p.slope) <= 0.15, "scene.slope must be in [-0.15, 0.15]");
   require(p.camber >= 0.0 && p.camber <= 0.08, "scene.camber must be in [0, 0.08]");
-  require(p.curb_height_m >= 0.0 && p.curb_height_m <= 0.4, "scene.curb_height_m must be in [0, 0.4] m");
+  require(p.curb_height_m >= 0.0 && p.curb_height_m <= 0.4,
+          "scene.curb_height_m must be in [0, 0.4] m");
   require(p.terrain_width_m >= 1.0 && p.terrain_width_m <= 200.0,
           "scene.terrain_width_m must be in [1, 200] m");
   const BuildingParams& b = p.buildings;
@@ -939,7 +953,8 @@ void validate(const SceneParams& p) {
           "scene.buildings: need 2 <= height_min_m <= height_max_m");
   require(b.gap_min_m > 0.0 && b.gap_max_m >= b.gap_min_m,
           "scene.buildings: need 0 < gap_min_m <= gap_max_m");
-  require(b.depth_m >= 1.0 && b.recess_max_m >= 0.5, "scene.buildings: depth_m >= 1, recess_max_m >= 0.5");
+  require(b.depth_m >= 1.0 && b.recess_max_m >= 0.5,
+          "scene.buildings: depth_m >= 1, recess_max_m >= 0.5");
   const StreetObjectParams& o = p.objects;
   require(o.parked_gap_min_m > 0.0 && o.parked_gap_max_m >= o.parked_gap_min_m,
           "scene.objects: need 0 < parked_gap_min_m <= parked_gap_max_m");
@@ -957,23 +972,30 @@ void validate(const SceneParams& p) {
                         std::make_pair(v.hedge_transmission, "hedge_transmission"),
                         std::make_pair(v.bush_transmission, "bush_transmission"),
                         std::make_pair(v.crown_transmission, "crown_transmission")}) {
-    require(in(f.first, 0.0, 1.0), std::string("scene.vegetation.") + f.second + " must be in [0, 1]");
+    require(in(f.first, 0.0, 1.0),
+            std::string("scene.vegetation.") + f.second + " must be in [0, 1]");
   }
   for (const auto& f : {std::make_pair(v.hedge_penetration_m, "hedge_penetration_m"),
                         std::make_pair(v.bush_penetration_m, "bush_penetration_m"),
                         std::make_pair(v.crown_penetration_m, "crown_penetration_m")}) {
-    require(in(f.first, 0.0, 2.0), std::string("scene.vegetation.") + f.second + " must be in [0, 2] m");
+    require(in(f.first, 0.0, 2.0),
+            std::string("scene.vegetation.") + f.second + " must be in [0, 2] m");
   }
   require(in(v.verge_offset_m, 0.0, 2.0), "scene.vegetation.verge_offset_m must be in [0, 2] m");
   require(in(v.verge_width_m, 0.3, 5.0), "scene.vegetation.verge_width_m must be in [0.3, 5] m");
-  require(in(v.verge_step_max_m, 0.0, 0.3), "scene.vegetation.verge_step_max_m must be in [0, 0.3] m");
+  require(in(v.verge_step_max_m, 0.0, 0.3),
+          "scene.vegetation.verge_step_max_m must be in [0, 0.3] m");
   require(v.verge_bush_spacing_m >= 2.0, "scene.vegetation.verge_bush_spacing_m must be >= 2 m");
-  require(in(v.terrain_tile_m, 0.25, 5.0), "scene.vegetation.terrain_tile_m must be in [0.25, 5] m");
+  require(in(v.terrain_tile_m, 0.25, 5.0),
+          "scene.vegetation.terrain_tile_m must be in [0.25, 5] m");
   require(in(v.terrain_roughness_m, 0.0, 0.2),
           "scene.vegetation.terrain_roughness_m must be in [0, 0.2] m");
-  require(in(v.terrain_tilt_deg, 0.0, 10.0), "scene.vegetation.terrain_tilt_deg must be in [0, 10] deg");
-  require(in(v.garden_depth_m, 0.5, 20.0), "scene.vegetation.garden_depth_m must be in [0.5, 20] m");
-  require(in(v.garden_step_max_m, 0.0, 0.5), "scene.vegetation.garden_step_max_m must be in [0, 0.5] m");
+  require(in(v.terrain_tilt_deg, 0.0, 10.0),
+          "scene.vegetation.terrain_tilt_deg must be in [0, 10] deg");
+  require(in(v.garden_depth_m, 0.5, 20.0),
+          "scene.vegetation.garden_depth_m must be in [0.5, 20] m");
+  require(in(v.garden_step_max_m, 0.0, 0.5),
+          "scene.vegetation.garden_step_max_m must be in [0, 0.5] m");
   require(v.hedge_height_min_m >= 0.3 && v.hedge_height_max_m >= v.hedge_height_min_m &&
               v.hedge_height_max_m <= 4.0,
           "scene.vegetation: need 0.3 <= hedge_height_min_m <= hedge_height_max_m <= 4 m");

@@ -95,8 +95,8 @@ bool Primitive::span(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, 
   return spanOf(*this, origin, dir, t_s, t_in, t_out);
 }
 
-double Primitive::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
-                            double t_s, double t_min) const {
+double Primitive::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_s,
+                            double t_min) const {
   double t_in, t_out;
   if (!spanOf(*this, origin, dir, t_s, &t_in, &t_out)) return -1.0;
   return t_in > t_min ? t_in : -1.0;
@@ -235,8 +235,10 @@ void RayCaster::binInto(const Eigen::AlignedBox3d& box, std::uint32_t prim,
                         std::vector<std::vector<std::uint32_t>>* cells) const {
   const int ix0 = std::max(0, static_cast<int>(std::floor((box.min().x() - x0_) / params_.cell_m)));
   const int iy0 = std::max(0, static_cast<int>(std::floor((box.min().y() - y0_) / params_.cell_m)));
-  const int ix1 = std::min(nx_ - 1, static_cast<int>(std::floor((box.max().x() - x0_) / params_.cell_m)));
-  const int iy1 = std::min(ny_ - 1, static_cast<int>(std::floor((box.max().y() - y0_) / params_.cell_m)));
+  const int ix1 =
+      std::min(nx_ - 1, static_cast<int>(std::floor((box.max().x() - x0_) / params_.cell_m)));
+  const int iy1 =
+      std::min(ny_ - 1, static_cast<int>(std::floor((box.max().y() - y0_) / params_.cell_m)));
   for (int iy = iy0; iy <= iy1; ++iy) {
     for (int ix = ix0; ix <= ix1; ++ix) {
       (*cells)[static_cast<std::size_t>(iy) * nx_ + ix].push_back(prim);

@@ -229,7 +229,8 @@ SimulationConfig loadSimulationConfig(const std::string& path) {
   SimulationConfig c = parseSimulationConfig(ss.str(), path);
   if (!c.calibration_file.empty() && c.calibration_file.front() != '/') {
     const std::size_t slash = path.find_last_of('/');
-    if (slash != std::string::npos) c.calibration_file = path.substr(0, slash + 1) + c.calibration_file;
+    if (slash != std::string::npos)
+      c.calibration_file = path.substr(0, slash + 1) + c.calibration_file;
   }
   return c;
 }

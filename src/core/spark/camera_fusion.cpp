@@ -87,7 +87,9 @@ bool buildCameraClassMap(const std::vector<std::string>& names,
   return true;
 }
 
-std::string validate(const CameraFusionParams& p) { return checkFieldRanges(p); }
+std::string validate(const CameraFusionParams& p) {
+  return checkFieldRanges(p);
+}
 
 CameraEvidence cameraEvidence(const float* class_scores, int class_bound, std::uint32_t visible,
                               const CameraClassMap& map) {

@@ -7,7 +7,9 @@
 namespace urban_detection {
 namespace core {
 
-std::string validate(const ImageLabelTransferParams& params) { return checkFieldRanges(params); }
+std::string validate(const ImageLabelTransferParams& params) {
+  return checkFieldRanges(params);
+}
 
 bool PinholeCamera::valid() const {
   return width_px > 0 && height_px > 0 && projection.allFinite() && projection(0, 0) > 0.0 &&

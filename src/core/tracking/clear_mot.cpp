@@ -45,8 +45,12 @@ double ClearMotResult::mota() const {
   if (gt == 0) return 1.0;
   return 1.0 - static_cast<double>(misses + false_positives + id_switches) / gt;
 }
-double ClearMotResult::motp_m() const { return matches ? distance_sum_m / matches : 0.0; }
-double ClearMotResult::recall() const { return gt ? static_cast<double>(matches) / gt : 1.0; }
+double ClearMotResult::motp_m() const {
+  return matches ? distance_sum_m / matches : 0.0;
+}
+double ClearMotResult::recall() const {
+  return gt ? static_cast<double>(matches) / gt : 1.0;
+}
 double ClearMotResult::precision() const {
   return matches + false_positives ? static_cast<double>(matches) / (matches + false_positives)
                                    : 1.0;

@@ -18,10 +18,10 @@ double solveRowsNotMoreThanCols(int n, int m, CostFn a, std::vector<int>* row_to
   const double inf = std::numeric_limits<double>::infinity();
   // Working arrays, 1-based with index 0 as the virtual column/row of the path's start.
   work->assign(static_cast<std::size_t>(n + 1) + 3 * static_cast<std::size_t>(m + 1), 0.0);
-  double* u = work->data();                // row potentials, n + 1
-  double* v = u + (n + 1);                 // column potentials, m + 1
-  double* minv = v + (m + 1);              // least reduced cost to each column, m + 1
-  double* slack_way = minv + (m + 1);      // previous column on the path (as double), m + 1
+  double* u = work->data();            // row potentials, n + 1
+  double* v = u + (n + 1);             // column potentials, m + 1
+  double* minv = v + (m + 1);          // least reduced cost to each column, m + 1
+  double* slack_way = minv + (m + 1);  // previous column on the path (as double), m + 1
   std::vector<int> p(static_cast<std::size_t>(m + 1), 0);  // row assigned to column j (0 none)
   std::vector<char> used(static_cast<std::size_t>(m + 1), 0);
   for (int i = 1; i <= n; ++i) {

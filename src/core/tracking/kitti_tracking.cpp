@@ -85,8 +85,7 @@ Eigen::Vector3d KittiTrackingCalibration::rectToVelo(const Eigen::Vector3d& p_re
   return tr_velo_cam.leftCols<3>().inverse() * (cam - tr_velo_cam.col(3));
 }
 
-bool KittiTrackingCalibration::project(const Eigen::Vector3d& p_velo, double* u,
-                                       double* v) const {
+bool KittiTrackingCalibration::project(const Eigen::Vector3d& p_velo, double* u, double* v) const {
   const Eigen::Vector3d r = veloToRect(p_velo);
   if (r.z() <= 0.1) return false;
   const Eigen::Vector3d h = p2.leftCols<3>() * r + p2.col(3);
@@ -129,14 +128,14 @@ bool readKittiTrackingCalibration(const std::string& path, KittiTrackingCalibrat
       std::fabs(calib->r_rect.determinant()) > 1e-6) {
     return true;
   }
-  *error = path + ": needs P2, R_rect (or R0_rect) and Tr_velo_cam (or Tr_velo_to_cam) with "
-                  "12, 9 and 12 numbers";
+  *error = path +
+           ": needs P2, R_rect (or R0_rect) and Tr_velo_cam (or Tr_velo_to_cam) with "
+           "12, 9 and 12 numbers";
   return false;
 }
 
-bool insideKittiTrackingBox(const KittiTrackingLabel& label,
-                            const KittiTrackingCalibration& calib, const Eigen::Vector3d& p_velo,
-                            double margin_m) {
+bool insideKittiTrackingBox(const KittiTrackingLabel& label, const KittiTrackingCalibration& calib,
+                            const Eigen::Vector3d& p_velo, double margin_m) {
   const Eigen::Vector3d d = calib.veloToRect(p_velo) - label.location;
   // Box frame: x along the length (rotation_y about the camera's y axis, which points down).
   const double c = std::cos(label.rotation_y), s = std::sin(label.rotation_y);

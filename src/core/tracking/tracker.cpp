@@ -19,7 +19,6 @@ constexpr double kPi = 3.14159265358979323846;
 // overlap weight, both bounded by validate()), so the solver uses as few as possible.
 constexpr double kForbidden = 1e6;
 
-
 // Angle wrapped to (-pi/2, pi/2]: the difference of two box yaws, which are defined modulo pi
 // (a box looks the same turned half way round).
 double wrapHalfPi(double a) {
@@ -64,8 +63,8 @@ std::string validate(const TrackerParams& p) {
   std::string error = checkFieldRanges(p);
   if (error.empty() && p.max_dt_s < p.default_dt_s) {
     std::ostringstream msg;
-    msg << "parameter 'max_dt_s' = " << p.max_dt_s << " must not be below 'default_dt_s' = "
-        << p.default_dt_s << " s";
+    msg << "parameter 'max_dt_s' = " << p.max_dt_s
+        << " must not be below 'default_dt_s' = " << p.default_dt_s << " s";
     error = msg.str();
   }
   return error;
@@ -73,9 +72,12 @@ std::string validate(const TrackerParams& p) {
 
 const char* toString(TrackState s) {
   switch (s) {
-    case TrackState::kTentative: return "tentative";
-    case TrackState::kConfirmed: return "confirmed";
-    default: return "lost";
+    case TrackState::kTentative:
+      return "tentative";
+    case TrackState::kConfirmed:
+      return "confirmed";
+    default:
+      return "lost";
   }
 }
 
@@ -109,7 +111,9 @@ double bevIoU(const Eigen::Vector2d& c1, double l1, double w1, double yaw1,
   return uni > 0 ? std::min(1.0, inter / uni) : 0.0;
 }
 
-Tracker::Tracker(const TrackerParams& params) { setParams(params); }
+Tracker::Tracker(const TrackerParams& params) {
+  setParams(params);
+}
 
 void Tracker::setParams(const TrackerParams& params) {
   const std::string error = validate(params);
@@ -275,9 +279,9 @@ void Tracker::associateStage(bool tentative) {
     const double lambda_max =
         half_trace + std::sqrt(std::max(0.0, 0.25 * (P(0, 0) - P(1, 1)) * (P(0, 0) - P(1, 1)) +
                                                  P(0, 1) * P(1, 0)));
-    const double gate = std::min(params_.gate_distance_m + params_.gate_sigmas *
-                                                               std::sqrt(std::max(0.0, lambda_max)),
-                                 2.0 * params_.gate_distance_m);
+    const double gate = std::min(
+        params_.gate_distance_m + params_.gate_sigmas * std::sqrt(std::max(0.0, lambda_max)),
+        2.0 * params_.gate_distance_m);
     const double gate2 = gate * gate;
     for (int m = 0; m < nm; ++m) {
       if (meas_match_[m] >= 0) continue;
@@ -387,7 +391,8 @@ void Tracker::updateTrack(std::size_t t, const Measurement& m) {
   f.P = I_KH * f.P * I_KH.transpose() + r * K * K.transpose();
 
   const double a = params_.smoothing;
-  track.center = Eigen::Vector3d(f.x(0), f.x(1), track.center.z() + a * (m.center.z() - track.center.z()));
+  track.center =
+      Eigen::Vector3d(f.x(0), f.x(1), track.center.z() + a * (m.center.z() - track.center.z()));
   track.size += a * (m.size - track.size);
   track.yaw_rad = wrapPi(track.yaw_rad + a * wrapHalfPi(m.yaw_rad - track.yaw_rad));
   track.velocity = f.x.tail<2>();
@@ -396,9 +401,8 @@ void Tracker::updateTrack(std::size_t t, const Measurement& m) {
   ++track.hits;
   track.misses = 0;
   track.detection = m.index;
-  if (track.state == TrackState::kLost ||
-      (track.state == TrackState::kTentative &&
-       static_cast<int>(track.hits) >= params_.birth_hits)) {
+  if (track.state == TrackState::kLost || (track.state == TrackState::kTentative &&
+                                           static_cast<int>(track.hits) >= params_.birth_hits)) {
     track.state = TrackState::kConfirmed;
   }
   const int c = static_cast<int>(m.category);

@@ -25,10 +25,10 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/common/param_fields.h"
-#include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/classification/object_features.h"
+#include "urban_detection/core/common/param_fields.h"
 #include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/detection/object_detector.h"
 
 namespace cv {
 namespace ml {
@@ -53,13 +53,13 @@ ObjectCategory categoryOfClassName(const std::string& name);
 
 /// Options of the training (urban_detection_train_classifier).
 struct ClassifierTrainingParams {
-  int trees = 32;                // [-] trees of the forest
-  int max_depth = 12;            // [-] depth limit of a tree
-  int min_sample_count = 4;      // [-] a node with fewer samples is not split
-  int active_var_count = 0;      // [-] features tried per split (0: sqrt of their number)
-  bool use_intensity = true;     // [-] false: train without the intensity features
-  double object_threshold = 0.5; // [0..1] P(object) needed to keep an object
-  std::string description;       // free text stored in the model (data, seed, command)
+  int trees = 32;                 // [-] trees of the forest
+  int max_depth = 12;             // [-] depth limit of a tree
+  int min_sample_count = 4;       // [-] a node with fewer samples is not split
+  int active_var_count = 0;       // [-] features tried per split (0: sqrt of their number)
+  bool use_intensity = true;      // [-] false: train without the intensity features
+  double object_threshold = 0.5;  // [0..1] P(object) needed to keep an object
+  std::string description;        // free text stored in the model (data, seed, command)
 };
 
 /// Empty when valid, else a message naming the first out-of-range field and its range.
@@ -113,7 +113,7 @@ class ObjectClassifierModel {
     std::int32_t label;
   };
   int usedFeatures() const;
-  void flatten();  // builds flat_ and roots_ from forest_
+  void flatten();                           // builds flat_ and roots_ from forest_
   std::shared_ptr<cv::ml::RTrees> forest_;  // cv::Ptr is std::shared_ptr in OpenCV 4
   std::vector<FlatNode> flat_;
   std::vector<std::int32_t> roots_;
@@ -125,13 +125,13 @@ class ObjectClassifierModel {
 
 /// Parameters of the classification stage.
 struct ObjectClassifierParams {
-  bool enabled = false;                 // [-] false: objects pass unclassified ("unknown"); the
-                                        //     shipped config/classification.yaml turns it on
-  std::string model_path;               // model file (urban_detection_train_classifier)
+  bool enabled = false;                  // [-] false: objects pass unclassified ("unknown"); the
+                                         //     shipped config/classification.yaml turns it on
+  std::string model_path;                // model file (urban_detection_train_classifier)
   double min_object_probability = -1.0;  // [0..1] keep an object when P(object) >= this;
-                                          //   negative: the threshold stored in the model
-  bool reject_non_objects = true;       // [-] false: non-objects stay in the output, labelled
-                                        //     "non_object"
+                                         //   negative: the threshold stored in the model
+  bool reject_non_objects = true;        // [-] false: non-objects stay in the output, labelled
+                                         //     "non_object"
 };
 
 /// ObjectClassifierParams' field table (core/common/param_fields.h).
@@ -154,9 +154,9 @@ struct ParamFields<ObjectClassifierParams> {
 std::string validate(const ObjectClassifierParams& p);
 
 struct ObjectClassifierStats {
-  std::size_t input = 0;     // objects given to apply()
-  std::size_t kept = 0;      // objects in the output
-  std::size_t rejected = 0;  // non-objects removed
+  std::size_t input = 0;                                     // objects given to apply()
+  std::size_t kept = 0;                                      // objects in the output
+  std::size_t rejected = 0;                                  // non-objects removed
   std::array<std::size_t, kNumObjectCategories> by_class{};  // decisions per class
 };
 

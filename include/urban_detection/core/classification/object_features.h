@@ -30,18 +30,18 @@
 #include <vector>
 
 #include "urban_detection/core/classification/foreground_index.h"
-#include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/detection/object_detector.h"
 
 namespace urban_detection {
 namespace core {
 
 /// Parameters of the feature extraction (fixed by the model they were trained with).
 struct ObjectFeatureParams {
-  double sensor_height_m = 1.73;     // [m] sensor above the road (heights refer to z = -this)
-  double row_gap_deg = 0.12;         // [deg] elevation gap that starts a new scan row
-  double max_azimuth_gap_deg = 0.6;  // [deg] returns farther apart in azimuth: not neighbours
-  double jump_m = 0.25;              // [m] |r_b - (r_a + r_c) / 2| above this is a range jump
+  double sensor_height_m = 1.73;         // [m] sensor above the road (heights refer to z = -this)
+  double row_gap_deg = 0.12;             // [deg] elevation gap that starts a new scan row
+  double max_azimuth_gap_deg = 0.6;      // [deg] returns farther apart in azimuth: not neighbours
+  double jump_m = 0.25;                  // [m] |r_b - (r_a + r_c) / 2| above this is a range jump
   double azimuth_resolution_deg = 0.17;  // [deg] the sensor's horizontal step (HDL-64E at
                                          //       10 Hz: 0.17 deg)
 };
@@ -53,47 +53,47 @@ std::string validate(const ObjectFeatureParams& p);
 /// finite `values`, exactly the element a full sort puts there. Counts the values into unit
 /// buckets first and selects only inside the bucket holding a rank: near-linear for
 /// intensities, whatever their distribution. `scratch` is reused between calls.
-void selectRanks(const std::vector<float>& values, const std::size_t* ranks, int count,
-                 float* out, std::vector<float>* scratch);
+void selectRanks(const std::vector<float>& values, const std::size_t* ranks, int count, float* out,
+                 std::vector<float>* scratch);
 
 /// The feature vector's entries, in order. Names (featureName) go into the training CSV and
 /// the model file, so a model refuses a feature list it was not trained with.
 enum ObjectFeature : int {
-  kFeatPoints = 0,        // [-] points of the object
-  kFeatPointsAt10m,       // [-] points x (range / 10 m)^2: the count at 10 m
-  kFeatRange,             // [m] horizontal distance of the centroid
-  kFeatLength,            // [m] oriented box, longer side
-  kFeatWidth,             // [m] oriented box, shorter side
-  kFeatHeight,            // [m] z extent
-  kFeatFootprint,         // [m^2] length x width
-  kFeatBottom,            // [m] lowest point above the sensor's ground plane
-  kFeatTop,               // [m] highest point above the sensor's ground plane
-  kFeatMeanAboveBottom,   // [m] mean z - lowest z
-  kFeatStdZ,              // [m] standard deviation of z
-  kFeatLinearity,         // [0..1] (l1 - l2) / l1 of the 3-D covariance eigenvalues
-  kFeatPlanarity,         // [0..1] (l2 - l3) / l1
-  kFeatScattering,        // [0..1] l3 / l1
-  kFeatNormalZ,           // [0..1] |z| of the smallest eigenvector (1: horizontal surface)
-  kFeatPrincipalZ,        // [0..1] |z| of the largest eigenvector (1: vertical, pole-like)
-  kFeatXyElongation,      // [0..1] 1 - l2 / l1 of the horizontal covariance
-  kFeatProfile0,          // [0..1] share of points in the lowest quarter of the height
-  kFeatProfile1,          // [0..1] second quarter
-  kFeatProfile2,          // [0..1] third quarter
-  kFeatProfile3,          // [0..1] top quarter
-  kFeatBelow05,           // [0..1] share of points less than 0.5 m above the lowest point
-  kFeatAbove15,           // [0..1] share of points more than 1.5 m above the lowest point
-  kFeatRows,              // [-] scan rows hit
-  kFeatPointsPerRow,      // [-] points / rows
-  kFeatAzimuthFill,       // [-] mean azimuth step between row neighbours / sensor resolution
-  kFeatRowNeighbours,     // [0..1] share of points with a row neighbour on both sides
-  kFeatJumpFraction,      // [0..1] range jumps / triplets
-  kFeatMeanSecondDiff,    // [m] mean |r_b - (r_a + r_c) / 2| over the triplets
-  kFeatIntensityMean,     // [input units] mean intensity
-  kFeatIntensityStd,      // [input units] standard deviation
-  kFeatIntensityQ10,      // [input units] 10 % quantile
-  kFeatIntensityQ50,      // [input units] median
-  kFeatIntensityQ90,      // [input units] 90 % quantile
-  kFeatIntensityMax,      // [input units] largest intensity
+  kFeatPoints = 0,       // [-] points of the object
+  kFeatPointsAt10m,      // [-] points x (range / 10 m)^2: the count at 10 m
+  kFeatRange,            // [m] horizontal distance of the centroid
+  kFeatLength,           // [m] oriented box, longer side
+  kFeatWidth,            // [m] oriented box, shorter side
+  kFeatHeight,           // [m] z extent
+  kFeatFootprint,        // [m^2] length x width
+  kFeatBottom,           // [m] lowest point above the sensor's ground plane
+  kFeatTop,              // [m] highest point above the sensor's ground plane
+  kFeatMeanAboveBottom,  // [m] mean z - lowest z
+  kFeatStdZ,             // [m] standard deviation of z
+  kFeatLinearity,        // [0..1] (l1 - l2) / l1 of the 3-D covariance eigenvalues
+  kFeatPlanarity,        // [0..1] (l2 - l3) / l1
+  kFeatScattering,       // [0..1] l3 / l1
+  kFeatNormalZ,          // [0..1] |z| of the smallest eigenvector (1: horizontal surface)
+  kFeatPrincipalZ,       // [0..1] |z| of the largest eigenvector (1: vertical, pole-like)
+  kFeatXyElongation,     // [0..1] 1 - l2 / l1 of the horizontal covariance
+  kFeatProfile0,         // [0..1] share of points in the lowest quarter of the height
+  kFeatProfile1,         // [0..1] second quarter
+  kFeatProfile2,         // [0..1] third quarter
+  kFeatProfile3,         // [0..1] top quarter
+  kFeatBelow05,          // [0..1] share of points less than 0.5 m above the lowest point
+  kFeatAbove15,          // [0..1] share of points more than 1.5 m above the lowest point
+  kFeatRows,             // [-] scan rows hit
+  kFeatPointsPerRow,     // [-] points / rows
+  kFeatAzimuthFill,      // [-] mean azimuth step between row neighbours / sensor resolution
+  kFeatRowNeighbours,    // [0..1] share of points with a row neighbour on both sides
+  kFeatJumpFraction,     // [0..1] range jumps / triplets
+  kFeatMeanSecondDiff,   // [m] mean |r_b - (r_a + r_c) / 2| over the triplets
+  kFeatIntensityMean,    // [input units] mean intensity
+  kFeatIntensityStd,     // [input units] standard deviation
+  kFeatIntensityQ10,     // [input units] 10 % quantile
+  kFeatIntensityQ50,     // [input units] median
+  kFeatIntensityQ90,     // [input units] 90 % quantile
+  kFeatIntensityMax,     // [input units] largest intensity
   kNumObjectFeatures
 };
 
@@ -135,10 +135,10 @@ class ObjectFeatureExtractor {
   };
   ObjectFeatureParams params_;
   ForegroundIndex index_;
-  std::vector<RowPoint> rows_, sorted_;    // scratch: points, ordered by elevation bin
+  std::vector<RowPoint> rows_, sorted_;          // scratch: points, ordered by elevation bin
   std::vector<std::uint32_t> bin_start_, fill_;  // scratch of the counting sort
-  std::vector<float> intensities_;         // scratch
-  std::vector<float> bucket_values_;       // scratch of the quantile selection
+  std::vector<float> intensities_;               // scratch
+  std::vector<float> bucket_values_;             // scratch of the quantile selection
 };
 
 }  // namespace core

@@ -33,10 +33,10 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/common/param_fields.h"
 #include "urban_detection/core/classification/foreground_index.h"
-#include "urban_detection/core/detection/object_detector.h"
+#include "urban_detection/core/common/param_fields.h"
 #include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/detection/object_detector.h"
 
 namespace urban_detection {
 namespace core {
@@ -151,8 +151,8 @@ class ObjectFilter {
   };
   ObjectFilterParams params_;
   ForegroundIndex index_;
-  std::vector<RowPoint> row_points_;       // scratch
-  std::vector<DetectedObject> kept_;       // scratch
+  std::vector<RowPoint> row_points_;  // scratch
+  std::vector<DetectedObject> kept_;  // scratch
 };
 
 }  // namespace core

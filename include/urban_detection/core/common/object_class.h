@@ -13,20 +13,20 @@ namespace core {
 
 /// Class of a scene surface / of a ground-truth point.
 enum class ObjectClass : std::uint8_t {
-  kUnlabeled = 0,    // not a scene surface (never emitted for a real return)
-  kGround = 1,       // road, curb, sidewalk, paved ground
-  kWall = 2,         // building facades
-  kVegetation = 3,   // tree crowns, hedges, bushes
-  kTrunk = 4,        // tree trunks
-  kPole = 5,         // lamp posts, sign posts
-  kSign = 6,         // traffic-sign plates
-  kCar = 7,          // passenger cars
-  kVan = 8,          // vans
-  kPedestrian = 9,   // pedestrians
-  kCyclist = 10,     // cyclists with their bicycle
-  kBin = 11,         // waste bins
-  kBench = 12,       // benches
-  kTerrain = 13,     // natural ground: grass verges, lawns, garden beds
+  kUnlabeled = 0,   // not a scene surface (never emitted for a real return)
+  kGround = 1,      // road, curb, sidewalk, paved ground
+  kWall = 2,        // building facades
+  kVegetation = 3,  // tree crowns, hedges, bushes
+  kTrunk = 4,       // tree trunks
+  kPole = 5,        // lamp posts, sign posts
+  kSign = 6,        // traffic-sign plates
+  kCar = 7,         // passenger cars
+  kVan = 8,         // vans
+  kPedestrian = 9,  // pedestrians
+  kCyclist = 10,    // cyclists with their bicycle
+  kBin = 11,        // waste bins
+  kBench = 12,      // benches
+  kTerrain = 13,    // natural ground: grass verges, lawns, garden beds
 };
 
 /// Number of classes (one past the largest value).
@@ -35,20 +35,34 @@ constexpr int kNumObjectClasses = 14;
 /// Lower-case name of a class ("car", "pedestrian", ...); "unlabeled" for unknown values.
 inline const char* toString(ObjectClass c) {
   switch (c) {
-    case ObjectClass::kGround: return "ground";
-    case ObjectClass::kWall: return "wall";
-    case ObjectClass::kVegetation: return "vegetation";
-    case ObjectClass::kTrunk: return "trunk";
-    case ObjectClass::kPole: return "pole";
-    case ObjectClass::kSign: return "sign";
-    case ObjectClass::kCar: return "car";
-    case ObjectClass::kVan: return "van";
-    case ObjectClass::kPedestrian: return "pedestrian";
-    case ObjectClass::kCyclist: return "cyclist";
-    case ObjectClass::kBin: return "bin";
-    case ObjectClass::kBench: return "bench";
-    case ObjectClass::kTerrain: return "terrain";
-    default: return "unlabeled";
+    case ObjectClass::kGround:
+      return "ground";
+    case ObjectClass::kWall:
+      return "wall";
+    case ObjectClass::kVegetation:
+      return "vegetation";
+    case ObjectClass::kTrunk:
+      return "trunk";
+    case ObjectClass::kPole:
+      return "pole";
+    case ObjectClass::kSign:
+      return "sign";
+    case ObjectClass::kCar:
+      return "car";
+    case ObjectClass::kVan:
+      return "van";
+    case ObjectClass::kPedestrian:
+      return "pedestrian";
+    case ObjectClass::kCyclist:
+      return "cyclist";
+    case ObjectClass::kBin:
+      return "bin";
+    case ObjectClass::kBench:
+      return "bench";
+    case ObjectClass::kTerrain:
+      return "terrain";
+    default:
+      return "unlabeled";
   }
 }
 

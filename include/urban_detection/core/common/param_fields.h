@@ -81,8 +81,8 @@ template <typename T>
 std::string outOfRangeMessage(const std::string& name, T value, T min, T max,
                               const std::string& unit = "") {
   std::ostringstream msg;
-  msg << "parameter '" << name << "' = " << value << " is out of range: accepted [" << min
-      << ", " << max << "]" << (unit.empty() ? "" : " ") << unit;
+  msg << "parameter '" << name << "' = " << value << " is out of range: accepted [" << min << ", "
+      << max << "]" << (unit.empty() ? "" : " ") << unit;
   return msg.str();
 }
 

@@ -15,10 +15,10 @@ namespace urban_detection {
 /// A decoded Velodyne return. Field names (x y z intensity ring time) match
 /// velodyne_pointcloud's XYZIRT so existing tools and rviz configs work unchanged.
 struct EIGEN_ALIGN16 PointXYZIRT {
-  PCL_ADD_POINT4D;      // [m] x, y, z in the sensor (or target) frame
-  float intensity;      // [0..255] calibrated intensity
-  std::uint16_t ring;   // laser index ordered by vertical angle, 0 = lowest beam
-  float time;           // [s] time of the firing relative to the revolution start
+  PCL_ADD_POINT4D;     // [m] x, y, z in the sensor (or target) frame
+  float intensity;     // [0..255] calibrated intensity
+  std::uint16_t ring;  // laser index ordered by vertical angle, 0 = lowest beam
+  float time;          // [s] time of the firing relative to the revolution start
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 };
 
@@ -27,10 +27,10 @@ struct EIGEN_ALIGN16 PointXYZIRT {
 /// outputs; `index` is the position of the point in the input cloud of the segmentation,
 /// so detections can be matched to per-point ground truth.
 struct EIGEN_ALIGN16 LabeledPoint {
-  PCL_ADD_POINT4D;       // [m]
-  float intensity;       // [0..255]
-  std::uint32_t label;   // class or object id, see above
-  std::uint32_t index;   // index into the input cloud
+  PCL_ADD_POINT4D;      // [m]
+  float intensity;      // [0..255]
+  std::uint32_t label;  // class or object id, see above
+  std::uint32_t index;  // index into the input cloud
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 };
 
@@ -87,9 +87,10 @@ inline std::size_t countNonFinite(const pcl::PointCloud<PointT>& cloud) {
 }  // namespace urban_detection
 
 POINT_CLOUD_REGISTER_POINT_STRUCT(urban_detection::PointXYZIRT,
-                                  (float, x, x)(float, y, y)(float, z, z)(float, intensity,
-                                                                          intensity)(
-                                      std::uint16_t, ring, ring)(float, time, time))
+                                  (float, x, x)(float, y, y)(float, z,
+                                                             z)(float, intensity,
+                                                                intensity)(std::uint16_t, ring,
+                                                                           ring)(float, time, time))
 
 POINT_CLOUD_REGISTER_POINT_STRUCT(urban_detection::LabeledPoint,
                                   (float, x, x)(float, y, y)(float, z, z)(float, intensity,

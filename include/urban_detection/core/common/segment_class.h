@@ -19,11 +19,16 @@ enum class SegmentClass : std::uint8_t {
 
 inline const char* toString(SegmentClass c) {
   switch (c) {
-    case SegmentClass::kClutter: return "clutter";
-    case SegmentClass::kGround: return "ground";
-    case SegmentClass::kTall: return "tall";
-    case SegmentClass::kShort: return "short";
-    default: return "unknown";
+    case SegmentClass::kClutter:
+      return "clutter";
+    case SegmentClass::kGround:
+      return "ground";
+    case SegmentClass::kTall:
+      return "tall";
+    case SegmentClass::kShort:
+      return "short";
+    default:
+      return "unknown";
   }
 }
 

@@ -44,8 +44,8 @@ struct CellCounts {
 /// Counts the cells of a grid of side `cell_m` [m] over the finite points of `cloud` with
 /// |x|, |y| < `half_extent_m` [m] (others are ignored), and adds them to `counts`
 /// (counts->cell_m is set). `t_min` [points] is the dense threshold.
-void countCells(const LabeledCloud& cloud, double cell_m, double half_extent_m,
-                std::size_t t_min, CellCounts* counts);
+void countCells(const LabeledCloud& cloud, double cell_m, double half_extent_m, std::size_t t_min,
+                CellCounts* counts);
 
 }  // namespace core
 }  // namespace urban_detection

@@ -44,7 +44,7 @@ namespace core {
 /// ../shared/data/kitti_raw/drive_0048`, fit rms 0.094), mirrored in config/hierarchical_grid.yaml.
 struct DistanceWeightParams {
   bool enabled = true;  // false: w(d) = 1 everywhere (no density compensation)
-  bool log_fit = true;   // true: the polynomial is of ln(normalised density), see above
+  bool log_fit = true;  // true: the polynomial is of ln(normalised density), see above
   /// Polynomial p(d) = sum_k coefficients[k] * d^k, d in [m].
   std::vector<double> coefficients = {-3.2283822161e+00, 7.9045388742e-01,  -8.6082372620e-02,
                                       3.3503074472e-03,  -6.2757445375e-05, 5.6547142417e-07,

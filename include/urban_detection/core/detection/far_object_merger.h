@@ -32,9 +32,9 @@
 #include <vector>
 
 #include "urban_detection/core/common/param_fields.h"
+#include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/detection/object_geometry.h"
-#include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
 namespace core {
@@ -65,14 +65,12 @@ struct ParamFields<FarObjectMergerParams> {
     f({"min_across_overlap", "", 0.0, 1.0,
        "boxes overlapping across it by at least this fraction of the narrower one"},
       p.min_across_overlap);
-    f({"max_z_gap_m", "m", 0.0, 10.0, "largest gap between the pieces' z ranges"},
-      p.max_z_gap_m);
+    f({"max_z_gap_m", "m", 0.0, 10.0, "largest gap between the pieces' z ranges"}, p.max_z_gap_m);
     f({"min_range_m", "m", 0.0, 1000.0, "only objects whose centroid is at least this far"},
       p.min_range_m);
     f({"max_length_m", "m", 0.01, 100.0, "the joined object's box at most this long"},
       p.max_length_m);
-    f({"max_width_m", "m", 0.01, 100.0, "... and this wide (at most max_length_m)"},
-      p.max_width_m);
+    f({"max_width_m", "m", 0.01, 100.0, "... and this wide (at most max_length_m)"}, p.max_width_m);
   }
 };
 

@@ -79,11 +79,11 @@
 #include <vector>
 
 #include "urban_detection/core/common/param_fields.h"
+#include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/detection/distance_weight.h"
 #include "urban_detection/core/detection/far_object_merger.h"
 #include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/detection/object_geometry.h"
-#include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
 namespace core {
@@ -325,11 +325,11 @@ class HierarchicalGridDetector : public ObjectDetector {
   };
   // Per output object.
   struct ObjectScratch {
-    std::vector<std::uint32_t> begin;      // object k: xy[begin[k], begin[k + 1])
-    std::vector<Eigen::Vector2f> xy;       // [m] xy of the points, grouped by object
-    std::vector<ObjectMoments> moments;    // pass 1 of the object geometry
-    std::vector<std::uint32_t*> index_out; // scatter cursors into the objects' indices
-    std::vector<Eigen::Vector2f*> xy_out;  // scatter cursors into xy
+    std::vector<std::uint32_t> begin;       // object k: xy[begin[k], begin[k + 1])
+    std::vector<Eigen::Vector2f> xy;        // [m] xy of the points, grouped by object
+    std::vector<ObjectMoments> moments;     // pass 1 of the object geometry
+    std::vector<std::uint32_t*> index_out;  // scatter cursors into the objects' indices
+    std::vector<Eigen::Vector2f*> xy_out;   // scatter cursors into xy
   };
   DenseLevel dense_;
   CoarseLevel coarse_;

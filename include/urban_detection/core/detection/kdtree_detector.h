@@ -18,10 +18,10 @@ namespace core {
 
 /// Parameters of KdTreeDetector, mirrored in config/kdtree.yaml.
 struct KdTreeDetectorParams {
-  double cluster_tolerance_m = 0.4;   // [m] points closer than this (3-D) are connected
-  int min_cluster_size = 5;           // [-] smaller clusters are dropped
-  int max_cluster_size = 1000000;     // [-] larger clusters are dropped (PCL semantics)
-  double max_extent_m = 20.0;         // [m] objects with a longer xy box side are dropped
+  double cluster_tolerance_m = 0.4;      // [m] points closer than this (3-D) are connected
+  int min_cluster_size = 5;              // [-] smaller clusters are dropped
+  int max_cluster_size = 1000000;        // [-] larger clusters are dropped (PCL semantics)
+  double max_extent_m = 20.0;            // [m] objects with a longer xy box side are dropped
   double max_abs_coordinate_m = 1000.0;  // [m] points with a larger |x|, |y| or |z| are ignored
   // [-] true: the kd-tree sorts every radius search's neighbours by distance (PCL's default
   // for pcl::search::KdTree, as in PCL's clustering tutorial). Clustering does not use the

@@ -30,12 +30,18 @@ enum class ObjectCategory : std::uint8_t {
 /// "unknown" for kUnknown and any other value).
 inline const char* toString(ObjectCategory c) {
   switch (c) {
-    case ObjectCategory::kNonObject: return "non_object";
-    case ObjectCategory::kVehicle: return "vehicle";
-    case ObjectCategory::kPedestrian: return "pedestrian";
-    case ObjectCategory::kCyclist: return "cyclist";
-    case ObjectCategory::kOtherObject: return "other_object";
-    default: return "unknown";
+    case ObjectCategory::kNonObject:
+      return "non_object";
+    case ObjectCategory::kVehicle:
+      return "vehicle";
+    case ObjectCategory::kPedestrian:
+      return "pedestrian";
+    case ObjectCategory::kCyclist:
+      return "cyclist";
+    case ObjectCategory::kOtherObject:
+      return "other_object";
+    default:
+      return "unknown";
   }
 }
 
@@ -44,9 +50,9 @@ struct DetectedObject {
   std::uint32_t id = 0;                // 1.. within one frame
   std::vector<std::uint32_t> indices;  // indices of its points in the segmented input cloud
                                        // (the `index` field of the foreground points)
-  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  // [m]
-  Eigen::Vector3f min_pt = Eigen::Vector3f::Zero();    // [m] axis-aligned box corner
-  Eigen::Vector3f max_pt = Eigen::Vector3f::Zero();    // [m] axis-aligned box corner
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();    // [m]
+  Eigen::Vector3f min_pt = Eigen::Vector3f::Zero();      // [m] axis-aligned box corner
+  Eigen::Vector3f max_pt = Eigen::Vector3f::Zero();      // [m] axis-aligned box corner
   Eigen::Vector3f obb_center = Eigen::Vector3f::Zero();  // [m] yaw-oriented box centre
   Eigen::Vector3f obb_size = Eigen::Vector3f::Zero();    // [m] length (along yaw), width, height
   float obb_yaw_rad = 0.0f;                              // [rad] about z

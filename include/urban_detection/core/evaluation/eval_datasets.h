@@ -32,12 +32,12 @@
 
 #include <Eigen/Core>
 
-#include "urban_detection/core/sensor/calibration.h"
+#include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/evaluation/evaluation.h"
-#include "urban_detection/core/simulation/ground_truth.h"
+#include "urban_detection/core/sensor/calibration.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/sensor/pcap_io.h"
-#include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/simulation/ground_truth.h"
 
 namespace urban_detection {
 namespace core {
@@ -52,7 +52,7 @@ std::vector<std::string> listFiles(const std::string& dir, const std::string& su
 /// The calibration of one KITTI object frame (calib/*.txt).
 struct KittiCalibration {
   Eigen::Matrix<double, 3, 4> p2 = Eigen::Matrix<double, 3, 4>::Zero();  ///< camera 2 projection
-  Eigen::Matrix3d r0_rect = Eigen::Matrix3d::Identity();  ///< rectifying rotation
+  Eigen::Matrix3d r0_rect = Eigen::Matrix3d::Identity();                 ///< rectifying rotation
   Eigen::Matrix<double, 3, 4> tr_velo_to_cam = Eigen::Matrix<double, 3, 4>::Zero();  ///< [m]
 
   /// LiDAR point -> rectified camera coordinates (x right, y down, z forward) [m].
@@ -61,8 +61,7 @@ struct KittiCalibration {
   Eigen::Vector3d rectToVelo(const Eigen::Vector3d& p_rect) const;
   /// Projects a LiDAR point into image 2; returns false when it is not in front of the camera
   /// (depth <= min_depth_m). `u`, `v` in pixels.
-  bool project(const Eigen::Vector3d& p_velo, double* u, double* v,
-               double min_depth_m = 0.1) const;
+  bool project(const Eigen::Vector3d& p_velo, double* u, double* v, double min_depth_m = 0.1) const;
 };
 
 /// Parses calib/*.txt (needs P2, R0_rect, Tr_velo_to_cam). Returns false with `error` set.
@@ -70,22 +69,21 @@ bool readKittiCalibration(const std::string& path, KittiCalibration* calib, std:
 
 /// One line of label_2/*.txt.
 struct KittiLabel {
-  std::string type;          ///< Car, Van, Truck, Pedestrian, Person_sitting, Cyclist, Tram,
-                             ///< Misc or DontCare
-  double truncated = 0.0;    ///< [0..1]
-  int occluded = 0;          ///< 0..3
-  double alpha = 0.0;        ///< [rad] observation angle
+  std::string type;              ///< Car, Van, Truck, Pedestrian, Person_sitting, Cyclist, Tram,
+                                 ///< Misc or DontCare
+  double truncated = 0.0;        ///< [0..1]
+  int occluded = 0;              ///< 0..3
+  double alpha = 0.0;            ///< [rad] observation angle
   std::array<double, 4> bbox{};  ///< [px] left, top, right, bottom in image 2
   double height_m = 0.0, width_m = 0.0, length_m = 0.0;  ///< [m] box dimensions
-  Eigen::Vector3d location = Eigen::Vector3d::Zero();  ///< [m] bottom centre, rectified camera
-  double rotation_y = 0.0;   ///< [rad] yaw about the camera y axis
+  Eigen::Vector3d location = Eigen::Vector3d::Zero();    ///< [m] bottom centre, rectified camera
+  double rotation_y = 0.0;                               ///< [rad] yaw about the camera y axis
 };
 
 /// Parses one label line; returns false if it has fewer than 15 fields or non-numbers.
 bool parseKittiLabelLine(const std::string& line, KittiLabel* label);
 /// Reads label_2/*.txt; returns false with `error` set on a missing file or a bad line.
-bool readKittiLabels(const std::string& path, std::vector<KittiLabel>* labels,
-                     std::string* error);
+bool readKittiLabels(const std::string& path, std::vector<KittiLabel>* labels, std::string* error);
 
 /// Coordinates of a rectified-camera point in the frame of a label's box: x along the length,
 /// y up from the bottom face, z along the width; the box is |x| <= l/2, 0 <= y <= h,
@@ -147,8 +145,7 @@ struct SemanticKittiGroundTruthParams {
 
 /// Builds the ground truth of one SemanticKITTI scan from its per-point labels.
 void buildSemanticKittiGroundTruth(const std::vector<std::uint32_t>& labels,
-                                   const SemanticKittiGroundTruthParams& params,
-                                   EvalFrame* gt);
+                                   const SemanticKittiGroundTruthParams& params, EvalFrame* gt);
 
 // ------------------------------------------------------------------------------------------
 // Simulated drives

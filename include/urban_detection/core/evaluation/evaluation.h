@@ -32,11 +32,11 @@ enum class PointRole : std::uint8_t {
 
 /// One ground-truth object of a frame.
 struct EvalObject {
-  std::string label;             ///< class name ("Car", "person", ...)
-  std::uint32_t id = 0;          ///< dataset id (instance id, label line number, track id)
-  bool ignored = false;          ///< not counted in NO (e.g. too few points); a detection
-                                 ///< matched to it, or made mostly of its points, is ignored
-  std::size_t num_points = 0;    ///< scored (non-excluded) points; filled by finalize()
+  std::string label;           ///< class name ("Car", "person", ...)
+  std::uint32_t id = 0;        ///< dataset id (instance id, label line number, track id)
+  bool ignored = false;        ///< not counted in NO (e.g. too few points); a detection
+                               ///< matched to it, or made mostly of its points, is ignored
+  std::size_t num_points = 0;  ///< scored (non-excluded) points; filled by finalize()
 };
 
 /// Ground truth of one frame, per point of the evaluated cloud.
@@ -56,10 +56,10 @@ struct EvalFrame {
 
 /// Scoring parameters.
 struct EvaluationParams {
-  double min_iou = 0.5;              ///< [0..1] a detection/GT pair is a match when IoU >= this
-  double ignore_majority = 0.5;      ///< [0..1] an unmatched detection is ignored when more than
-                                     ///< this fraction of its scored points is don't-care or
-                                     ///< belongs to ignored GT objects
+  double min_iou = 0.5;          ///< [0..1] a detection/GT pair is a match when IoU >= this
+  double ignore_majority = 0.5;  ///< [0..1] an unmatched detection is ignored when more than
+                                 ///< this fraction of its scored points is don't-care or
+                                 ///< belongs to ignored GT objects
 };
 
 /// Verdict on one detection.
@@ -67,9 +67,12 @@ enum class DetectionVerdict : std::uint8_t { kTrue = 0, kFalse = 1, kIgnored = 2
 
 inline const char* toString(DetectionVerdict v) {
   switch (v) {
-    case DetectionVerdict::kTrue: return "true";
-    case DetectionVerdict::kFalse: return "false";
-    default: return "ignored";
+    case DetectionVerdict::kTrue:
+      return "true";
+    case DetectionVerdict::kFalse:
+      return "false";
+    default:
+      return "ignored";
   }
 }
 
@@ -77,11 +80,11 @@ inline const char* toString(DetectionVerdict v) {
 /// nothing was detected), recall = TP / NO (1 when there is no GT object), F-rate =
 /// 2 P R / (P + R) (0 when both are 0), with TP = NO - MO.
 struct DetectionScore {
-  std::size_t no = 0;       ///< number of (non-ignored) GT objects
-  std::size_t mo = 0;       ///< missed GT objects
-  std::size_t fo = 0;       ///< false detections
-  std::size_t tp = 0;       ///< matched GT objects (= no - mo)
-  std::size_t ignored = 0;  ///< detections neither true nor false
+  std::size_t no = 0;          ///< number of (non-ignored) GT objects
+  std::size_t mo = 0;          ///< missed GT objects
+  std::size_t fo = 0;          ///< false detections
+  std::size_t tp = 0;          ///< matched GT objects (= no - mo)
+  std::size_t ignored = 0;     ///< detections neither true nor false
   std::size_t detections = 0;  ///< all detections (tp + fo + ignored)
 
   double precision() const;
@@ -107,8 +110,7 @@ struct FrameMatch {
 /// IoU >= min_iou and then the total IoU of those pairs; pairs below min_iou count for nothing
 /// (maximising the total of all IoUs could trade one valid match for two sub-threshold
 /// overlaps). Returns, per row, the assigned column or -1.
-std::vector<std::int32_t> assignMaxIou(const std::vector<std::vector<double>>& iou,
-                                       double min_iou);
+std::vector<std::int32_t> assignMaxIou(const std::vector<std::vector<double>>& iou, double min_iou);
 
 /// Scores the detections of one frame against its ground truth. Detection indices outside the
 /// GT arrays are ignored (counted as non-existent points).
@@ -127,8 +129,8 @@ class DetectionEvaluator {
   EvaluationParams params_;
   DetectionScore total_;
   // Scratch, reused between frames.
-  std::vector<std::uint32_t> gt_hits_;       // per GT: intersection with the current detection
-  std::vector<std::int32_t> touched_;        // GT objects touched by the current detection
+  std::vector<std::uint32_t> gt_hits_;  // per GT: intersection with the current detection
+  std::vector<std::int32_t> touched_;   // GT objects touched by the current detection
 };
 
 }  // namespace core

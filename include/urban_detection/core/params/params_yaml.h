@@ -6,11 +6,11 @@
 
 #include <string>
 
-#include "urban_detection/core/segmentation/grid_segmenter.h"
-#include "urban_detection/core/detection/hierarchical_grid_detector.h"
-#include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/detection/hierarchical_grid_detector.h"
+#include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/tracking/tracker.h"
 
 namespace urban_detection {
@@ -26,8 +26,8 @@ bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& sec
 
 /// Overrides the fields of `params` from the `hierarchical_grid:` map of a detection.yaml
 /// style file (the distance weight under `weight:`). A file without that map changes nothing.
-bool loadHierarchicalGridParamsYaml(const std::string& path,
-                                    HierarchicalGridDetectorParams* params, std::string* error);
+bool loadHierarchicalGridParamsYaml(const std::string& path, HierarchicalGridDetectorParams* params,
+                                    std::string* error);
 
 /// Overrides the fields of `params` from the `kdtree:` map of a detection.yaml style file.
 bool loadKdTreeParamsYaml(const std::string& path, KdTreeDetectorParams* params,

@@ -39,9 +39,9 @@
 #include <vector>
 
 #include "urban_detection/core/common/param_fields.h"
-#include "urban_detection/core/segmentation/hough_wall_refiner.h"
 #include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/common/segment_class.h"
+#include "urban_detection/core/segmentation/hough_wall_refiner.h"
 #include "urban_detection/core/segmentation/simple_grid.h"
 
 namespace urban_detection {
@@ -49,49 +49,49 @@ namespace core {
 
 /// Every threshold of the segmentation; config/segmentation.yaml mirrors it field by field.
 struct GridSegmenterParams {
-  double sensor_height_m = 1.73;      // [m] sensor height above the road (KITTI: 1.73)
-  double cell_size_m = 0.5;           // [m] W_S, side of a simple-grid cell
-  double max_range_m = 80.0;          // [m] half side of the grid; farther points: kUnknown
-  double max_abs_height_m = 50.0;     // [m] points farther than this from the ground plane
-                                      //     (|z + sensor_height_m|) are kUnknown
-  int min_points_per_cell = 3;        // [points] fewer -> clutter (paper: 4-8; 3 keeps far
-                                      //     cyclists on SemanticKITTI)
-  bool ground_in_sparse_cells = true; // points of a clutter cell lying within
-                                      //     ground_tolerance_m of the terrain filled in from
-                                      //     neighbouring ground cells are ground (far road)
-  double ground_max_range_m = 0.25;   // [m] z_max - z_min below this: ground candidate (paper)
-  double ground_tolerance_m = 0.08;   // [m] a point this close above the local ground is ground
-  double ground_max_step_m = 0.20;    // [m] elevation step allowed between neighbouring ground
-                                      //     cells (curbs, slopes)
-  bool curb_cells_ground = false;     // a reached cell whose points span less than
-                                      //     ground_max_step_m, lie within it of the local
-                                      //     ground and whose top is the ground of a reached
-                                      //     neighbour is ground (a curb inside the cell). Off:
-                                      //     it lowers SemanticKITTI's held-out F (see
-                                      //     docs/measurements.md, 2026-12-05)
-  double ground_max_gap_m = 2.0;      // [m] the terrain growing crosses empty or sparse cells
-                                      //     over at most this distance (gaps between far rings)
-  double seed_radius_m = 12.0;        // [m] ground growing starts from candidates this close
-  double seed_max_abs_height_m = 0.4; // [m] ... whose elevation is within this of z = 0
-  int terrain_fill_iterations = 6;    // [cells] search radius for the terrain of cells the
-                                      //     growing did not reach
-  double terrain_max_offset_m = 0.35; // [m] a flat cell the growing did not reach is ground when
-                                      //     its mean is this close to the filled terrain
-  double tall_min_height_m = 2.00;    // [m] z_max above local ground beyond this: tall (paper:
-                                      //     1.40, which makes standing people (1.7-1.9 m) tall
-                                      //     when heights are taken above the local ground)
-  double tall_min_range_m = 3.10;     // [m] z_max - z_min beyond this: tall (paper)
-  double vehicle_max_height_m = 4.0;  // [m] 0 = off; a tall cell whose top above the local
-                                      //     ground and whose z range are at most this is short
-                                      //     when the 8-connected group of such cells it is in
-                                      //     fits a vehicle box (trucks, buses, vans: 2-4 m)
-  double vehicle_max_length_m = 13.0; // [m] ... that box's longer side at most this (a bus)
-  double vehicle_max_width_m = 3.5;   // [m] ... and its shorter side at most this
-  double fov_top_elevation_deg = 1.0; // [deg] a cell whose highest point is seen at this
-                                      //     elevation or more may extend above the vertical
-                                      //     field of view (HDL-64E: +2 deg); it supports Hough
-                                      //     wall lines like a tall cell
-  HoughWallRefinerParams hough;       // Hough wall refinement (paper Fig. 3)
+  double sensor_height_m = 1.73;       // [m] sensor height above the road (KITTI: 1.73)
+  double cell_size_m = 0.5;            // [m] W_S, side of a simple-grid cell
+  double max_range_m = 80.0;           // [m] half side of the grid; farther points: kUnknown
+  double max_abs_height_m = 50.0;      // [m] points farther than this from the ground plane
+                                       //     (|z + sensor_height_m|) are kUnknown
+  int min_points_per_cell = 3;         // [points] fewer -> clutter (paper: 4-8; 3 keeps far
+                                       //     cyclists on SemanticKITTI)
+  bool ground_in_sparse_cells = true;  // points of a clutter cell lying within
+                                       //     ground_tolerance_m of the terrain filled in from
+                                       //     neighbouring ground cells are ground (far road)
+  double ground_max_range_m = 0.25;    // [m] z_max - z_min below this: ground candidate (paper)
+  double ground_tolerance_m = 0.08;    // [m] a point this close above the local ground is ground
+  double ground_max_step_m = 0.20;     // [m] elevation step allowed between neighbouring ground
+                                       //     cells (curbs, slopes)
+  bool curb_cells_ground = false;      // a reached cell whose points span less than
+                                       //     ground_max_step_m, lie within it of the local
+                                       //     ground and whose top is the ground of a reached
+                                       //     neighbour is ground (a curb inside the cell). Off:
+                                       //     it lowers SemanticKITTI's held-out F (see
+                                       //     docs/measurements.md, 2026-12-05)
+  double ground_max_gap_m = 2.0;       // [m] the terrain growing crosses empty or sparse cells
+                                       //     over at most this distance (gaps between far rings)
+  double seed_radius_m = 12.0;         // [m] ground growing starts from candidates this close
+  double seed_max_abs_height_m = 0.4;  // [m] ... whose elevation is within this of z = 0
+  int terrain_fill_iterations = 6;     // [cells] search radius for the terrain of cells the
+                                       //     growing did not reach
+  double terrain_max_offset_m = 0.35;  // [m] a flat cell the growing did not reach is ground when
+                                       //     its mean is this close to the filled terrain
+  double tall_min_height_m = 2.00;     // [m] z_max above local ground beyond this: tall (paper:
+                                       //     1.40, which makes standing people (1.7-1.9 m) tall
+                                       //     when heights are taken above the local ground)
+  double tall_min_range_m = 3.10;      // [m] z_max - z_min beyond this: tall (paper)
+  double vehicle_max_height_m = 4.0;   // [m] 0 = off; a tall cell whose top above the local
+                                       //     ground and whose z range are at most this is short
+                                       //     when the 8-connected group of such cells it is in
+                                       //     fits a vehicle box (trucks, buses, vans: 2-4 m)
+  double vehicle_max_length_m = 13.0;  // [m] ... that box's longer side at most this (a bus)
+  double vehicle_max_width_m = 3.5;    // [m] ... and its shorter side at most this
+  double fov_top_elevation_deg = 1.0;  // [deg] a cell whose highest point is seen at this
+                                       //     elevation or more may extend above the vertical
+                                       //     field of view (HDL-64E: +2 deg); it supports Hough
+                                       //     wall lines like a tall cell
+  HoughWallRefinerParams hough;        // Hough wall refinement (paper Fig. 3)
 };
 
 /// GridSegmenterParams' field table (core/common/param_fields.h).
@@ -206,7 +206,7 @@ class GridSegmenter {
   // Scratch, sized to the grid, reset only on the cells touched by the previous frame.
   std::vector<SegmentClass> cell_class_;
   std::vector<std::uint8_t> wall_support_;  // cell top at the upper edge of the field of view
-  std::vector<float> ground_z_;          // [m] local ground elevation per cell
+  std::vector<float> ground_z_;             // [m] local ground elevation per cell
   std::vector<std::uint8_t> ground_state_;
   // shortenVehicles: per cell, a tall cell low enough for a vehicle (candidate), grouped, or a
   // short cell of a group.
@@ -219,20 +219,20 @@ class GridSegmenter {
   std::vector<std::uint8_t> vehicle_state_;  // VehicleState per cell
   std::vector<std::int32_t> vehicle_cells_;  // the vehicle-high tall cells, in slot order
   std::vector<std::int32_t> vehicle_group_;  // scratch: one group's cells (breadth first)
-  std::vector<std::uint8_t> dense_;       // DenseState: min_points_per_cell points or more, flat
-  std::vector<float> slot_elev_;          // [m] per slot: mean (flat cell) or lowest point
-  std::vector<QueueEntry> grow_queue_;    // numCells() entries: each cell is queued at most once
-  std::vector<std::int32_t> touched_;     // numCells() entries; the first touched_count_ are the
-  std::size_t touched_count_ = 0;         //     cells whose ground state was set this frame
-  std::vector<std::int32_t> fill_cells_;  // cells given a filled terrain this frame
-  std::vector<float> fill_z_;             // [m] their terrain, applied after the search
-  static constexpr int kMaxBitRing = 28;   // fillTerrain's bit windows: 2 * 28 + 1 bits
+  std::vector<std::uint8_t> dense_;          // DenseState: min_points_per_cell points or more, flat
+  std::vector<float> slot_elev_;             // [m] per slot: mean (flat cell) or lowest point
+  std::vector<QueueEntry> grow_queue_;       // numCells() entries: each cell is queued at most once
+  std::vector<std::int32_t> touched_;        // numCells() entries; the first touched_count_ are the
+  std::size_t touched_count_ = 0;            //     cells whose ground state was set this frame
+  std::vector<std::int32_t> fill_cells_;     // cells given a filled terrain this frame
+  std::vector<float> fill_z_;                // [m] their terrain, applied after the search
+  static constexpr int kMaxBitRing = 28;     // fillTerrain's bit windows: 2 * 28 + 1 bits
   std::vector<std::uint64_t> terrain_bits_;  // per row: bit k+64 = cell k has terrain (cleared)
   std::size_t bit_words_ = 0;                // 64-bit words per row of terrain_bits_
   std::vector<std::uint64_t> terrain_near_;  // terrain_bits_ ORed over the rows within
                                              //     terrain_fill_iterations (overwritten)
   std::vector<std::uint64_t> near_fwd_, near_bwd_;  // scratch of terrain_near_: block-wise ORs
-  std::vector<std::uint64_t> zero_row_;              // one row of zero words (outside the grid)
+  std::vector<std::uint64_t> zero_row_;             // one row of zero words (outside the grid)
   // Per slot + 1 (entry 0: points without a cell) for the per-point pass: points below
   // split_z [m] are ground, the others get `label` (a SegmentClass). Filled by
   // classifyCells, then the cells the Hough refiner turned tall are patched.

@@ -19,24 +19,24 @@ namespace core {
 /// Parameters of the probabilistic Hough refinement. Lengths are in metres and converted to
 /// cells with the grid's cell size.
 struct HoughWallRefinerParams {
-  bool enabled = true;                 // run the refinement at all
-  double max_range_m = 20.0;           // [m] only cells within this square half side are
-                                       //     rasterised (the misreading happens near the sensor)
-  int votes = 8;                       // [cells] accumulator threshold of cv::HoughLinesP
-  double min_line_length_m = 6.0;      // [m] shortest accepted line
-  double max_line_gap_m = 1.0;         // [m] largest gap bridged within one line
-  double theta_resolution_deg = 2.0;   // [deg] angular resolution of the accumulator
-  double min_tall_fraction = 0.9;      // [0..1] a run of occupied cells along a line must lie
-                                       //     on at least this fraction of wall-supporting cells
-                                       //     (tall, or reaching the top of the field of view):
-                                       //     rows of parked cars are not walls
+  bool enabled = true;                   // run the refinement at all
+  double max_range_m = 20.0;             // [m] only cells within this square half side are
+                                         //     rasterised (the misreading happens near the sensor)
+  int votes = 8;                         // [cells] accumulator threshold of cv::HoughLinesP
+  double min_line_length_m = 6.0;        // [m] shortest accepted line
+  double max_line_gap_m = 1.0;           // [m] largest gap bridged within one line
+  double theta_resolution_deg = 2.0;     // [deg] angular resolution of the accumulator
+  double min_tall_fraction = 0.9;        // [0..1] a run of occupied cells along a line must lie
+                                         //     on at least this fraction of wall-supporting cells
+                                         //     (tall, or reaching the top of the field of view):
+                                         //     rows of parked cars are not walls
   double min_mixed_wall_length_m = 8.0;  // [m] in a run that fails min_tall_fraction, a
-                                       //     stretch of wall-supporting cells at least this long
-                                       //     (longer than a vehicle) is still a wall: a facade
-                                       //     continuing a row of parked cars; 0 disables
-  bool extend_lines = true;            // walk each Hough segment across the whole window, so a
-                                       //     facade fragment found by Hough recovers the facade
-  int line_half_width_cells = 1;       // [cells] relabel short cells up to this far from a line
+                                         //     stretch of wall-supporting cells at least this long
+                                         //     (longer than a vehicle) is still a wall: a facade
+                                         //     continuing a row of parked cars; 0 disables
+  bool extend_lines = true;              // walk each Hough segment across the whole window, so a
+                                         //     facade fragment found by Hough recovers the facade
+  int line_half_width_cells = 1;         // [cells] relabel short cells up to this far from a line
 };
 
 /// HoughWallRefinerParams' field table (core/common/param_fields.h).
@@ -49,8 +49,7 @@ struct ParamFields<HoughWallRefinerParams> {
       p.max_range_m);
     f({"votes", "cells", 1, 10000, "accumulator threshold of cv::HoughLinesP"}, p.votes);
     f({"min_line_length_m", "m", 0.0, 500.0, "shortest accepted line"}, p.min_line_length_m);
-    f({"max_line_gap_m", "m", 0.0, 100.0, "largest gap bridged within one line"},
-      p.max_line_gap_m);
+    f({"max_line_gap_m", "m", 0.0, 100.0, "largest gap bridged within one line"}, p.max_line_gap_m);
     f({"theta_resolution_deg", "deg", 0.1, 45.0, "angular resolution of the accumulator"},
       p.theta_resolution_deg);
     f({"min_tall_fraction", "", 0.0, 1.0,
@@ -70,9 +69,9 @@ std::string validate(const HoughWallRefinerParams& p);
 
 /// Statistics of the last refine() call.
 struct HoughWallStats {
-  int lines_found = 0;     // lines returned by cv::HoughLinesP
-  int lines_accepted = 0;  // lines with at least one accepted wall run
-  int cells_relabeled = 0; // short cells turned tall
+  int lines_found = 0;      // lines returned by cv::HoughLinesP
+  int lines_accepted = 0;   // lines with at least one accepted wall run
+  int cells_relabeled = 0;  // short cells turned tall
 };
 
 /// Relabels short cells lying on long straight structures as tall (paper Sec. 3.1).
@@ -108,14 +107,14 @@ class HoughWallRefiner {
 
  private:
   HoughWallRefinerParams params_;
-  cv::Mat image_;                // scratch: binary occupancy image of the Hough window
-  std::vector<cv::Vec4i> lines_; // scratch: raw Hough output
+  cv::Mat image_;                 // scratch: binary occupancy image of the Hough window
+  std::vector<cv::Vec4i> lines_;  // scratch: raw Hough output
   std::vector<cv::Vec4i> accepted_;
   std::vector<std::int32_t> relabeled_;
   struct LinePixel {
-    int col, row;       // full-grid cell coordinates
-    bool occupied;      // a tall or short cell within the half width
-    bool support;       // a tall or wall-supporting cell within the half width
+    int col, row;   // full-grid cell coordinates
+    bool occupied;  // a tall or short cell within the half width
+    bool support;   // a tall or wall-supporting cell within the half width
   };
   std::vector<LinePixel> line_px_;  // scratch: pixels of the segment being examined
 };

@@ -140,10 +140,10 @@ class SimpleGrid {
   SimpleGridParams params_;
   int side_ = 0;
   float inv_cell_ = 1.0f;
-  double inv_side_ = 1.0;  // [1/cells] 1 / side_, for rowOf
-  float origin_m_ = 0.0f;  // [m] coordinate of the grid's lower-left corner (both axes)
-  float cell_m_ = 1.0f;    // [m] cell side as a float (cellCenter)
-  std::vector<std::int32_t> slot_;        // per cell: slot, or -1 (reset on occupied_ only)
+  double inv_side_ = 1.0;           // [1/cells] 1 / side_, for rowOf
+  float origin_m_ = 0.0f;           // [m] coordinate of the grid's lower-left corner (both axes)
+  float cell_m_ = 1.0f;             // [m] cell side as a float (cellCenter)
+  std::vector<std::int32_t> slot_;  // per cell: slot, or -1 (reset on occupied_ only)
   // Per slot, numCells() + 1 entries (the first num_occupied_ valid): build() writes the entry
   // of the next slot for every run, new cell or not, so that it needs no branch on newness.
   std::vector<std::int32_t> occupied_;    // per slot: cell index

@@ -12,8 +12,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "urban_detection/core/sensor/calibration.h"
 #include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/sensor/calibration.h"
 
 namespace urban_detection {
 namespace core {
@@ -268,8 +268,8 @@ class RevolutionBoundary {
   std::size_t openPackets() const { return packets_; }
   std::size_t partialDropped() const { return partial_dropped_; }
   std::size_t forcedCuts() const { return forced_cuts_; }
-  std::size_t invalidPackets() const { return invalid_; }   // skipped: failed validation
-  std::size_t strayPackets() const { return strays_; }      // skipped: RevolutionCutter::kJump
+  std::size_t invalidPackets() const { return invalid_; }      // skipped: failed validation
+  std::size_t strayPackets() const { return strays_; }         // skipped: RevolutionCutter::kJump
   std::size_t reorderedPackets() const { return reordered_; }  // appended although late
   double cutAngleDeg() const { return cutter_.cutAngleDeg(); }
 

@@ -30,12 +30,12 @@ bool readPcdXyzi(const std::string& path, CloudXYZIRT* cloud, std::string* error
 /// SemanticKITTI semantic ids used by the evaluations (moving classes 252-259 map to the
 /// static ones via semanticKittiStaticClass()).
 namespace semantic_kitti {
-constexpr std::uint16_t kUnlabeled = 0, kOutlier = 1, kCar = 10, kBicycle = 11,
-                        kMotorcycle = 15, kTruck = 18, kOtherVehicle = 20, kPerson = 30,
-                        kBicyclist = 31, kMotorcyclist = 32, kRoad = 40, kParking = 44,
-                        kSidewalk = 48, kOtherGround = 49, kBuilding = 50, kFence = 51,
-                        kOtherStructure = 52, kLaneMarking = 60, kVegetation = 70, kTrunk = 71,
-                        kTerrain = 72, kPole = 80, kTrafficSign = 81, kOtherObject = 99;
+constexpr std::uint16_t kUnlabeled = 0, kOutlier = 1, kCar = 10, kBicycle = 11, kMotorcycle = 15,
+                        kTruck = 18, kOtherVehicle = 20, kPerson = 30, kBicyclist = 31,
+                        kMotorcyclist = 32, kRoad = 40, kParking = 44, kSidewalk = 48,
+                        kOtherGround = 49, kBuilding = 50, kFence = 51, kOtherStructure = 52,
+                        kLaneMarking = 60, kVegetation = 70, kTrunk = 71, kTerrain = 72, kPole = 80,
+                        kTrafficSign = 81, kOtherObject = 99;
 }  // namespace semantic_kitti
 
 /// Maps a SemanticKITTI semantic id (low 16 bits of a label) to its static class: moving-car

@@ -51,7 +51,7 @@ class PcapReader {
 /// was none): a capture that stops mid-revolution loses only its tail.
 class PcapRevolutionReader {
  public:
-  static constexpr double kStartToleranceDeg = 2.0;  // one packet at 1200 rpm
+  static constexpr double kStartToleranceDeg = 2.0;    // one packet at 1200 rpm
   static constexpr std::size_t kNominalPackets = 347;  // one revolution at 600 rpm
   enum class Result { kRevolution, kEnd, kTruncated };
 
@@ -70,10 +70,10 @@ class PcapRevolutionReader {
  private:
   PcapReader reader_;
   RevolutionBoundary boundary_;
-  PcapPacket pending_;          // opens the next revolution
+  PcapPacket pending_;  // opens the next revolution
   bool has_pending_ = false;
-  bool first_ = true;           // no revolution opened yet
-  bool first_whole_ = false;    // the open revolution is the file's first and began at the cut
+  bool first_ = true;         // no revolution opened yet
+  bool first_whole_ = false;  // the open revolution is the file's first and began at the cut
   bool done_ = false;
   PcapReader::Result end_ = PcapReader::Result::kEnd;
   std::size_t previous_packets_ = 0;
@@ -104,7 +104,7 @@ class ReplayTimeline {
   double nominal_gap_s_, max_gap_s_;
   bool started_ = false, restarted_ = false;
   double last_capture_s_ = 0.0, now_s_ = 0.0;
-  double sane_sum_s_ = 0.0;     // sum of the sane gaps (the file's own pace)
+  double sane_sum_s_ = 0.0;  // sum of the sane gaps (the file's own pace)
   std::size_t sane_gaps_ = 0;
 };
 const char* toString(ReplayTimeline::Anomaly anomaly);

@@ -50,9 +50,9 @@ struct GroundTruthFrame {
   double stamp_s = 0.0;  // [s] epoch, = the VelodyneScan header stamp of the revolution
   std::uint32_t num_packets = 0;
   Eigen::Isometry3d sensor_pose = Eigen::Isometry3d::Identity();  // world_T_velodyne at stamp
-  std::vector<std::uint32_t> instance_ids;  // per decoded point
-  std::vector<std::uint8_t> classes;        // per decoded point, ObjectClass values
-  std::vector<GroundTruthObject> objects;   // every scene object, with its point count
+  std::vector<std::uint32_t> instance_ids;                        // per decoded point
+  std::vector<std::uint8_t> classes;       // per decoded point, ObjectClass values
+  std::vector<GroundTruthObject> objects;  // every scene object, with its point count
 };
 
 /// Index of the frame whose stamp is within `tolerance_s` of `stamp_s` (a VelodyneScan header

@@ -20,10 +20,10 @@
 ///
 /// Intensity: the byte sent for a return is 255 x r x fade x jitter x partial, with r the
 /// surface's reflectivity drawn per return (Primitive::reflectivity + reflectivity_spread x a
-/// near-normal deviate of unit variance, clamped to [0, 1]), fade = 1 / (1 + 0.004 range [m]), jitter uniform in
-/// [0.85, 1.15], partial uniform in [0.5, 1] for a return from inside foliage (a partly covered
-/// footprint) and 1 otherwise. Without fade and jitter this is KITTI's scale, reflectance x 255;
-/// the materials behind r are listed in scene_generator.h.
+/// near-normal deviate of unit variance, clamped to [0, 1]), fade = 1 / (1 + 0.004 range [m]),
+/// jitter uniform in [0.85, 1.15], partial uniform in [0.5, 1] for a return from inside foliage (a
+/// partly covered footprint) and 1 otherwise. Without fade and jitter this is KITTI's scale,
+/// reflectance x 255; the materials behind r are listed in scene_generator.h.
 ///
 /// Every random draw (noise, dropout, foliage, intensity) is a hash of (noise_seed, firing,
 /// laser), so a revolution is the same whichever revolutions were simulated before it.
@@ -38,9 +38,9 @@
 
 #include <Eigen/Geometry>
 
+#include "urban_detection/core/common/object_class.h"
 #include "urban_detection/core/sensor/calibration.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
-#include "urban_detection/core/common/object_class.h"
 #include "urban_detection/core/simulation/scene_generator.h"
 #include "urban_detection/core/simulation/sim_scene.h"
 
@@ -65,20 +65,20 @@ struct SimSensorParams {
 
 /// Counters of one revolution.
 struct SimStats {
-  std::size_t rays = 0;        // lasers fired
-  std::size_t returns = 0;     // returns emitted (= ground-truth length)
-  std::size_t no_hit = 0;      // rays that hit nothing within max range
-  std::size_t dropped = 0;     // hits lost by dropout
-  std::size_t out_of_range = 0;  // hits outside [min_range_m, max_range_m] after noise
-  std::size_t transmitted = 0;   // passes of a ray through a porous volume
+  std::size_t rays = 0;             // lasers fired
+  std::size_t returns = 0;          // returns emitted (= ground-truth length)
+  std::size_t no_hit = 0;           // rays that hit nothing within max range
+  std::size_t dropped = 0;          // hits lost by dropout
+  std::size_t out_of_range = 0;     // hits outside [min_range_m, max_range_m] after noise
+  std::size_t transmitted = 0;      // passes of a ray through a porous volume
   std::size_t foliage_returns = 0;  // rays stopped inside a porous volume
 };
 
 /// Output of one simulated revolution.
 struct SimRevolution {
-  std::uint64_t index = 0;        // 0, 1, ... since the start (or the last reset())
-  double start_time_s = 0.0;      // [s] drive time of the revolution's first firing
-  double stamp_s = 0.0;           // [s] epoch stamp of the first packet (scan header stamp)
+  std::uint64_t index = 0;    // 0, 1, ... since the start (or the last reset())
+  double start_time_s = 0.0;  // [s] drive time of the revolution's first firing
+  double stamp_s = 0.0;       // [s] epoch stamp of the first packet (scan header stamp)
   std::vector<RawPacket> packets;
   std::vector<double> packet_stamps_s;  // [s] epoch stamp of each packet's first firing
   /// Ground truth, one entry per decoded point, in decoder order (packet, block, laser).
@@ -151,11 +151,11 @@ class LidarSimulator {
   PacketEncoder encoder_;
   std::unique_ptr<RayCaster> caster_;
   RevolutionCutter cutter_;
-  double firing_period_s_ = 0.0;    // [s]
-  double azimuth_step_ = 0.0;       // [1/100 deg] per firing
+  double firing_period_s_ = 0.0;  // [s]
+  double azimuth_step_ = 0.0;     // [1/100 deg] per firing
   std::uint64_t next_packet_ = 0;
   std::uint64_t next_revolution_ = 0;
-  bool pending_start_ = false;      // next_packet_ was already seen by the cutter as a start
+  bool pending_start_ = false;            // next_packet_ was already seen by the cutter as a start
   std::vector<float> dist_correction_m_;  // per laser
   bool fast_rays_ = false;                // rays turned from the azimuth-0 ones (see ctor)
   std::vector<Eigen::Vector3d> base_origin_, base_dir_;  // per laser, azimuth 0, sensor frame

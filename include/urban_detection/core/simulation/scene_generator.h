@@ -53,37 +53,37 @@ struct StreetSection {
 
 /// Buildings along a street section.
 struct BuildingParams {
-  double depth_m = 12.0;              // [m] from the facade back
-  double height_min_m = 7.0;          // [m]
-  double height_max_m = 18.0;         // [m]
-  double length_min_m = 8.0;          // [m] along the street
-  double length_max_m = 24.0;         // [m]
-  double gap_probability = 0.25;      // [-] chance of a gap (alley) after a building
-  double gap_min_m = 2.0;             // [m]
-  double gap_max_m = 5.0;             // [m]
-  double recess_probability = 0.3;    // [-] chance a building is set back from the facade line
-  double recess_max_m = 2.0;          // [m] largest setback
+  double depth_m = 12.0;            // [m] from the facade back
+  double height_min_m = 7.0;        // [m]
+  double height_max_m = 18.0;       // [m]
+  double length_min_m = 8.0;        // [m] along the street
+  double length_max_m = 24.0;       // [m]
+  double gap_probability = 0.25;    // [-] chance of a gap (alley) after a building
+  double gap_min_m = 2.0;           // [m]
+  double gap_max_m = 5.0;           // [m]
+  double recess_probability = 0.3;  // [-] chance a building is set back from the facade line
+  double recess_max_m = 2.0;        // [m] largest setback
 };
 
 /// Street objects.
 struct StreetObjectParams {
-  double parked_gap_min_m = 0.35;       // [m] smallest gap between parked cars
-  double parked_gap_max_m = 2.5;        // [m] largest gap
+  double parked_gap_min_m = 0.35;         // [m] smallest gap between parked cars
+  double parked_gap_max_m = 2.5;          // [m] largest gap
   double parked_skip_probability = 0.15;  // [-] chance a parking slot stays empty
-  double van_fraction = 0.2;            // [-] share of vans among vehicles
-  int moving_cars = 4;                  // vehicles driving in the two lanes
-  double moving_car_speed_mps = 10.0;   // [m/s] oncoming traffic speed
-  double lane_offset_m = 1.7;           // [m] |y| of the traffic lanes' centre lines
-  int pedestrians = 14;                 // pedestrians (singles and groups)
-  double group_probability = 0.35;      // [-] chance a pedestrian starts a group of 2-4
-  double standing_probability = 0.3;    // [-] chance a pedestrian (group) stands still
-  int cyclists = 2;                     // cyclists riding beside the parked cars
-  double tree_spacing_m = 14.0;         // [m] mean spacing of trees on each sidewalk
-  double pole_spacing_m = 30.0;         // [m] mean spacing of lamp posts on each sidewalk
-  int signs = 4;                        // traffic signs
-  int bins = 6;                         // waste bins
-  int benches = 3;                      // benches
-  bool hard_cases = true;               // add the paper's Fig. 4 / 7 hard cases
+  double van_fraction = 0.2;              // [-] share of vans among vehicles
+  int moving_cars = 4;                    // vehicles driving in the two lanes
+  double moving_car_speed_mps = 10.0;     // [m/s] oncoming traffic speed
+  double lane_offset_m = 1.7;             // [m] |y| of the traffic lanes' centre lines
+  int pedestrians = 14;                   // pedestrians (singles and groups)
+  double group_probability = 0.35;        // [-] chance a pedestrian starts a group of 2-4
+  double standing_probability = 0.3;      // [-] chance a pedestrian (group) stands still
+  int cyclists = 2;                       // cyclists riding beside the parked cars
+  double tree_spacing_m = 14.0;           // [m] mean spacing of trees on each sidewalk
+  double pole_spacing_m = 30.0;           // [m] mean spacing of lamp posts on each sidewalk
+  int signs = 4;                          // traffic signs
+  int bins = 6;                           // waste bins
+  int benches = 3;                        // benches
+  bool hard_cases = true;                 // add the paper's Fig. 4 / 7 hard cases
 };
 
 /// Vegetation and natural ground (see the file comment). Lengths are along the street (x),
@@ -91,29 +91,29 @@ struct StreetObjectParams {
 struct VegetationParams {
   bool enabled = true;  // false: the scene without any of the below (crowns stay solid)
   // Grass verges: a strip of terrain beside the curb on streets with furniture.
-  double verge_probability = 0.7;   // [0..1] chance a street side has a verge
-  double verge_offset_m = 0.2;      // [m] paved edge between the curb and the verge
-  double verge_width_m = 1.0;       // [m] across the street (sidewalks >= verge + 1.5 m only)
-  double verge_step_max_m = 0.08;   // [m] largest height of a verge above the sidewalk
+  double verge_probability = 0.7;      // [0..1] chance a street side has a verge
+  double verge_offset_m = 0.2;         // [m] paved edge between the curb and the verge
+  double verge_width_m = 1.0;          // [m] across the street (sidewalks >= verge + 1.5 m only)
+  double verge_step_max_m = 0.08;      // [m] largest height of a verge above the sidewalk
   double verge_bush_spacing_m = 12.0;  // [m] mean spacing of small shrubs in a verge
   // Terrain (verges and gardens) is tiled; each tile is slightly raised and tilted.
-  double terrain_tile_m = 1.0;       // [m] side of a terrain tile
-  double terrain_roughness_m = 0.04; // [m] largest random extra height of a tile
-  double terrain_tilt_deg = 2.0;     // [deg] largest random tilt of a tile
+  double terrain_tile_m = 1.0;        // [m] side of a terrain tile
+  double terrain_roughness_m = 0.04;  // [m] largest random extra height of a tile
+  double terrain_tilt_deg = 2.0;      // [deg] largest random tilt of a tile
   // Front gardens behind the sidewalk, where no building front stands on the facade line.
-  double garden_depth_m = 4.0;       // [m] depth of a garden (a setback: up to the building)
-  double garden_step_max_m = 0.3;    // [m] largest terrain step at the sidewalk's back edge
-  double hedge_probability = 0.75;   // [0..1] chance a garden stretch is lined with a hedge
-  double hedge_height_min_m = 0.8;   // [m]
-  double hedge_height_max_m = 1.8;   // [m]
-  double hedge_width_min_m = 0.5;    // [m]
-  double hedge_width_max_m = 1.0;    // [m]
-  double hedge_gap_spacing_m = 12.0; // [m] mean hedge length between entrance gaps
-  double bush_spacing_m = 4.0;       // [m] mean spacing of bushes along a garden
+  double garden_depth_m = 4.0;          // [m] depth of a garden (a setback: up to the building)
+  double garden_step_max_m = 0.3;       // [m] largest terrain step at the sidewalk's back edge
+  double hedge_probability = 0.75;      // [0..1] chance a garden stretch is lined with a hedge
+  double hedge_height_min_m = 0.8;      // [m]
+  double hedge_height_max_m = 1.8;      // [m]
+  double hedge_width_min_m = 0.5;       // [m]
+  double hedge_width_max_m = 1.0;       // [m]
+  double hedge_gap_spacing_m = 12.0;    // [m] mean hedge length between entrance gaps
+  double bush_spacing_m = 4.0;          // [m] mean spacing of bushes along a garden
   double facade_shrub_spacing_m = 8.0;  // [m] mean spacing of shrubs planted against facades
                                         //     that stand on the sidewalk (sidewalks >= 2 m)
-  double bush_height_min_m = 0.5;    // [m]
-  double bush_height_max_m = 2.0;    // [m]
+  double bush_height_min_m = 0.5;       // [m]
+  double bush_height_max_m = 2.0;       // [m]
   double garden_tree_spacing_m = 16.0;  // [m] mean spacing of trees in deep gardens
   // Tree crowns: lobes of foliage hanging over the road and the walkway.
   int canopy_lobes_min = 2;             // [-] per tree
@@ -134,8 +134,7 @@ struct VegetationParams {
 /// ego vehicle during the drive, and never drive through it).
 struct DriveParams {
   /// [m] polyline in the world xy plane followed at constant speed (>= 2 points).
-  std::vector<Eigen::Vector2d> waypoints{Eigen::Vector2d(0.0, -1.9),
-                                         Eigen::Vector2d(200.0, -1.9)};
+  std::vector<Eigen::Vector2d> waypoints{Eigen::Vector2d(0.0, -1.9), Eigen::Vector2d(200.0, -1.9)};
   double speed_mps = 8.0;  // [m/s] platform speed (0 = standing)
 
   /// Length of the polyline [m].
@@ -149,11 +148,11 @@ struct DriveParams {
 /// Everything the generator needs.
 struct SceneParams {
   std::uint64_t seed = 42;
-  double start_x_m = -40.0;      // [m] x of the street's first section start
-  double slope = 0.015;          // [-] rise of the road per metre along x
-  double camber = 0.02;          // [-] fall of the road per metre from the crown to the curb
-  double curb_height_m = 0.14;   // [m] sidewalk above the road edge
-  double terrain_width_m = 30.0; // [m] ground beyond the sidewalks (under buildings, in alleys)
+  double start_x_m = -40.0;       // [m] x of the street's first section start
+  double slope = 0.015;           // [-] rise of the road per metre along x
+  double camber = 0.02;           // [-] fall of the road per metre from the crown to the curb
+  double curb_height_m = 0.14;    // [m] sidewalk above the road edge
+  double terrain_width_m = 30.0;  // [m] ground beyond the sidewalks (under buildings, in alleys)
   std::vector<StreetSection> sections = defaultSections();
   BuildingParams buildings;
   StreetObjectParams objects;

@@ -62,8 +62,8 @@ struct Primitive {
                    double t_min = 1e-6) const;
   /// The interval [*t_in, *t_out] of the whole line `origin + t * dir` (any sign of t) inside
   /// the solid at time `t_s`; false if the line misses it. Same units as intersect().
-  bool span(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_s,
-            double* t_in, double* t_out) const;
+  bool span(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_s, double* t_in,
+            double* t_out) const;
   /// True if `p` [m] lies inside the solid (grown by `margin_m`) at time `t_s`. For the box
   /// and the cylinder the margin is exact; for the ellipsoid it grows each semi-axis.
   bool contains(const Eigen::Vector3d& p, double t_s, double margin_m = 0.0) const;
@@ -76,13 +76,13 @@ Primitive makeEllipsoid(const Eigen::Vector3d& center, const Eigen::Vector3d& se
 
 /// One labelled object of the scene (metadata of a group of primitives).
 struct SceneObject {
-  std::uint32_t instance_id = 0;                           // >= 1
-  ObjectClass object_class = ObjectClass::kUnlabeled;      // class of the whole object
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();      // [m] footprint centre on the ground, t = 0
-  double yaw_rad = 0.0;                                    // [rad] heading about z
-  Eigen::Vector3d size = Eigen::Vector3d::Zero();          // [m] length, width, height
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      // [m/s]
-  std::uint32_t first_primitive = 0;                       // index into Scene::primitives
+  std::uint32_t instance_id = 0;                       // >= 1
+  ObjectClass object_class = ObjectClass::kUnlabeled;  // class of the whole object
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // [m] footprint centre on the ground, t = 0
+  double yaw_rad = 0.0;                                // [rad] heading about z
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();      // [m] length, width, height
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // [m/s]
+  std::uint32_t first_primitive = 0;                   // index into Scene::primitives
   std::uint32_t num_primitives = 0;
 };
 
@@ -101,8 +101,8 @@ struct Scene {
 
 /// Result of one cast.
 struct RayHit {
-  double distance_m = -1.0;      // along the unit direction; < 0: no hit
-  std::uint32_t primitive = 0;   // index into Scene::primitives
+  double distance_m = -1.0;     // along the unit direction; < 0: no hit
+  std::uint32_t primitive = 0;  // index into Scene::primitives
 };
 
 /// Parameters of the ray caster.
@@ -137,14 +137,14 @@ class RayCaster {
  private:
   void binInto(const Eigen::AlignedBox3d& box, std::uint32_t prim,
                std::vector<std::vector<std::uint32_t>>* cells) const;
-  bool testCell(int cell, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
-                double t_s, RayHit* best);
+  bool testCell(int cell, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_s,
+                RayHit* best);
 
   const Scene& scene_;
   RayCasterParams params_;
   double x0_ = 0.0, y0_ = 0.0;  // [m] grid origin
   int nx_ = 1, ny_ = 1;
-  double z_max_ = 0.0;  // [m] highest point of the scene (rays above it going up stop)
+  double z_max_ = 0.0;         // [m] highest point of the scene (rays above it going up stop)
   double static_z_max_ = 0.0;  // [m] same, static primitives only
   struct Group {  // consecutive static primitives of one object (or one background primitive)
     std::uint32_t first = 0, count = 0;

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "urban_detection/core/common/point_types.h"
+#include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/spark/image_label_transfer.h"
-#include "urban_detection/core/detection/object_detector.h"
-#include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
 namespace core {

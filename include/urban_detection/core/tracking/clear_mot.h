@@ -39,30 +39,30 @@ struct MotGroundTruth {
 struct MotHypothesis {
   std::uint32_t id = 0;                                // track id
   Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] fixed frame
-  bool dont_care = false;  // when unmatched, not a false positive
+  bool dont_care = false;                              // when unmatched, not a false positive
 };
 
 struct ClearMotParams {
-  double max_distance_m = 2.0;   // [m] largest GT-to-hypothesis distance of a match
-  double mostly_tracked = 0.8;   // [0..1] tracked fraction of a mostly tracked trajectory
-  double mostly_lost = 0.2;      // [0..1] a trajectory tracked less than this is mostly lost
+  double max_distance_m = 2.0;  // [m] largest GT-to-hypothesis distance of a match
+  double mostly_tracked = 0.8;  // [0..1] tracked fraction of a mostly tracked trajectory
+  double mostly_lost = 0.2;     // [0..1] a trajectory tracked less than this is mostly lost
 };
 
 struct ClearMotResult {
   std::size_t frames = 0;
-  std::size_t gt = 0;               // GT objects over all frames (not ignored)
+  std::size_t gt = 0;  // GT objects over all frames (not ignored)
   std::size_t matches = 0;
-  std::size_t misses = 0;           // false negatives
+  std::size_t misses = 0;  // false negatives
   std::size_t false_positives = 0;
   std::size_t id_switches = 0;
   std::size_t fragmentations = 0;
-  std::size_t gt_tracks = 0;        // GT trajectories present (not ignored) at least once
+  std::size_t gt_tracks = 0;  // GT trajectories present (not ignored) at least once
   std::size_t mostly_tracked = 0, partially_tracked = 0, mostly_lost = 0;
   double distance_sum_m = 0.0;
 
-  double mota() const;   // 1 - (misses + false_positives + id_switches) / gt (1 when gt is 0)
-  double motp_m() const; // mean match distance [m] (0 without matches)
-  double recall() const; // matches / gt
+  double mota() const;       // 1 - (misses + false_positives + id_switches) / gt (1 when gt is 0)
+  double motp_m() const;     // mean match distance [m] (0 without matches)
+  double recall() const;     // matches / gt
   double precision() const;  // matches / (matches + false_positives)
   double idSwitchesPer100GtTracks() const;
 };
@@ -82,10 +82,10 @@ class ClearMot {
  private:
   struct Trajectory {
     std::size_t present = 0, tracked = 0;
-    bool has_last = false;          // matched in some earlier frame
-    std::uint32_t last_hyp = 0;     // hypothesis of its latest match
+    bool has_last = false;             // matched in some earlier frame
+    std::uint32_t last_hyp = 0;        // hypothesis of its latest match
     bool matched_in_previous = false;  // matched in the previous frame it was present in
-    bool previous_frame = false;    // present in the frame just before (for step 1)
+    bool previous_frame = false;       // present in the frame just before (for step 1)
     std::size_t last_frame = 0;
   };
   ClearMotParams params_;

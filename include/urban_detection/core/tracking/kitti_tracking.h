@@ -24,17 +24,17 @@ namespace core {
 /// One line of label_02/<seq>.txt.
 struct KittiTrackingLabel {
   int frame = 0;
-  int track_id = -1;        ///< -1 for DontCare
-  std::string type;         ///< Car, Van, Truck, Pedestrian, Person_sitting, Cyclist, Tram,
-                            ///< Misc, DontCare
-  double truncated = 0.0;   ///< 0..2 (0 none, 1 partly, 2 largely)
-  int occluded = 0;         ///< 0..3
-  double alpha = 0.0;       ///< [rad]
+  int track_id = -1;             ///< -1 for DontCare
+  std::string type;              ///< Car, Van, Truck, Pedestrian, Person_sitting, Cyclist, Tram,
+                                 ///< Misc, DontCare
+  double truncated = 0.0;        ///< 0..2 (0 none, 1 partly, 2 largely)
+  int occluded = 0;              ///< 0..3
+  double alpha = 0.0;            ///< [rad]
   std::array<double, 4> bbox{};  ///< [px] left, top, right, bottom
   double height_m = 0.0, width_m = 0.0, length_m = 0.0;
   Eigen::Vector3d location = Eigen::Vector3d::Zero();  ///< [m] bottom centre, rectified camera
-  double rotation_y = 0.0;  ///< [rad]
-  double score = 1.0;       ///< detector confidence when given (results files), else 1
+  double rotation_y = 0.0;                             ///< [rad]
+  double score = 1.0;  ///< detector confidence when given (results files), else 1
 
   bool dontCare() const { return type == "DontCare"; }
 };
@@ -67,9 +67,8 @@ bool readKittiTrackingCalibration(const std::string& path, KittiTrackingCalibrat
                                   std::string* error);
 
 /// True when LiDAR point `p_velo` lies inside the label's 3-D box grown by `margin_m`.
-bool insideKittiTrackingBox(const KittiTrackingLabel& label,
-                            const KittiTrackingCalibration& calib, const Eigen::Vector3d& p_velo,
-                            double margin_m = 0.0);
+bool insideKittiTrackingBox(const KittiTrackingLabel& label, const KittiTrackingCalibration& calib,
+                            const Eigen::Vector3d& p_velo, double margin_m = 0.0);
 
 /// Centre of the label's box in the LiDAR frame [m].
 Eigen::Vector3d kittiTrackingBoxCenterVelo(const KittiTrackingLabel& label,

@@ -40,20 +40,20 @@ namespace core {
 
 /// Parameters of the Tracker. Units in the comments; ranges in the field table below.
 struct TrackerParams {
-  double gate_distance_m = 2.0;        // [m] largest predicted-to-detected centre distance
-  double gate_sigmas = 2.0;            // [-] the gate widens by this many std devs of the
-                                       //   predicted centre (at most to 2 x gate_distance_m)
-  double overlap_weight_m = 1.0;       // [m] cost of a pair with no box overlap vs full overlap
-  int birth_hits = 3;                  // [-] hits that confirm a tentative track (N)
-  int death_misses = 20;               // [-] consecutive misses that delete a confirmed track (M)
-  int tentative_max_misses = 2;        // [-] consecutive misses that delete a tentative track
-  double measurement_std_m = 0.3;      // [m] std dev of a detected box centre
-  double process_accel_std_mps2 = 2.0; // [m/s^2] std dev of the unmodelled acceleration
+  double gate_distance_m = 2.0;         // [m] largest predicted-to-detected centre distance
+  double gate_sigmas = 2.0;             // [-] the gate widens by this many std devs of the
+                                        //   predicted centre (at most to 2 x gate_distance_m)
+  double overlap_weight_m = 1.0;        // [m] cost of a pair with no box overlap vs full overlap
+  int birth_hits = 3;                   // [-] hits that confirm a tentative track (N)
+  int death_misses = 20;                // [-] consecutive misses that delete a confirmed track (M)
+  int tentative_max_misses = 2;         // [-] consecutive misses that delete a tentative track
+  double measurement_std_m = 0.3;       // [m] std dev of a detected box centre
+  double process_accel_std_mps2 = 2.0;  // [m/s^2] std dev of the unmodelled acceleration
   double initial_velocity_std_mps = 5.0;  // [m/s] velocity std dev of a new track
-  double smoothing = 0.3;              // [0..1] weight of a new measurement in z, yaw and size
-  double default_dt_s = 0.1;           // [s] revolution period used when stamps do not advance
-  double max_dt_s = 1.0;               // [s] a larger gap between stamps restarts the tracker
-  double moving_speed_mps = 0.5;       // [m/s] above it the heading follows the velocity
+  double smoothing = 0.3;                 // [0..1] weight of a new measurement in z, yaw and size
+  double default_dt_s = 0.1;              // [s] revolution period used when stamps do not advance
+  double max_dt_s = 1.0;                  // [s] a larger gap between stamps restarts the tracker
+  double moving_speed_mps = 0.5;          // [m/s] above it the heading follows the velocity
 };
 
 /// "" when every value is in its table range (ParamFields<TrackerParams> below) and
@@ -72,9 +72,9 @@ struct ParamFields<TrackerParams> {
       p.gate_sigmas);
     f(FieldInfo("overlap_weight_m", "m", 0, 20, "pair cost of no box overlap vs full overlap"),
       p.overlap_weight_m);
-    f(FieldInfo("birth_hits", "", 1, 100, "hits that confirm a tentative track (N)"),
-      p.birth_hits);
-    f(FieldInfo("death_misses", "", 1, 1000, "consecutive misses that delete a confirmed track (M)"),
+    f(FieldInfo("birth_hits", "", 1, 100, "hits that confirm a tentative track (N)"), p.birth_hits);
+    f(FieldInfo("death_misses", "", 1, 1000,
+                "consecutive misses that delete a confirmed track (M)"),
       p.death_misses);
     f(FieldInfo("tentative_max_misses", "", 1, 100,
                 "consecutive misses that delete a tentative track"),
@@ -110,36 +110,36 @@ const char* toString(TrackState s);
 
 /// One track, in the fixed frame.
 struct Track {
-  std::uint32_t id = 0;               // 1.., stable for the track's life
+  std::uint32_t id = 0;  // 1.., stable for the track's life
   TrackState state = TrackState::kTentative;
-  std::uint32_t age = 0;              // [revolutions] since birth (1 in its first revolution)
-  std::uint32_t hits = 0;             // [revolutions] matched to a detection
-  std::uint32_t misses = 0;           // [revolutions] consecutive revolutions without a match
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // [m] box centre (x, y filtered, z smoothed)
+  std::uint32_t age = 0;     // [revolutions] since birth (1 in its first revolution)
+  std::uint32_t hits = 0;    // [revolutions] matched to a detection
+  std::uint32_t misses = 0;  // [revolutions] consecutive revolutions without a match
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();    // [m] box centre (x, y filtered, z smoothed)
   Eigen::Vector2d velocity = Eigen::Vector2d::Zero();  // [m/s] in the fixed frame
   Eigen::Matrix2d velocity_covariance = Eigen::Matrix2d::Identity();  // [m^2/s^2]
   Eigen::Matrix2d position_covariance = Eigen::Matrix2d::Identity();  // [m^2]
   Eigen::Vector3d size = Eigen::Vector3d::Zero();  // [m] length, width, height (smoothed)
-  double yaw_rad = 0.0;               // [rad] box yaw; along the velocity when moving
+  double yaw_rad = 0.0;                            // [rad] box yaw; along the velocity when moving
   ObjectCategory category = ObjectCategory::kUnknown;  // most confident class over its hits
-  float class_confidence = 0.0f;      // [0..1] mean confidence of `category` over its hits
-  int detection = -1;                 // index of the detection it was matched to in the latest
-                                      // revolution, -1 when it was not matched
+  float class_confidence = 0.0f;  // [0..1] mean confidence of `category` over its hits
+  int detection = -1;             // index of the detection it was matched to in the latest
+                                  // revolution, -1 when it was not matched
 
   double speed() const { return velocity.norm(); }  // [m/s]
 };
 
 /// What the latest update did.
 struct TrackerStats {
-  std::size_t detections = 0;        // detections given
+  std::size_t detections = 0;          // detections given
   std::size_t invalid_detections = 0;  // refused: non-finite centre, size or yaw
   std::size_t matched = 0;
-  std::size_t born = 0;              // new tentative tracks
-  std::size_t confirmed = 0;         // tracks in state kConfirmed after the update
+  std::size_t born = 0;       // new tentative tracks
+  std::size_t confirmed = 0;  // tracks in state kConfirmed after the update
   std::size_t tentative = 0;
   std::size_t lost = 0;
-  std::size_t died = 0;              // tracks deleted in this update
-  bool restarted = false;            // the tracker was reset (time went back or jumped)
+  std::size_t died = 0;    // tracks deleted in this update
+  bool restarted = false;  // the tracker was reset (time went back or jumped)
 };
 
 /// The tracker. Not thread-safe; holds its scratch buffers between revolutions.
