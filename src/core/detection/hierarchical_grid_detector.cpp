@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "urban_detection/core/common/grid_cells_sse2.h"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #include <xmmintrin.h>
@@ -339,34 +341,14 @@ std::int32_t HierarchicalGridDetector::binPoints(const LabeledCloud& foreground)
   // Four points at a time: the same float operations as the scalar loop below (subtract,
   // multiply, ordered comparisons, truncation), so the same cells.
   {
-    const __m128 v_origin = _mm_set1_ps(origin), v_inv = _mm_set1_ps(inv_dense);
-    const __m128 v_nd = _mm_set1_ps(nd_f), v_zero = _mm_setzero_ps();
-    const __m128 v_max_z = _mm_set1_ps(max_abs_z);
-    const __m128 v_abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-    const __m128i v_stride = _mm_set1_epi32(stride_);
-    const __m128i v_pad = _mm_set1_epi32(pad_offset);
+    const GridCellsSse2 grid4(origin, inv_dense, nd_f, max_abs_z, stride_, pad_offset);
     for (; i + 4 <= n; i += 4) {
       __m128 x = _mm_loadu_ps(&points[i].x), y = _mm_loadu_ps(&points[i + 1].x);
       __m128 z = _mm_loadu_ps(&points[i + 2].x), w = _mm_loadu_ps(&points[i + 3].x);
       _MM_TRANSPOSE4_PS(x, y, z, w);
-      const __m128 fx = _mm_mul_ps(_mm_sub_ps(x, v_origin), v_inv);
-      const __m128 fy = _mm_mul_ps(_mm_sub_ps(y, v_origin), v_inv);
-      const __m128 ok =
-          _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpge_ps(fx, v_zero), _mm_cmplt_ps(fx, v_nd)),
-                                _mm_and_ps(_mm_cmpge_ps(fy, v_zero), _mm_cmplt_ps(fy, v_nd))),
-                     _mm_cmple_ps(_mm_and_ps(z, v_abs), v_max_z));
-      const __m128i ix = _mm_cvttps_epi32(fx), iy = _mm_cvttps_epi32(fy);
-      // iy * stride_ + ix + pad_offset; SSE2 multiplies 32-bit lanes pairwise into 64 bits
-      // (even, then odd).
-      const __m128i even = _mm_mul_epu32(iy, v_stride);
-      const __m128i odd = _mm_mul_epu32(_mm_srli_si128(iy, 4), v_stride);
-      const __m128i prod = _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
-                                              _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
-      // Rejected lanes: -1 (all bits set).
-      const __m128i ok_i = _mm_castps_si128(ok);
-      const __m128i cell =
-          _mm_or_si128(_mm_and_si128(_mm_add_epi32(_mm_add_epi32(prod, ix), v_pad), ok_i),
-                       _mm_andnot_si128(ok_i, _mm_set1_epi32(-1)));
+      // iy * stride_ + ix + pad_offset, rejected lanes -1.
+      __m128i valid;
+      const __m128i cell = grid4.cells(x, y, z, &valid);
       _mm_storeu_si128(reinterpret_cast<__m128i*>(point_cell + i), cell);
       // (Entry -1 lies before the map; a prefetch never faults.)
       for (int j = 0; j < 4; ++j) __builtin_prefetch(slot_map_base + point_cell[i + j]);

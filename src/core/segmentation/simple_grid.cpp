@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <limits>
 
+#include "urban_detection/core/common/grid_cells_sse2.h"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #include <xmmintrin.h>
@@ -226,10 +228,9 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
     chunk_begin = begin;
     std::size_t i = begin;
 #if defined(__SSE2__)
-    const __m128 org4 = _mm_set1_ps(org), inv4 = _mm_set1_ps(inv), side4 = _mm_set1_ps(side_f);
-    const __m128 off4 = _mm_set1_ps(z_offset_m), maxh4 = _mm_set1_ps(max_abs_height_m);
-    const __m128 zero4 = _mm_setzero_ps(), sign4 = _mm_set1_ps(-0.0f);
-    const __m128i sidei = _mm_set1_epi32(side), ones = _mm_set1_epi32(-1);
+    const GridCellsSse2 grid4(org, inv, side_f, max_abs_height_m, side, 0);
+    const __m128 off4 = _mm_set1_ps(z_offset_m);
+    const __m128i ones = _mm_set1_epi32(-1);
     __m128i any_invalid = _mm_setzero_si128();
 #if defined(UD_SIMPLE_GRID_AVX2)
     if (use_avx2) {
@@ -249,25 +250,12 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
       __m128 x = _mm_load_ps(pts[i].data), y = _mm_load_ps(pts[i + 1].data);
       __m128 z = _mm_load_ps(pts[i + 2].data), w = _mm_load_ps(pts[i + 3].data);
       _MM_TRANSPOSE4_PS(x, y, z, w);
-      const __m128 fc = _mm_mul_ps(_mm_sub_ps(x, org4), inv4);
-      const __m128 fr = _mm_mul_ps(_mm_sub_ps(y, org4), inv4);
       const __m128 h = _mm_add_ps(z, off4);
       _mm_storeu_ps(pz + i, h);
-      const __m128 ok =
-          _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpge_ps(fc, zero4), _mm_cmplt_ps(fc, side4)),
-                                _mm_and_ps(_mm_cmpge_ps(fr, zero4), _mm_cmplt_ps(fr, side4))),
-                     _mm_cmple_ps(_mm_andnot_ps(sign4, h), maxh4));
-      const __m128i valid = _mm_castps_si128(ok);
-      // row * side + col in 32-bit lanes with SSE2 only (no pmulld): two 32x32->64 products.
-      const __m128i r = _mm_cvttps_epi32(fr), k = _mm_cvttps_epi32(fc);
-      const __m128i even = _mm_mul_epu32(r, sidei);
-      const __m128i odd = _mm_mul_epu32(_mm_srli_epi64(r, 32), sidei);
-      const __m128i prod = _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
-                                              _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
-      const __m128i cell = _mm_add_epi32(prod, k);
+      __m128i valid;
+      const __m128i cell = grid4.cells(x, y, h, &valid);
       any_invalid = _mm_or_si128(any_invalid, _mm_xor_si128(valid, ones));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(cc + (i - begin)),
-                       _mm_or_si128(_mm_and_si128(valid, cell), _mm_xor_si128(valid, ones)));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(cc + (i - begin)), cell);
     }
     bool chunk_valid = _mm_movemask_epi8(any_invalid) == 0;
 #else
