@@ -27,6 +27,7 @@
 #include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class CloudInputNodelet : public nodelet::Nodelet {
  private:
@@ -99,6 +100,7 @@ class CloudInputNodelet : public nodelet::Nodelet {
   ros::Subscriber sub_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::CloudInputNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ros_conv::CloudInputNodelet, nodelet::Nodelet)

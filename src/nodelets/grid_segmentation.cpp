@@ -27,6 +27,7 @@
 #include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class GridSegmentationNodelet : public nodelet::Nodelet {
  public:
@@ -120,6 +121,7 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
   ros::Subscriber sub_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::GridSegmentationNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ros_conv::GridSegmentationNodelet, nodelet::Nodelet)

@@ -11,6 +11,7 @@
 #include "urban_detection/ros/tunable_detector_nodelet.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 struct HierarchicalGridTraits {
   using Params = core::HierarchicalGridDetectorParams;
@@ -21,6 +22,7 @@ struct HierarchicalGridTraits {
 
 class HierarchicalGridDetectorNodelet : public TunableDetectorNodelet<HierarchicalGridTraits> {};
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::HierarchicalGridDetectorNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ros_conv::HierarchicalGridDetectorNodelet, nodelet::Nodelet)

@@ -38,6 +38,7 @@
 #include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class ImageLabelTransferNodelet : public nodelet::Nodelet {
   using Policy = message_filters::sync_policies::ApproximateTime<DetectedObjectArray, LabeledCloud>;
@@ -310,6 +311,7 @@ class ImageLabelTransferNodelet : public nodelet::Nodelet {
   ros::Publisher pub_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::ImageLabelTransferNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ros_conv::ImageLabelTransferNodelet, nodelet::Nodelet)

@@ -10,6 +10,7 @@
 #include "urban_detection/ros/tunable_detector_nodelet.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 struct KdTreeTraits {
   using Params = core::KdTreeDetectorParams;
@@ -20,6 +21,7 @@ struct KdTreeTraits {
 
 class KdTreeDetectorNodelet : public TunableDetectorNodelet<KdTreeTraits> {};
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::KdTreeDetectorNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ros_conv::KdTreeDetectorNodelet, nodelet::Nodelet)

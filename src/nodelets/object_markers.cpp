@@ -19,6 +19,7 @@
 #include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class ObjectMarkersNodelet : public nodelet::Nodelet {
  private:
@@ -80,6 +81,7 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
   ros::Subscriber sub_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::ObjectMarkersNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ros_conv::ObjectMarkersNodelet, nodelet::Nodelet)

@@ -28,6 +28,7 @@
 #include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class ObjectTrackerNodelet : public nodelet::Nodelet {
  private:
@@ -180,6 +181,7 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
   ros::Subscriber sub_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::ObjectTrackerNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ros_conv::ObjectTrackerNodelet, nodelet::Nodelet)

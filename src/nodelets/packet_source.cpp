@@ -18,6 +18,7 @@
 #include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class PacketSourceNodelet : public nodelet::Nodelet {
  public:
@@ -74,6 +75,7 @@ class PacketSourceNodelet : public nodelet::Nodelet {
   std::unique_ptr<PacketSourceWorker> worker_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::PacketSourceNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ros_conv::PacketSourceNodelet, nodelet::Nodelet)

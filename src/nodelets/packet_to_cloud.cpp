@@ -16,6 +16,7 @@
 #include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class PacketToCloudNodelet : public nodelet::Nodelet {
  private:
@@ -95,6 +96,7 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
   ros::Subscriber sub_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::PacketToCloudNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ros_conv::PacketToCloudNodelet, nodelet::Nodelet)

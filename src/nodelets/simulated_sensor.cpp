@@ -19,6 +19,7 @@
 #include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class SimulatedSensorNodelet : public nodelet::Nodelet {
  public:
@@ -159,6 +160,7 @@ class SimulatedSensorNodelet : public nodelet::Nodelet {
   std::thread worker_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
-PLUGINLIB_EXPORT_CLASS(urban_detection::SimulatedSensorNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(urban_detection::ros_conv::SimulatedSensorNodelet, nodelet::Nodelet)

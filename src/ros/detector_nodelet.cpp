@@ -15,6 +15,7 @@
 #include "urban_detection/ros/tunable_fields.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 void DetectorNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
@@ -133,4 +134,5 @@ void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& 
                          foreground->size(), objects_.size());
 }
 
+}  // namespace ros_conv
 }  // namespace urban_detection

@@ -5,6 +5,7 @@
 #include <cmath>
 
 namespace urban_detection {
+namespace ros_conv {
 
 PacketSourceParams loadPacketSourceParams(const ros::NodeHandle& nh) {
   PacketSourceParams p;
@@ -68,4 +69,5 @@ PacketToCloudParams loadPacketToCloudParams(const ros::NodeHandle& nh) {
   return p;
 }
 
+}  // namespace ros_conv
 }  // namespace urban_detection

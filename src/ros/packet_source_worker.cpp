@@ -7,6 +7,7 @@
 #include <chrono>
 
 namespace urban_detection {
+namespace ros_conv {
 
 PacketSourceWorker::PacketSourceWorker(const PacketSourceParams& params,
                                        ros_conv::StageDiagnostics* diagnostics, PublishFn publish,
@@ -260,4 +261,5 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
   diagnostics_->output();
 }
 
+}  // namespace ros_conv
 }  // namespace urban_detection

@@ -1,6 +1,7 @@
 #include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {
+namespace ros_conv {
 namespace {
 
 // NodeHandle::getParam() returns false both for "not set" and for "set with another type";
@@ -48,4 +49,5 @@ void loadParam(const ros::NodeHandle& nh, const std::string& name, std::vector<d
   readOptional(nh, name, value, "a list of numbers");
 }
 
+}  // namespace ros_conv
 }  // namespace urban_detection

@@ -4,6 +4,7 @@
 #include <tf2_eigen/tf2_eigen.h>
 
 namespace urban_detection {
+namespace ros_conv {
 
 ScanToCloud::ScanToCloud(const PacketToCloudParams& params, const ros::NodeHandle& nh)
     : params_(params), decoder_(core::loadCalibration(params.calibration), params.decoder) {
@@ -56,4 +57,5 @@ bool ScanToCloud::convert(const VelodyneScan& scan, CloudXYZIRT* cloud, ScanDeco
   return true;
 }
 
+}  // namespace ros_conv
 }  // namespace urban_detection

@@ -8,6 +8,7 @@
 #include <cstring>
 
 namespace urban_detection {
+namespace ros_conv {
 
 void toMessage(const core::RawPacket& packet, const ros::Time& stamp, VelodynePacket* msg) {
   static_assert(sizeof(msg->data) == core::kPacketSize, "VelodynePacket.data must be 1206 bytes");
@@ -174,4 +175,5 @@ void StreamingScanDecoder::reset() {
   current_.reset();
 }
 
+}  // namespace ros_conv
 }  // namespace urban_detection

@@ -20,6 +20,7 @@
 #include "urban_detection/ros/velodyne_scan.h"
 
 namespace ud = urban_detection;
+namespace rc = urban_detection::ros_conv;
 namespace core = urban_detection::core;
 namespace ser = ros::serialization;
 
@@ -75,7 +76,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   // PacketToCloud without and with a per-packet transform (some stamps "unavailable").
   for (int with_tf = 0; with_tf < 2; ++with_tf) {
-    ud::PacketTransformFn transform;
+    rc::PacketTransformFn transform;
     if (with_tf) {
       transform = [](const ros::Time& stamp, Eigen::Affine3f* t) {
         if (stamp.nsec % 3 == 0) return false;
@@ -86,8 +87,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       };
     }
     ud::CloudXYZIRT cloud;
-    ud::ScanDecodeStats stats;
-    ud::decodeScan(decoder, scan, transform, &cloud, &stats);
+    rc::ScanDecodeStats stats;
+    rc::decodeScan(decoder, scan, transform, &cloud, &stats);
     UD_FUZZ_CHECK(stats.decode.packets + stats.tf_failures == scan.packets.size());
     UD_FUZZ_CHECK(stats.decode.points == cloud.size() && cloud.width == cloud.size());
     std::size_t valid_packets = 0;
@@ -106,10 +107,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   // PacketSource: the same packets through the revolution assembler and, in step, through the
   // streaming decoder, which must cut the same revolutions with the same points.
-  const ud::ScanStamp convention =
-      scan.header.seq % 2 ? ud::ScanStamp::kFirstPacket : ud::ScanStamp::kLastPacket;
-  ud::ScanAssembler assembler(scan.header.seq % 360, scan.header.frame_id, 700, convention);
-  ud::StreamingScanDecoder streamer(&decoder, scan.header.seq % 360, scan.header.frame_id, 700,
+  const rc::ScanStamp convention =
+      scan.header.seq % 2 ? rc::ScanStamp::kFirstPacket : rc::ScanStamp::kLastPacket;
+  rc::ScanAssembler assembler(scan.header.seq % 360, scan.header.frame_id, 700, convention);
+  rc::StreamingScanDecoder streamer(&decoder, scan.header.seq % 360, scan.header.frame_id, 700,
                                     convention);
   std::uint32_t expected_seq = 1;
   for (const ud::VelodynePacket& p : scan.packets) {
@@ -120,15 +121,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     UD_FUZZ_CHECK(static_cast<bool>(rev) == static_cast<bool>(streamed));
     if (rev) {
       ud::CloudXYZIRT batch;
-      ud::ScanDecodeStats batch_stats;
-      ud::decodeScan(decoder, *rev, ud::PacketTransformFn(), &batch, &batch_stats);
+      rc::ScanDecodeStats batch_stats;
+      rc::decodeScan(decoder, *rev, rc::PacketTransformFn(), &batch, &batch_stats);
       UD_FUZZ_CHECK(batch.size() == streamed->size());
       UD_FUZZ_CHECK(streamed->header.seq == rev->header.seq);
       UD_FUZZ_CHECK(rev->header.seq == expected_seq);
       ++expected_seq;
       UD_FUZZ_CHECK(!rev->packets.empty() &&
-                    rev->packets.size() <= ud::ScanAssembler::kMaxPacketsPerScan);
-      UD_FUZZ_CHECK(rev->header.stamp == (convention == ud::ScanStamp::kLastPacket
+                    rev->packets.size() <= rc::ScanAssembler::kMaxPacketsPerScan);
+      UD_FUZZ_CHECK(rev->header.stamp == (convention == rc::ScanStamp::kLastPacket
                                               ? rev->packets.back().stamp
                                               : rev->packets.front().stamp));
     }

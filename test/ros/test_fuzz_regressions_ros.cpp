@@ -7,6 +7,7 @@
 #include "urban_detection/ros/velodyne_scan.h"
 
 namespace urban_detection {
+namespace ros_conv {
 namespace {
 
 VelodynePacket packetAt(const core::PacketEncoder& encoder, const ros::Time& stamp,
@@ -49,4 +50,5 @@ TEST(FuzzRegressions, DecodeScanSurvivesStampsFarApart) {
 }
 
 }  // namespace
+}  // namespace ros_conv
 }  // namespace urban_detection

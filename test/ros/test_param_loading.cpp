@@ -8,6 +8,7 @@
 #include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {
+namespace ros_conv {
 namespace {
 
 std::string errorOf(double value, double min, double max) {
@@ -48,9 +49,11 @@ TEST(ParamLoading, IntegerRangeWithoutUnit) {
 }
 
 }  // namespace
+}  // namespace ros_conv
 }  // namespace urban_detection
 
 namespace urban_detection {
+namespace ros_conv {
 namespace {
 
 // One packet every 6 x 48 us = 288 us: 60 / rpm / 288e-6 packets per revolution (by hand:
@@ -75,4 +78,5 @@ TEST(PacketSourceParams, RpmSizesTheRevolutionAndTheExpectedRate) {
 }
 
 }  // namespace
+}  // namespace ros_conv
 }  // namespace urban_detection

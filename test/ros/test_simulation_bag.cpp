@@ -153,7 +153,7 @@ TEST(SimulationBag, ScanAndGroundTruthMessagesCopyTheRevolution) {
   // velodyne_driver's convention: the last packet's stamp, or the first's on request.
   EXPECT_DOUBLE_EQ(scan.header.stamp.toSec(), ros::Time().fromSec(1700000000.250288).toSec());
   ud::VelodyneScan first;
-  ud::ros_conv::toScanMsg(rev, "velodyne", &first, ud::ScanStamp::kFirstPacket);
+  ud::ros_conv::toScanMsg(rev, "velodyne", &first, ud::ros_conv::ScanStamp::kFirstPacket);
   EXPECT_DOUBLE_EQ(first.header.stamp.toSec(), ros::Time().fromSec(1700000000.25).toSec());
   EXPECT_NEAR(scan.packets[1].stamp.toSec(), 1700000000.250288, 1e-6);
   ud::GroundTruth gt;

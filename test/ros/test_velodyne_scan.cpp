@@ -16,6 +16,7 @@
 #include "urban_detection/ros/velodyne_scan.h"
 
 namespace urban_detection {
+namespace ros_conv {
 namespace {
 
 constexpr std::size_t kReturnsPerPacket = 384;
@@ -150,6 +151,7 @@ TEST(DecodeScan, EmptyScanGivesAnEmptyCloud) {
 }
 
 }  // namespace
+}  // namespace ros_conv
 }  // namespace urban_detection
 
 // ------------------------------------------------------------------------------------------
@@ -158,6 +160,7 @@ TEST(DecodeScan, EmptyScanGivesAnEmptyCloud) {
 // starting mid-revolution, the same revolutions with the same points bit for bit, the same
 // header stamps under both stamp conventions, and the same seq.
 namespace urban_detection {
+namespace ros_conv {
 namespace stream_test {
 
 bool samePointBits(const PointXYZIRT& a, const PointXYZIRT& b) {
@@ -212,9 +215,11 @@ void compareOnSimulatedDrive(ScanStamp convention) {
 
 }  // namespace stream_test
 
+}  // namespace ros_conv
 }  // namespace urban_detection
 
 namespace urban_detection {
+namespace ros_conv {
 
 TEST(StreamingScanDecoder, EqualsTheBatchDecodeBitForBitOnTheSimulatedDrive) {
   stream_test::compareOnSimulatedDrive(ScanStamp::kLastPacket);
@@ -224,4 +229,5 @@ TEST(StreamingScanDecoder, FirstPacketStampConvention) {
   stream_test::compareOnSimulatedDrive(ScanStamp::kFirstPacket);
 }
 
+}  // namespace ros_conv
 }  // namespace urban_detection

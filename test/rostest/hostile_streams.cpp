@@ -178,7 +178,10 @@ void expectSameRevolutions(const Revolutions& clean, const Revolutions& altered)
   ASSERT_GE(clean.objects.size(), 12u);
   ASSERT_EQ(altered.objects.size(), clean.objects.size()) << "revolutions split or lost";
   const double span = (altered.last - altered.first).toSec();
-  EXPECT_NEAR((altered.objects.size() - 1) / span, 10.0, 0.5) << "rate";
+  // Paced at the capture's 10 Hz, not a burst (times stepped back or standing still) and not a
+  // stall (a year ahead). 13 intervals: one arrival 70 ms late on a loaded machine moves the
+  // measured rate by 0.5 Hz, while the failures guarded against give 0 Hz or hundreds.
+  EXPECT_NEAR((altered.objects.size() - 1) / span, 10.0, 1.5) << "rate";
   for (const auto& rev : clean.objects) {
     auto it = altered.objects.find(rev.first);
     ASSERT_NE(it, altered.objects.end()) << "revolution " << rev.first;

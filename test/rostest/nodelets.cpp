@@ -34,6 +34,7 @@
 #include "urban_detection/ros/velodyne_scan.h"
 
 namespace urban_detection {
+namespace ros_conv {
 namespace {
 
 using rostest_util::Collector;
@@ -704,6 +705,7 @@ TEST(GridSegmentation, WrongParameterTypesFailInitClearly) {
 }
 
 }  // namespace
+}  // namespace ros_conv
 }  // namespace urban_detection
 
 int main(int argc, char** argv) {

@@ -42,6 +42,7 @@
 #include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class DetectorNodelet : public nodelet::Nodelet {
  public:
@@ -80,4 +81,5 @@ class DetectorNodelet : public nodelet::Nodelet {
   ros::Subscriber sub_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection

@@ -13,6 +13,7 @@
 #include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 /// urban_detection/PacketSource: live UDP socket or pcap replay -> VelodyneScan per revolution.
 struct PacketSourceParams {
@@ -63,4 +64,5 @@ void loadDecoderParams(const ros::NodeHandle& private_nh, std::string* calibrati
 PacketSourceParams loadPacketSourceParams(const ros::NodeHandle& private_nh);
 PacketToCloudParams loadPacketToCloudParams(const ros::NodeHandle& private_nh);
 
+}  // namespace ros_conv
 }  // namespace urban_detection

@@ -22,6 +22,7 @@
 #include "urban_detection/ros/velodyne_scan.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class PacketSourceWorker {
  public:
@@ -79,4 +80,5 @@ class PacketSourceWorker {
   double revolution_s_ = 0.0;  // [s] time spent on the packets of the open revolution
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection

@@ -17,6 +17,7 @@
 #include <vector>
 
 namespace urban_detection {
+namespace ros_conv {
 
 /// A missing, mistyped or out-of-range parameter. The message is meant for the user as is.
 class ParamError : public std::runtime_error {
@@ -75,4 +76,5 @@ void loadFields(const ros::NodeHandle& nh, Params* params) {
   if (!error.empty()) throw ParamError(error);
 }
 
+}  // namespace ros_conv
 }  // namespace urban_detection

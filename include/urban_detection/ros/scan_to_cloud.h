@@ -20,6 +20,7 @@
 #include "urban_detection/ros/velodyne_scan.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 class ScanToCloud {
  public:
@@ -49,4 +50,5 @@ class ScanToCloud {
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection

@@ -22,6 +22,7 @@
 #include "urban_detection/ros/validated_reconfigure.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 template <class Traits>
 class TunableDetectorNodelet : public DetectorNodelet {
@@ -57,4 +58,5 @@ class TunableDetectorNodelet : public DetectorNodelet {
   std::unique_ptr<Reconfigure> reconfigure_;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection

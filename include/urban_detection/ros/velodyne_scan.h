@@ -20,6 +20,7 @@
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 
 namespace urban_detection {
+namespace ros_conv {
 
 /// Copies one raw packet and its stamp into a message packet.
 void toMessage(const core::RawPacket& packet, const ros::Time& stamp, VelodynePacket* msg);
@@ -150,4 +151,5 @@ class StreamingScanDecoder {
   std::uint32_t revolutions_ = 0;
 };
 
+}  // namespace ros_conv
 }  // namespace urban_detection
