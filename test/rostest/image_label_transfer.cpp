@@ -74,6 +74,17 @@ struct Scene {
   std::mutex mutex;
   std::vector<DetectedObjectArray::ConstPtr> received;
 
+  // objects/classified into `received`.
+  ros::Subscriber collect() {
+    return nh.subscribe<DetectedObjectArray>(
+        "objects/classified", 5,
+        boost::function<void(const DetectedObjectArray::ConstPtr&)>(
+            [this](const DetectedObjectArray::ConstPtr& m) {
+              std::lock_guard<std::mutex> lock(mutex);
+              received.push_back(m);
+            }));
+  }
+
   void advertise() {
     image = nh.advertise<sensor_msgs::Image>("image", 2);
     info = nh.advertise<sensor_msgs::CameraInfo>("camera_info", 2);
@@ -128,32 +139,41 @@ struct Scene {
   }
 };
 
-TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
-  if (std::system("/usr/bin/python3 -c 'import onnx' >/dev/null 2>&1") != 0)
-    GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("ud_ilt_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string model = (dir / "colour.onnx").string(), names = (dir / "classes.txt").string();
-  const std::string cmd =
-      "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " + model + " 100 80 " + names;
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  const std::string ns = "/ilt/image_label_transfer/";
-  ASSERT_TRUE(ros::param::has(ns + "transfer/min_confidence"))
-      << "config/image_label_transfer.yaml not loaded by the .test file";
-  ros::param::set(ns + "model/path", model);
-  ros::param::set(ns + "model/class_names_file", names);
-  ros::param::set(ns + "model/input_width_px", 100);
-  ros::param::set(ns + "model/input_height_px", 80);
-  ros::param::set(ns + "model/mean", std::vector<double>{0.0, 0.0, 0.0});
-  ros::param::set(ns + "model/scale", std::vector<double>{1 / 255.0, 1 / 255.0, 1 / 255.0});
-  ros::param::set(ns + "model/keep_classes", std::vector<std::string>{"car", "vegetation", "pole"});
+// The test network (test/spark_colour_model.py, 100 x 80 input, colour -> class) in a
+// temporary folder removed at the end; setParams() points the nodelet under `ns` at it.
+struct ColourModel {
+  explicit ColourModel(const std::string& tag)
+      : dir(std::filesystem::temp_directory_path() / (tag + "_" + std::to_string(::getpid()))) {
+    std::filesystem::create_directories(dir);
+    command = "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " + model() +
+              " 100 80 " + names();
+    built = std::system(command.c_str()) == 0;
+  }
+  ~ColourModel() { std::filesystem::remove_all(dir); }
+  std::string model() const { return (dir / "colour.onnx").string(); }
+  std::string names() const { return (dir / "classes.txt").string(); }
+  void setParams(const std::string& ns) const {
+    ros::param::set(ns + "model/path", model());
+    ros::param::set(ns + "model/class_names_file", names());
+    ros::param::set(ns + "model/input_width_px", 100);
+    ros::param::set(ns + "model/input_height_px", 80);
+  }
+  std::filesystem::path dir;
+  std::string command;
+  bool built = false;
+};
 
-  tf2_ros::StaticTransformBroadcaster tf;
+bool haveOnnx() {
+  return std::system("/usr/bin/python3 -c 'import onnx' >/dev/null 2>&1") == 0;
+}
+
+// The camera `frame` (optical: z forward, x right, y down) at the LiDAR origin looking along
+// the LiDAR's x axis.
+void sendCameraTf(tf2_ros::StaticTransformBroadcaster* tf, const std::string& frame) {
   geometry_msgs::TransformStamped t;
   t.header.stamp = ros::Time::now();
   t.header.frame_id = "velodyne";
-  t.child_frame_id = "camera_optical";
+  t.child_frame_id = frame;
   Eigen::Matrix3d optical_from_lidar;
   optical_from_lidar << 0, -1, 0, 0, 0, -1, 1, 0, 0;
   const Eigen::Quaterniond q(optical_from_lidar.transpose());  // camera pose in the LiDAR frame
@@ -161,7 +181,23 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
   t.transform.rotation.y = q.y();
   t.transform.rotation.z = q.z();
   t.transform.rotation.w = q.w();
-  tf.sendTransform(t);
+  tf->sendTransform(t);
+}
+
+TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
+  if (!haveOnnx()) GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
+  const ColourModel net("ud_ilt");
+  ASSERT_TRUE(net.built) << net.command;
+  const std::string ns = "/ilt/image_label_transfer/";
+  ASSERT_TRUE(ros::param::has(ns + "transfer/min_confidence"))
+      << "config/image_label_transfer.yaml not loaded by the .test file";
+  net.setParams(ns);
+  ros::param::set(ns + "model/mean", std::vector<double>{0.0, 0.0, 0.0});
+  ros::param::set(ns + "model/scale", std::vector<double>{1 / 255.0, 1 / 255.0, 1 / 255.0});
+  ros::param::set(ns + "model/keep_classes", std::vector<std::string>{"car", "vegetation", "pole"});
+
+  tf2_ros::StaticTransformBroadcaster tf;
+  sendCameraTf(&tf, "camera_optical");
 
   nodelet::Loader manager(false);
   ASSERT_TRUE(
@@ -171,13 +207,7 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
   ros::Duration(0.5).sleep();
   // Lazy: no subscriber on the inputs while nobody listens to the output.
   EXPECT_EQ(scene.image.getNumSubscribers(), 0u);
-  ros::Subscriber sub = scene.nh.subscribe<DetectedObjectArray>(
-      "objects/classified", 5,
-      boost::function<void(const DetectedObjectArray::ConstPtr&)>(
-          [&](const DetectedObjectArray::ConstPtr& m) {
-            std::lock_guard<std::mutex> lock(scene.mutex);
-            scene.received.push_back(m);
-          }));
+  ros::Subscriber sub = scene.collect();
   ASSERT_TRUE(waitFor(
       [&] { return scene.points.getNumSubscribers() > 0 && scene.image.getNumSubscribers() > 0; },
       10.0));
@@ -212,27 +242,17 @@ TEST(ImageLabelTransferNodelet, ClassifiesObjectsSeenBySyntheticCamera) {
   EXPECT_EQ(out->objects[2].class_label, "unknown");  // behind the camera
   EXPECT_FLOAT_EQ(out->objects[2].class_confidence, 0.0f);
   EXPECT_EQ(out->objects[1].indices.size(), 8u);  // the rest of the message is kept
-  std::filesystem::remove_all(dir);
 }
 
 // Bad input never stops the stage or the manager: images in an unsupported encoding, then images
 // from a camera frame tf does not know. Every revolution still goes out, with its LiDAR classes.
 TEST(ImageLabelTransferNodelet, BadEncodingAndMissingTfKeepLidarClasses) {
-  if (std::system("/usr/bin/python3 -c 'import onnx' >/dev/null 2>&1") != 0)
-    GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("ud_ilt_bad_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string model = (dir / "colour.onnx").string(), names = (dir / "classes.txt").string();
-  const std::string cmd =
-      "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " + model + " 100 80 " + names;
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  if (!haveOnnx()) GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
+  const ColourModel net("ud_ilt_bad");
+  ASSERT_TRUE(net.built) << net.command;
   const std::string ns = "/ilt_bad/image_label_transfer/";
   ros::param::set(ns + "fusion", std::string("camera"));
-  ros::param::set(ns + "model/path", model);
-  ros::param::set(ns + "model/class_names_file", names);
-  ros::param::set(ns + "model/input_width_px", 100);
-  ros::param::set(ns + "model/input_height_px", 80);
+  net.setParams(ns);
   nodelet::Loader manager(false);
   ASSERT_TRUE(
       manager.load("/ilt_bad/image_label_transfer", "urban_detection/ImageLabelTransfer", {}, {}));
@@ -242,13 +262,7 @@ TEST(ImageLabelTransferNodelet, BadEncodingAndMissingTfKeepLidarClasses) {
   scene.lidar_class = "vehicle";
   scene.lidar_confidence = 0.7f;
   scene.advertise();
-  ros::Subscriber sub = scene.nh.subscribe<DetectedObjectArray>(
-      "objects/classified", 5,
-      boost::function<void(const DetectedObjectArray::ConstPtr&)>(
-          [&](const DetectedObjectArray::ConstPtr& m) {
-            std::lock_guard<std::mutex> lock(scene.mutex);
-            scene.received.push_back(m);
-          }));
+  ros::Subscriber sub = scene.collect();
   ASSERT_TRUE(waitFor([&] { return scene.points.getNumSubscribers() > 0; }, 10.0));
   for (const char* encoding : {"yuv422", "rgb8"}) {  // rgb8: a good image, but no tf
     SCOPED_TRACE(encoding);
@@ -275,46 +289,25 @@ TEST(ImageLabelTransferNodelet, BadEncodingAndMissingTfKeepLidarClasses) {
   }
   // The nodelet is still there and working.
   EXPECT_GT(scene.points.getNumSubscribers(), 0u);
-  std::filesystem::remove_all(dir);
 }
 
 // fusion: fused through the nodelet. All three objects come with the LiDAR class vehicle (0.6):
 // the one on car pixels is confirmed (noisy-or confidence), the one on vegetation pixels is
 // vetoed (left out), the one behind the camera keeps its LiDAR class.
 TEST(ImageLabelTransferNodelet, FusedConfirmsVetoesAndKeepsUnseen) {
-  if (std::system("/usr/bin/python3 -c 'import onnx' >/dev/null 2>&1") != 0)
-    GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("ud_ilt_fused_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string model = (dir / "colour.onnx").string(), names = (dir / "classes.txt").string();
-  const std::string cmd =
-      "/usr/bin/python3 " UD_SOURCE_DIR "/test/spark_colour_model.py " + model + " 100 80 " + names;
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  if (!haveOnnx()) GTEST_SKIP() << "python3-onnx is not installed (apt-get install python3-onnx)";
+  const ColourModel net("ud_ilt_fused");
+  ASSERT_TRUE(net.built) << net.command;
   const std::string ns = "/ilt_fused/image_label_transfer/";
   ros::param::set(ns + "fusion", std::string("fused"));
-  ros::param::set(ns + "model/path", model);
-  ros::param::set(ns + "model/class_names_file", names);
-  ros::param::set(ns + "model/input_width_px", 100);
-  ros::param::set(ns + "model/input_height_px", 80);
+  net.setParams(ns);
   ros::param::set(ns + "model/mean", std::vector<double>{0.0, 0.0, 0.0});
   ros::param::set(ns + "model/scale", std::vector<double>{1 / 255.0, 1 / 255.0, 1 / 255.0});
   ros::param::set(ns + "model/vehicle_classes", std::vector<std::string>{"car"});
   ros::param::set(ns + "model/background_classes", std::vector<std::string>{"vegetation"});
 
   tf2_ros::StaticTransformBroadcaster tf;
-  geometry_msgs::TransformStamped t;
-  t.header.stamp = ros::Time::now();
-  t.header.frame_id = "velodyne";
-  t.child_frame_id = "camera_fused";
-  Eigen::Matrix3d optical_from_lidar;
-  optical_from_lidar << 0, -1, 0, 0, 0, -1, 1, 0, 0;
-  const Eigen::Quaterniond q(optical_from_lidar.transpose());
-  t.transform.rotation.x = q.x();
-  t.transform.rotation.y = q.y();
-  t.transform.rotation.z = q.z();
-  t.transform.rotation.w = q.w();
-  tf.sendTransform(t);
+  sendCameraTf(&tf, "camera_fused");
 
   nodelet::Loader manager(false);
   ASSERT_TRUE(manager.load("/ilt_fused/image_label_transfer", "urban_detection/ImageLabelTransfer",
@@ -324,13 +317,7 @@ TEST(ImageLabelTransferNodelet, FusedConfirmsVetoesAndKeepsUnseen) {
   scene.lidar_class = "vehicle";
   scene.lidar_confidence = 0.6f;
   scene.advertise();
-  ros::Subscriber sub = scene.nh.subscribe<DetectedObjectArray>(
-      "objects/classified", 5,
-      boost::function<void(const DetectedObjectArray::ConstPtr&)>(
-          [&](const DetectedObjectArray::ConstPtr& m) {
-            std::lock_guard<std::mutex> lock(scene.mutex);
-            scene.received.push_back(m);
-          }));
+  ros::Subscriber sub = scene.collect();
   ASSERT_TRUE(waitFor([&] { return scene.points.getNumSubscribers() > 0; }, 10.0));
   DetectedObjectArray::ConstPtr out;
   ASSERT_TRUE(waitFor(
@@ -350,7 +337,6 @@ TEST(ImageLabelTransferNodelet, FusedConfirmsVetoesAndKeepsUnseen) {
   EXPECT_EQ(out->objects[1].id, 3u);  // object 2 (vegetation pixels) vetoed
   EXPECT_EQ(out->objects[1].class_label, "vehicle");
   EXPECT_FLOAT_EQ(out->objects[1].class_confidence, 0.6f);
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
