@@ -204,30 +204,25 @@ int main(int argc, char** argv) {
   bool run_kdtree = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&](const char* what) {
-      return urban_detection::tools::optionValue(argc, argv, &i, what);
-    };
-    auto integer = [&](const char* what) {
-      return urban_detection::tools::optionCount(argc, argv, &i, what);
-    };
+    const urban_detection::tools::OptionArgs arg{argc, argv, &i};
     if (a == "--pcd-dir")
-      pcd_dirs.push_back(value("--pcd-dir"));
+      pcd_dirs.push_back(arg.value("--pcd-dir"));
     else if (a == "--bin-dir")
-      bin_dirs.push_back(value("--bin-dir"));
+      bin_dirs.push_back(arg.value("--bin-dir"));
     else if (a == "--pcap")
-      pcap = value("--pcap");
+      pcap = arg.value("--pcap");
     else if (a == "--calibration")
-      calib_path = value("--calibration");
+      calib_path = arg.value("--calibration");
     else if (a == "--config")
-      configs.push_back(value("--config"));
+      configs.push_back(arg.value("--config"));
     else if (a == "--repeat")
-      repeat = std::max(1L, integer("--repeat"));
+      repeat = std::max(1L, arg.count("--repeat"));
     else if (a == "--max-frames")
-      max_frames = integer("--max-frames");
+      max_frames = arg.count("--max-frames");
     else if (a == "--label")
-      label = value("--label");
+      label = arg.value("--label");
     else if (a == "--json")
-      json_path = value("--json");
+      json_path = arg.value("--json");
     else if (a == "--no-kdtree")
       run_kdtree = false;
     else if (a == "-h" || a == "--help") {

@@ -474,24 +474,19 @@ int main(int argc, char** argv) {
   std::string kitti_tracking_dir, tracker_config;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&](const char* what) {
-      return urban_detection::tools::optionValue(argc, argv, &i, what);
-    };
-    auto integer = [&](const char* what) {
-      return urban_detection::tools::optionCount(argc, argv, &i, what);
-    };
+    const urban_detection::tools::OptionArgs arg{argc, argv, &i};
     if (a == "--kitti-object")
-      kitti_dir = value("--kitti-object");
+      kitti_dir = arg.value("--kitti-object");
     else if (a == "--semantic-kitti")
-      skitti_dir = value("--semantic-kitti");
+      skitti_dir = arg.value("--semantic-kitti");
     else if (a == "--sim")
-      sim_gt = value("--sim");
+      sim_gt = arg.value("--sim");
     else if (a == "--pcap")
-      sim_pcap = value("--pcap");
+      sim_pcap = arg.value("--pcap");
     else if (a == "--calibration")
-      calibration_path = value("--calibration");
+      calibration_path = arg.value("--calibration");
     else if (a == "--cut-angle") {
-      const std::string v = value("--cut-angle");
+      const std::string v = arg.value("--cut-angle");
       char* end = nullptr;
       cut_angle_deg = std::strtod(v.c_str(), &end);
       if (end == v.c_str() || *end != '\0' || !std::isfinite(cut_angle_deg)) {
@@ -499,35 +494,35 @@ int main(int argc, char** argv) {
         return 2;
       }
     } else if (a == "--detector")
-      detector_arg = value("--detector");
+      detector_arg = arg.value("--detector");
     else if (a == "--config")
-      configs.push_back(value("--config"));
+      configs.push_back(arg.value("--config"));
     else if (a == "--json")
-      json_path = value("--json");
+      json_path = arg.value("--json");
     else if (a == "--max-frames")
-      max_frames = integer("--max-frames");
+      max_frames = arg.count("--max-frames");
     else if (a == "--min-gt-points")
-      min_gt_points = integer("--min-gt-points");
+      min_gt_points = arg.count("--min-gt-points");
     else if (a == "--details")
       details = true;
     else if (a == "--object-filter")
-      filter_arg = value("--object-filter");
+      filter_arg = arg.value("--object-filter");
     else if (a == "--features")
-      features_path = value("--features");
+      features_path = arg.value("--features");
     else if (a == "--classifier")
-      classifier_arg = value("--classifier");
+      classifier_arg = arg.value("--classifier");
     else if (a == "--detections")
-      detections_dir = value("--detections");
+      detections_dir = arg.value("--detections");
     else if (a == "--png")
-      png_dir = value("--png");
+      png_dir = arg.value("--png");
     else if (a == "--tracking")
       tracking = true;
     else if (a == "--kitti-tracking")
-      kitti_tracking_dir = value("--kitti-tracking");
+      kitti_tracking_dir = arg.value("--kitti-tracking");
     else if (a == "--tracker-config")
-      tracker_config = value("--tracker-config");
+      tracker_config = arg.value("--tracker-config");
     else if (a == "--png-view") {
-      const std::string v = value("--png-view");
+      const std::string v = arg.value("--png-view");
       if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &png_view.cx, &png_view.cy, &png_view.half_m) !=
               3 ||
           !(png_view.half_m > 0.0 && png_view.half_m <= 100.0)) {

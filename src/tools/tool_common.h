@@ -55,6 +55,20 @@ inline double optionNumber(int argc, char** argv, int* i, const char* option) {
   return x;
 }
 
+/// The value readers of a tool's option loop, for the option at argv[*i] (each advances *i):
+///   for (int i = 1; i < argc; ++i) {
+///     const std::string a = argv[i];
+///     const OptionArgs arg{argc, argv, &i};
+///     if (a == "--out") out = arg.value("--out"); else if (a == "--n") n = arg.count("--n"); ...
+struct OptionArgs {
+  int argc;
+  char** argv;
+  int* i;
+  std::string value(const char* option) const { return optionValue(argc, argv, i, option); }
+  long count(const char* option) const { return optionCount(argc, argv, i, option); }
+  double number(const char* option) const { return optionNumber(argc, argv, i, option); }
+};
+
 /// Every parameter set of the pipeline, as the config files give them.
 struct PipelineParams {
   core::GridSegmenterParams segmentation;

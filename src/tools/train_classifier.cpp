@@ -231,40 +231,35 @@ int main(int argc, char** argv) {
   long max_frames = -1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&](const char* what) {
-      return urban_detection::tools::optionValue(argc, argv, &i, what);
-    };
-    auto integer = [&](const char* what) {
-      return urban_detection::tools::optionCount(argc, argv, &i, what);
-    };
+    const urban_detection::tools::OptionArgs arg{argc, argv, &i};
     if (a == "--semantic-kitti")
-      skitti_dir = value("--semantic-kitti");
+      skitti_dir = arg.value("--semantic-kitti");
     else if (a == "--config")
-      configs.push_back(value("--config"));
+      configs.push_back(arg.value("--config"));
     else if (a == "--out")
-      out_path = value("--out");
+      out_path = arg.value("--out");
     else if (a == "--csv")
-      csv_path = value("--csv");
+      csv_path = arg.value("--csv");
     else if (a == "--json")
-      json_path = value("--json");
+      json_path = arg.value("--json");
     else if (a == "--no-intensity")
       tp.use_intensity = false;
     else if (a == "--trees")
-      tp.trees = static_cast<int>(integer("--trees"));
+      tp.trees = static_cast<int>(arg.count("--trees"));
     else if (a == "--max-depth")
-      tp.max_depth = static_cast<int>(integer("--max-depth"));
+      tp.max_depth = static_cast<int>(arg.count("--max-depth"));
     else if (a == "--min-samples")
-      tp.min_sample_count = static_cast<int>(integer("--min-samples"));
+      tp.min_sample_count = static_cast<int>(arg.count("--min-samples"));
     else if (a == "--fragments")
-      fragments_arg = value("--fragments");
+      fragments_arg = arg.value("--fragments");
     else if (a == "--threshold")
-      threshold_arg = value("--threshold");
+      threshold_arg = arg.value("--threshold");
     else if (a == "--no-loso")
       loso = false;
     else if (a == "--no-kdtree")
       kdtree = false;
     else if (a == "--max-frames")
-      max_frames = integer("--max-frames");
+      max_frames = arg.count("--max-frames");
     else if (a == "-h" || a == "--help") {
       usage();
       return 0;
