@@ -6,7 +6,6 @@
 
 #include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/object_markers.h"
-#include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {
 namespace ros_conv {

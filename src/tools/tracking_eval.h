@@ -36,8 +36,6 @@
 #include <string>
 #include <vector>
 
-#include <yaml-cpp/yaml.h>
-
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_filter.h"
 #include "urban_detection/core/common/object_class.h"

@@ -1,7 +1,7 @@
 /// \file object_tracking.h
-/// ROS side of the ObjectTracker (issue 28): detected-object messages into core objects, core
-/// tracks into TrackedObjectArray, the tracks' rviz markers, and the parameter loading and
-/// checking shared by the start-up loader and dynamic_reconfigure. No ROS master needed.
+/// ROS side of the ObjectTracker: detected-object messages into core objects, core tracks into
+/// TrackedObjectArray, the tracks' rviz markers and their parameters' field table (loaded and
+/// checked by loadFields/checkFields, ros/param_loading.h). No ROS master needed.
 #pragma once
 
 #include <cstdint>
@@ -9,7 +9,6 @@
 #include <string>
 #include <vector>
 
-#include <ros/node_handle.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include "urban_detection/DetectedObjectArray.h"
