@@ -47,7 +47,7 @@ void DetectorNodelet::onInit() {
       const std::string error = checkFields(classifier_nh, p);
       if (!error.empty()) return error;
       std::lock_guard<std::mutex> lock(detector_mutex_);  // between two revolutions
-      classifier_->setDecision(p.min_object_probability, p.reject_non_objects);
+      classifier_->setDecision(p.min_object_probability, p.reject_non_objects, p.keep_uncertain);
       return "";
     };
     classifier_reconfigure_ =

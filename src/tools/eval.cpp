@@ -3,7 +3,7 @@
 //
 //   urban_detection_eval (--kitti-object DIR | --semantic-kitti DIR | --sim GTFILE --pcap PCAP)
 //                        [--detector hierarchical|kdtree|both] [--config FILE]...
-//                        [--json FILE] [--max-frames N] [--min-gt-points N] [--details]
+//                        [--json FILE] [--max-frames N] [--min-points N] [--details]
 //   urban_detection_eval --tracking --sim GTFILE --pcap PCAP | --kitti-tracking DIR  (CLEAR-MOT
 //                        of the tracker after the pipeline; rules in tracking_eval.h)
 //
@@ -425,7 +425,7 @@ void usage() {
       "                             --sim GTFILE --pcap PCAP [--calibration FILE]\n"
       "                             [--cut-angle DEG])\n"
       "         [--detector hierarchical|kdtree|both] [--config FILE]... [--json FILE]\n"
-      "         [--max-frames N] [--min-gt-points N] [--details]\n"
+      "         [--max-frames N] [--min-points N] [--details]\n"
       "         [--object-filter on|off] [--features CSV] [--classifier MODEL|off]\n"
       "         [--detections DIR]\n"
       "  --sim GTFILE    ground-truth file of urban_detection_simulate (--gt), with the pcap it\n"
@@ -447,6 +447,9 @@ void usage() {
       "                  (0 = none), at DIR/<frame>.label (SemanticKITTI: DIR/SEQ/NNNNNN.label\n"
       "                  or DIR/sequences/SEQ/predictions/NNNNNN.label; KITTI object:\n"
       "                  DIR/NNNNNN.label; simulated drive: DIR/revN.label)\n"
+      "  --min-points N  objects and detections with fewer than N points count only when\n"
+      "                  they match each other (SemanticKITTI's panoptic rule; default 30);\n"
+      "                  the all-objects figure (N = 1) is printed beside it\n"
       "  --details       print every missed object and false detection with its cause\n"
       "  --png DIR       write a top view per frame (first detector): ground truth left,\n"
       "                  detections right; yellow boxes missed objects, red false detections\n"
@@ -466,7 +469,7 @@ int main(int argc, char** argv) {
   double cut_angle_deg = 0.0;
   std::vector<std::string> configs;
   long max_frames = -1;
-  long min_gt_points = 10;
+  long min_points = 30;
   bool details = false;
   std::string png_dir, features_path, filter_arg, classifier_arg, detections_dir;
   PngView png_view;
@@ -501,8 +504,8 @@ int main(int argc, char** argv) {
       json_path = arg.value("--json");
     else if (a == "--max-frames")
       max_frames = arg.count("--max-frames");
-    else if (a == "--min-gt-points")
-      min_gt_points = arg.count("--min-gt-points");
+    else if (a == "--min-points")
+      min_points = arg.count("--min-points");
     else if (a == "--details")
       details = true;
     else if (a == "--object-filter")
@@ -646,7 +649,7 @@ int main(int argc, char** argv) {
     tp.detector = detectors[0].get();
     tp.object_filter = object_filter.get();
     tp.classifier = classifier.get();
-    tp.min_gt_points = static_cast<std::size_t>(min_gt_points);
+    tp.min_gt_points = static_cast<std::size_t>(min_points);
     if (max_frames >= 0) tp.max_frames = static_cast<std::size_t>(max_frames);
     std::string tracker_error;
     if (!tracker_config.empty() &&
@@ -670,17 +673,17 @@ int main(int argc, char** argv) {
   std::string dataset_path;
   if (!kitti_dir.empty()) {
     core::KittiGroundTruthParams p;
-    p.min_points = static_cast<std::size_t>(min_gt_points);
+    p.min_points = 1;  // the evaluator applies --min-points (small objects count when matched)
     dataset.reset(new KittiObjectDataset(kitti_dir, p));
     dataset_path = kitti_dir;
   } else if (!skitti_dir.empty()) {
     core::SemanticKittiGroundTruthParams p;
-    p.min_points = static_cast<std::size_t>(min_gt_points);
+    p.min_points = 1;  // the evaluator applies --min-points (small objects count when matched)
     dataset.reset(new SemanticKittiDataset(skitti_dir, p));
     dataset_path = skitti_dir;
   } else {
     core::SimulatedGroundTruthParams p;
-    p.min_points = static_cast<std::size_t>(min_gt_points);
+    p.min_points = 1;  // the evaluator applies --min-points (small objects count when matched)
     try {
       const core::Calibration cal = core::loadCalibration(calibration_path);
       dataset.reset(new SimulatedDriveDataset(sim_gt, sim_pcap, cal, cut_angle_deg, p));
@@ -693,9 +696,31 @@ int main(int argc, char** argv) {
   const std::size_t max_frames_n =
       max_frames >= 0 ? static_cast<std::size_t>(max_frames) : static_cast<std::size_t>(-1);
 
-  std::vector<core::DetectionEvaluator> evaluators(detectors.size());
+  if (min_points < 1) {
+    std::fprintf(stderr, "error: --min-points must be at least 1\n");
+    return 2;
+  }
+  core::EvaluationParams eval_params;
+  eval_params.min_points = static_cast<std::size_t>(min_points);
+  core::EvaluationParams all_objects = eval_params;
+  all_objects.min_points = 1;
+  // Per detector: the score under --min-points, the all-objects score (N = 1), and both of
+  // the detector's own output before the classifier; where recall goes, before and after.
+  std::vector<core::DetectionEvaluator> evaluators(detectors.size(),
+                                                   core::DetectionEvaluator(eval_params));
+  std::vector<core::DetectionEvaluator> evaluators_all(detectors.size(),
+                                                       core::DetectionEvaluator(all_objects));
+  std::vector<core::DetectionEvaluator> before_classifier(detectors.size(),
+                                                          core::DetectionEvaluator(eval_params));
+  std::vector<core::DetectionEvaluator> before_classifier_all(
+      detectors.size(), core::DetectionEvaluator(all_objects));
+  std::vector<core::RecallBreakdown> breakdown(detectors.size()),
+      breakdown_before(detectors.size());
+  std::vector<core::DetectedObject> detected;
+  std::vector<float> gt_range;
   std::vector<Diagnostics> diags(detectors.size());
-  std::vector<core::DetectionEvaluator> unfiltered(detectors.size());  // --features verdicts
+  std::vector<core::DetectionEvaluator> unfiltered(detectors.size(),
+                                                   core::DetectionEvaluator(eval_params));
   std::vector<std::map<std::string, std::size_t>> rejected_by_content(detectors.size());
   std::vector<core::DetectedObject> rejected;
   std::vector<std::map<std::string, std::size_t>> classified_out(detectors.size());
@@ -737,8 +762,13 @@ int main(int argc, char** argv) {
       ++fg_composition[g >= 0 ? "gt_object:" + f.gt.objects[g].label
                               : dataset->className(f.point_class[p.index])];
     }
+    gt_range = core::gtObjectRanges(f.gt, f.cloud);
     for (std::size_t k = 0; k < detectors.size(); ++k) {
       detectors[k]->detect(foreground, &objects);
+      detected = objects;
+      before_classifier[k].evaluate(f.gt, detected, &match);
+      breakdown_before[k].addFrame(f.gt, match, detected, gt_range, eval_params.min_points);
+      before_classifier_all[k].evaluate(f.gt, detected, nullptr);
       if (features_out) {
         unfiltered[k].evaluate(f.gt, objects, &match);
         feature_extractor.computeAll(foreground, objects, &feature_rows);
@@ -758,7 +788,9 @@ int main(int argc, char** argv) {
           ++classified_out[k][detectionContent(f, *dataset, o)];
         }
       }
+      evaluators_all[k].evaluate(f.gt, objects, nullptr);
       evaluators[k].evaluate(f.gt, objects, &match);
+      breakdown[k].addFrame(f.gt, match, objects, gt_range, eval_params.min_points);
       by_group[k][urban_detection::tools::frameGroup(f.id, dataset->name())] += match.score;
       for (std::size_t d = 0; d < objects.size() && classifier; ++d) {
         if (match.verdict[d] != core::DetectionVerdict::kTrue) continue;
@@ -788,14 +820,35 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: no frames found in %s\n", dataset_path.c_str());
     return 1;
   }
-  std::printf("\n%-15s %-18s %6s %5s %5s %5s %5s %9s %7s %7s\n", "dataset", "detector", "frames",
-              "NO", "MO", "FO", "ign", "precision", "recall", "F-rate");
+  std::printf(
+      "\nsmall objects (< %ld points) count only when matched (--min-points %ld); N = 1: "
+      "every object counts\n",
+      min_points, min_points);
+  std::printf("%-15s %-18s %-11s %6s %5s %5s %5s %5s %9s %7s %7s\n", "dataset", "detector",
+              "classifier", "frames", "NO", "MO", "FO", "ign", "precision", "recall", "F-rate");
   for (std::size_t k = 0; k < detectors.size(); ++k) {
-    const core::DetectionScore& t = evaluators[k].total();
-    std::printf("%-15s %-18s %6zu %5zu %5zu %5zu %5zu %9.3f %7.3f %7.3f\n", dataset->name().c_str(),
-                detectors[k]->name().c_str(), frames - failed, t.no, t.mo, t.fo, t.ignored,
-                t.precision(), t.recall(), t.fRate());
+    const std::pair<const char*, const core::DetectionEvaluator*> rows_k[] = {
+        {classifier ? "on" : "off", &evaluators[k]},
+        {classifier ? "on, N=1" : "off, N=1", &evaluators_all[k]},
+        {"off", &before_classifier[k]},
+        {"off, N=1", &before_classifier_all[k]}};
+    for (int r = 0; r < (classifier ? 4 : 2); ++r) {
+      const core::DetectionScore& t = rows_k[r].second->total();
+      std::printf("%-15s %-18s %-11s %6zu %5zu %5zu %5zu %5zu %9.3f %7.3f %7.3f\n",
+                  dataset->name().c_str(), detectors[k]->name().c_str(), rows_k[r].first,
+                  frames - failed, t.no, t.mo, t.fo, t.ignored, t.precision(), t.recall(),
+                  t.fRate());
+    }
   }
+  for (std::size_t k = 0; k < detectors.size(); ++k) {
+    std::printf("\n%s, classifier %s:\n%s", detectors[k]->name().c_str(), classifier ? "on" : "off",
+                breakdown[k].table("  ").c_str());
+    if (classifier) {
+      std::printf("%s, classifier off (the detector alone):\n%s", detectors[k]->name().c_str(),
+                  breakdown_before[k].table("  ").c_str());
+    }
+  }
+  std::printf("\n");
   for (std::size_t k = 0; k < detectors.size() && by_group[k].size() > 1; ++k) {
     for (const auto& g : by_group[k]) {
       const core::DetectionScore& t = g.second;
@@ -837,7 +890,7 @@ int main(int argc, char** argv) {
         << jsonEscape(dataset_path) << "\",\n  \"frames_evaluated\": " << frames - failed
         << ",\n  \"frames_failed\": " << failed
         << ",\n  \"min_iou\": " << jsonNumber(evaluators[0].params().min_iou)
-        << ",\n  \"min_gt_points\": " << min_gt_points << ",\n  \"classifier\": "
+        << ",\n  \"min_points\": " << min_points << ",\n  \"classifier\": "
         << (classifier ? "\"" + jsonEscape(params.classifier.model_path) + "\"" : "null")
         << ",\n  \"configs\": [";
     for (std::size_t c = 0; c < configs.size(); ++c) {
@@ -852,7 +905,12 @@ int main(int argc, char** argv) {
     out << "  \"by_detector\": {";
     for (std::size_t k = 0; k < detectors.size(); ++k) {
       out << (k ? ",\n" : "\n") << "    \"" << detectors[k]->name() << "\": {"
-          << scoreJson(evaluators[k].total())
+          << scoreJson(evaluators[k].total()) << ", \"all_objects\": {"
+          << scoreJson(evaluators_all[k].total()) << "}"
+          << ", \"classifier_off\": {" << scoreJson(before_classifier[k].total()) << "}"
+          << ", \"classifier_off_all_objects\": {" << scoreJson(before_classifier_all[k].total())
+          << "}, \"breakdown\": " << breakdown[k].json()
+          << ", \"breakdown_classifier_off\": " << breakdown_before[k].json()
           << ", \"missed_by_cause\": " << countsJson(diags[k].missed_by_cause)
           << ", \"false_by_content\": " << countsJson(diags[k].false_by_class)
           << ", \"object_filter\": " << (params.object_filter.enabled ? "true" : "false")

@@ -39,6 +39,8 @@
 #include "urban_detection/core/classification/object_features.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/evaluation/augmentation.h"
+#include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/evaluation/evaluation.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 
@@ -63,7 +65,9 @@ struct DetectorFrame {
 
 struct FrameData {
   std::string id, group;
+  bool augmented = false;  // made by augmentSequence: trained on, never scored
   core::EvalFrame gt;
+  std::vector<float> gt_range;  // per GT object, its horizontal distance [m]
   std::vector<DetectorFrame> detectors;
 };
 
@@ -103,30 +107,76 @@ void trainingSet(const std::vector<FrameData>& frames, const std::set<std::strin
   }
 }
 
-// Scores the frames of `groups` for detector k, keeping the detections whose P(object) >= t
-// (t < 0: all). `probs(frame, detection)` gives the probabilities. Adds per group to `by_group`.
+// Score and breakdown of a set of frames.
+struct Scored {
+  core::DetectionScore score;       // under --min-points
+  core::DetectionScore all;         // every object (N = 1)
+  core::RecallBreakdown breakdown;  // per class, points, range
+};
+
+// Scores the frames of `groups` for detector k, classified by `decision` (null: the detector
+// alone, every detection kept) with the probabilities `probs(frame, detection)`. Adds per
+// group to `by_group` when not null.
 template <class ProbFn>
-core::DetectionScore score(const std::vector<FrameData>& frames,
-                           const std::set<std::string>& groups, std::size_t k, double t,
-                           ProbFn probs, std::map<std::string, core::DetectionScore>* by_group) {
-  core::DetectionEvaluator eval;
+Scored score(const std::vector<FrameData>& frames, const std::set<std::string>& groups,
+             std::size_t k, const core::ClassDecision* decision, ProbFn probs,
+             const core::EvaluationParams& ep, std::map<std::string, Scored>* by_group) {
+  core::DetectionEvaluator eval(ep);
+  core::EvaluationParams ep_all = ep;
+  ep_all.min_points = 1;
+  core::DetectionEvaluator eval_all(ep_all);
+  Scored out;
   std::vector<core::DetectedObject> kept;
+  core::FrameMatch m;
   for (std::size_t fi = 0; fi < frames.size(); ++fi) {
     const FrameData& f = frames[fi];
-    if (!groups.count(f.group)) continue;
+    if (f.augmented || !groups.count(f.group)) continue;
     const DetectorFrame& d = f.detectors[k];
     kept.clear();
     for (std::size_t i = 0; i < d.objects.size(); ++i) {
-      if (t < 0.0 || 1.0 - probs(fi, i)[0] >= t) kept.push_back(d.objects[i]);
+      if (!decision) {
+        kept.push_back(d.objects[i]);
+        continue;
+      }
+      float confidence = 0.0f;
+      const core::ObjectCategory c = core::decideClass(probs(fi, i), *decision, true, &confidence);
+      if (c == core::ObjectCategory::kNonObject) continue;
+      kept.push_back(d.objects[i]);
+      kept.back().category = c;
     }
-    core::FrameMatch m;
+    eval_all.evaluate(f.gt, kept, &m);
+    const core::DetectionScore all = m.score;
     eval.evaluate(f.gt, kept, &m);
-    if (by_group) (*by_group)[f.group] += m.score;
+    core::RecallBreakdown b;
+    b.addFrame(f.gt, m, kept, f.gt_range, ep.min_points);
+    out.breakdown += b;
+    if (by_group) {
+      Scored& g = (*by_group)[f.group];
+      g.score += m.score;
+      g.all += all;
+      g.breakdown += b;
+    }
   }
-  return eval.total();
+  out.score = eval.total();
+  out.all = eval_all.total();
+  return out;
 }
 
-// Thresholds tried when choosing P(object).
+// What the decision is chosen for: the pooled F and, as much, the mean recall of the classes
+// present (vehicle, pedestrian, cyclist): missing a person costs more than keeping a bush.
+double objective(const Scored& s) {
+  double sum = 0.0;
+  int n = 0;
+  for (int c = 0; c < 3; ++c) {
+    if (s.breakdown.by_class[c].total == 0) continue;
+    sum += s.breakdown.by_class[c].recall();
+    ++n;
+  }
+  const double f = s.score.fRate();
+  return n == 0 ? f : 0.5 * f + 0.5 * sum / n;
+}
+
+// Thresholds tried when choosing a decision.
 std::vector<double> thresholdGrid() {
   std::vector<double> t;
   for (int k = 5; k <= 95; k += 5) t.push_back(k / 100.0);
@@ -144,27 +194,63 @@ core::ObjectClassifierModel trainOn(const std::vector<FrameData>& frames,
   return core::ObjectClassifierModel::train(x, y, params, fp);
 }
 
-// The threshold maximising the pooled F of `groups` (detector 0) under `probs`.
+enum class DecisionRule { kObject, kClass };
+
+// The decision maximising objective() on `groups` (detector 0) under `probs`: the object
+// threshold alone (kObject) or, after it, each class threshold and the uncertain band in turn
+// (coordinate ascent, kClass).
 template <class ProbFn>
-double bestThreshold(const std::vector<FrameData>& frames, const std::set<std::string>& groups,
-                     ProbFn probs) {
-  double best_t = 0.5, best_f = -1.0;
+core::ClassDecision bestDecision(const std::vector<FrameData>& frames,
+                                 const std::set<std::string>& groups, ProbFn probs,
+                                 const core::EvaluationParams& ep, DecisionRule rule) {
+  core::ClassDecision best;
+  double best_j = -1.0;
+  auto consider = [&](const core::ClassDecision& d) {
+    const double j = objective(score(frames, groups, 0, &d, probs, ep, nullptr));
+    if (j > best_j + 1e-12) {
+      best_j = j;
+      best = d;
+    }
+  };
   for (const double t : thresholdGrid()) {
-    const double f = score(frames, groups, 0, t, probs, nullptr).fRate();
-    if (f > best_f + 1e-12) {
-      best_f = f;
-      best_t = t;
+    core::ClassDecision d;
+    d.object_threshold = t;
+    consider(d);
+  }
+  if (rule == DecisionRule::kObject) return best;
+  for (int round = 0; round < 2; ++round) {
+    for (std::size_t c = 0; c < 3; ++c) {
+      const core::ClassDecision base = best;
+      for (const double t : thresholdGrid()) {
+        if (t >= base.object_threshold) break;
+        core::ClassDecision d = base;
+        d.class_thresholds[c] = t;
+        consider(d);
+      }
+    }
+    const core::ClassDecision base = best;
+    for (const double t : thresholdGrid()) {
+      if (t >= base.object_threshold) break;
+      core::ClassDecision d = base;
+      d.uncertain_threshold = t;
+      consider(d);
     }
   }
-  return best_t;
+  return best;
 }
 
-// Threshold for a model trained on `groups`: inner 3-fold cross-validation over the groups.
-double innerThreshold(std::vector<FrameData>* frames, const std::vector<std::string>& groups,
-                      const core::ClassifierTrainingParams& params,
-                      const core::ObjectFeatureParams& fp) {
+// Decision for a model trained on `groups`: inner 3-fold cross-validation over the groups.
+core::ClassDecision innerDecision(std::vector<FrameData>* frames,
+                                  const std::vector<std::string>& groups,
+                                  const core::ClassifierTrainingParams& params,
+                                  const core::ObjectFeatureParams& fp,
+                                  const core::EvaluationParams& ep, DecisionRule rule) {
   const int folds = std::min<int>(3, static_cast<int>(groups.size()));
-  if (folds < 2) return params.object_threshold;
+  if (folds < 2) {
+    core::ClassDecision d;
+    d.object_threshold = params.object_threshold;
+    return d;
+  }
   std::map<std::pair<std::size_t, std::size_t>, Probabilities> oof;
   for (int k = 0; k < folds; ++k) {
     std::set<std::string> train, test;
@@ -174,14 +260,19 @@ double innerThreshold(std::vector<FrameData>* frames, const std::vector<std::str
     const core::ObjectClassifierModel m = trainOn(*frames, train, params, fp);
     for (std::size_t fi = 0; fi < frames->size(); ++fi) {
       const FrameData& f = (*frames)[fi];
-      if (!test.count(f.group)) continue;
+      if (f.augmented || !test.count(f.group)) continue;
       std::vector<Probabilities> p;
       m.predict(f.detectors[0].features, &p);
       for (std::size_t i = 0; i < p.size(); ++i) oof[{fi, i}] = p[i];
     }
   }
   const std::set<std::string> all(groups.begin(), groups.end());
-  return bestThreshold(*frames, all, [&](std::size_t fi, std::size_t i) { return oof[{fi, i}]; });
+  return bestDecision(
+      *frames, all,
+      [&](std::size_t fi, std::size_t i) {
+        return oof[{fi, i}];
+      },
+      ep, rule);
 }
 
 std::string scoreRow(const core::DetectionScore& s) {
@@ -207,6 +298,7 @@ void usage() {
       "         [--out MODEL] [--csv FILE] [--json FILE] [--no-intensity] [--trees N]\n"
       "         [--max-depth N] [--min-samples N] [--fragments reject|skip]\n"
       "         [--threshold auto|P] [--no-loso] [--no-kdtree] [--max-frames N]\n"
+      "         [--min-points N] [--decision object|class] [--class-balance B]\n"
       "  --semantic-kitti DIR  dataset root (sequences/NN/{velodyne,labels}) or one sequence\n"
       "  --out MODEL     model file to write (.yml or .yml.gz), trained on every sequence\n"
       "  --csv FILE      feature table: one row per detection with its label and content\n"
@@ -217,7 +309,17 @@ void usage() {
       "                  default) or fixed\n"
       "  --no-loso       skip the leave-one-sequence-out report (threshold: --threshold P or\n"
       "                  0.5)\n"
-      "  --no-kdtree     do not score the kd-tree baseline with the same classifier\n");
+      "  --no-kdtree     do not score the kd-tree baseline with the same classifier\n"
+      "  --min-points N  objects and detections under N points count only when matched\n"
+      "                  (default 30; the N = 1 figure is printed beside it)\n"
+      "  --decision      object: one P(object) threshold; class (default): also a threshold\n"
+      "                  per class and an uncertain band kept as other_object, all chosen on\n"
+      "                  the training sequences\n"
+      "  --class-balance B  row weights (rows / (classes x class rows))^B (default 0.5)\n"
+      "  --augment P[,V]  training examples made from the training sequences' objects: P\n"
+      "                  copies of each person and cyclist, V of each vehicle (default 0,0:\n"
+      "                  off), re-sampled farther away and pasted on free ground into the\n"
+      "                  sequence's scans (augmentation.h); trained on, never scored\n");
 }
 
 }  // namespace
@@ -228,7 +330,12 @@ int main(int argc, char** argv) {
   std::vector<std::string> configs;
   core::ClassifierTrainingParams tp;
   bool loso = true, kdtree = true;
-  long max_frames = -1;
+  long max_frames = -1, min_points = 30;
+  std::string decision_arg = "class";
+  core::AugmentParams augment;
+  augment.person_copies = 0;
+  augment.vehicle_copies = 0;
+  tp.class_balance = 0.5;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const urban_detection::tools::OptionArgs arg{argc, argv, &i};
@@ -260,7 +367,29 @@ int main(int argc, char** argv) {
       kdtree = false;
     else if (a == "--max-frames")
       max_frames = arg.count("--max-frames");
-    else if (a == "-h" || a == "--help") {
+    else if (a == "--min-points")
+      min_points = arg.count("--min-points");
+    else if (a == "--augment") {
+      const std::string v = arg.value("--augment");
+      int pc = 0, vc = 0;
+      const int n = std::sscanf(v.c_str(), "%d,%d", &pc, &vc);
+      if (n < 1 || pc < 0 || pc > 100 || vc < 0 || vc > 100) {
+        std::fprintf(stderr, "error: --augment needs P[,V] copies in [0, 100]\n");
+        return 2;
+      }
+      augment.person_copies = pc;
+      augment.vehicle_copies = n == 2 ? vc : 0;
+    } else if (a == "--decision")
+      decision_arg = arg.value("--decision");
+    else if (a == "--class-balance") {
+      const std::string v = arg.value("--class-balance");
+      char* end = nullptr;
+      tp.class_balance = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0') {
+        std::fprintf(stderr, "error: --class-balance needs a number in [0, 1]\n");
+        return 2;
+      }
+    } else if (a == "-h" || a == "--help") {
       usage();
       return 0;
     } else {
@@ -278,6 +407,17 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: --fragments must be reject or skip\n");
     return 2;
   }
+  if (decision_arg != "object" && decision_arg != "class") {
+    std::fprintf(stderr, "error: --decision must be object or class\n");
+    return 2;
+  }
+  if (min_points < 1) {
+    std::fprintf(stderr, "error: --min-points must be at least 1\n");
+    return 2;
+  }
+  const DecisionRule rule = decision_arg == "class" ? DecisionRule::kClass : DecisionRule::kObject;
+  core::EvaluationParams ep;
+  ep.min_points = static_cast<std::size_t>(min_points);
   const FragmentRule fragments =
       fragments_arg == "skip" ? FragmentRule::kSkip : FragmentRule::kReject;
   bool auto_threshold = threshold_arg == "auto";
@@ -306,6 +446,7 @@ int main(int argc, char** argv) {
   core::ObjectFeatureExtractor extractor(fp);
 
   core::SemanticKittiGroundTruthParams gtp;
+  gtp.min_points = 1;  // small objects are trained on; the scoring applies --min-points
   urban_detection::tools::SemanticKittiDataset dataset(skitti_dir, gtp);
   if (dataset.size() == 0) {
     std::fprintf(stderr, "error: no labelled scans in %s\n", skitti_dir.c_str());
@@ -314,6 +455,8 @@ int main(int argc, char** argv) {
 
   // 1-2. Pipeline, features, labels.
   std::vector<FrameData> frames;
+  const bool augmenting = augment.person_copies > 0 || augment.vehicle_copies > 0;
+  std::map<std::string, std::vector<core::LabelledScan>> scans_of_group;  // for augmentation
   std::FILE* csv = nullptr;
   if (!csv_path.empty()) {
     csv = std::fopen(csv_path.c_str(), "w");
@@ -366,13 +509,62 @@ int main(int argc, char** argv) {
         }
       }
     }
+    fd.gt_range = core::gtObjectRanges(f.gt, f.cloud);
+    if (augmenting) {
+      core::LabelledScan scan;
+      scan.cloud = f.cloud;
+      scan.labels.resize(f.cloud.size());
+      for (std::size_t i = 0; i < scan.labels.size(); ++i) {
+        const std::int32_t g = f.gt.object_of_point[i];
+        scan.labels[i] = f.point_class[i] | (g >= 0 ? f.gt.objects[g].id << 16 : 0u);
+      }
+      scans_of_group[fd.group].push_back(std::move(scan));
+    }
     fd.gt = std::move(f.gt);
     frames.push_back(std::move(fd));
   }
   if (csv) std::fclose(csv);
+  // Augmented examples: each sequence's objects copied into its own scans, so that they stay on
+  // the training side of every leave-one-sequence-out split.
+  std::size_t augmented_rows = 0;
+  for (const auto& kv : scans_of_group) {
+    std::vector<const core::LabelledScan*> scans;
+    for (const auto& sc : kv.second) scans.push_back(&sc);
+    core::AugmentParams ap = augment;
+    ap.seed =
+        augment.seed + static_cast<std::uint32_t>(std::hash<std::string>{}(kv.first) & 0xFFFF);
+    const std::vector<core::LabelledScan> made = core::augmentSequence(scans, ap);
+    for (std::size_t a = 0; a < made.size(); ++a) {
+      urban_detection::tools::Frame af;
+      af.id = kv.first + "/augmented_" + std::to_string(a);
+      af.cloud = made[a].cloud;
+      core::buildSemanticKittiGroundTruth(made[a].labels, gtp, &af.gt);
+      segmenter.segment(af.cloud, &seg);
+      core::extractForeground(af.cloud, seg, &foreground);
+      FrameData fd;
+      fd.id = af.id;
+      fd.group = kv.first;
+      fd.augmented = true;
+      fd.detectors.resize(detectors.size());
+      DetectorFrame& d = fd.detectors[0];  // the forest learns from the hierarchical grid
+      detectors[0]->detect(foreground, &d.objects);
+      core::FrameMatch m;
+      evaluator.evaluate(af.gt, d.objects, &m);
+      extractor.computeAll(foreground, d.objects, &d.features);
+      for (std::size_t i = 0; i < d.objects.size(); ++i) {
+        // Only the pasted objects are new; the rest of the scan is already in the table.
+        const bool pasted = m.verdict[i] == core::DetectionVerdict::kTrue &&
+                            af.gt.objects[m.matched_gt[i]].id >= core::kPastedInstanceBase;
+        d.labels.push_back(pasted ? core::categoryOfClassName(af.gt.objects[m.matched_gt[i]].label)
+                                  : core::ObjectCategory::kUnknown);
+        augmented_rows += pasted;
+      }
+      frames.push_back(std::move(fd));
+    }
+  }
   std::vector<std::string> groups;
   for (const FrameData& fd : frames) {
-    if (groups.empty() || groups.back() != fd.group) groups.push_back(fd.group);
+    if (!fd.augmented && (groups.empty() || groups.back() != fd.group)) groups.push_back(fd.group);
   }
   std::array<std::size_t, core::kNumObjectCategories> label_count{};
   std::size_t unlabelled = 0;
@@ -389,27 +581,31 @@ int main(int argc, char** argv) {
   for (int c = 0; c < core::kNumObjectCategories; ++c) {
     std::printf(" %s %zu", core::toString(static_cast<core::ObjectCategory>(c)), label_count[c]);
   }
-  std::printf(", not trained on %zu\n", unlabelled);
+  std::printf(", not trained on %zu (augmented rows among them: %zu)\n", unlabelled,
+              augmented_rows);
 
   const std::set<std::string> all_groups(groups.begin(), groups.end());
   std::ostringstream json;
-  double shipped_threshold = tp.object_threshold;
+  core::ClassDecision shipped_decision;
+  shipped_decision.object_threshold = tp.object_threshold;
   if (loso && groups.size() >= 2) {
     // 3. Leave one sequence out.
-    std::map<std::string, double> fold_threshold;
+    std::map<std::string, core::ClassDecision> fold_decision;
     for (const std::string& held : groups) {
       std::vector<std::string> train_groups;
       for (const std::string& g : groups) {
         if (g != held) train_groups.push_back(g);
       }
       core::ClassifierTrainingParams fold_tp = tp;
-      if (auto_threshold) fold_tp.object_threshold = innerThreshold(&frames, train_groups, tp, fp);
-      fold_threshold[held] = fold_tp.object_threshold;
+      core::ClassDecision d;
+      d.object_threshold = tp.object_threshold;
+      if (auto_threshold) d = innerDecision(&frames, train_groups, tp, fp, ep, rule);
+      fold_decision[held] = d;
       const core::ObjectClassifierModel m = trainOn(
           frames, std::set<std::string>(train_groups.begin(), train_groups.end()), fold_tp, fp);
       for (FrameData& fd : frames) {
-        if (fd.group != held) continue;
-        for (DetectorFrame& d : fd.detectors) m.predict(d.features, &d.held_out);
+        if (fd.augmented || fd.group != held) continue;
+        for (DetectorFrame& dk : fd.detectors) m.predict(dk.features, &dk.held_out);
       }
     }
     auto held_out = [&](std::size_t k) {
@@ -417,61 +613,94 @@ int main(int argc, char** argv) {
         return frames[fi].detectors[k].held_out[i];
       };
     };
-    // Each sequence scored with its own fold's threshold.
-    std::vector<std::map<std::string, core::DetectionScore>> off(detectors.size()),
-        on(detectors.size());
-    std::vector<core::DetectionScore> off_total(detectors.size()), on_total(detectors.size());
+    // Each sequence scored with its own fold's decision.
+    std::vector<std::map<std::string, Scored>> off(detectors.size()), on(detectors.size());
+    std::vector<Scored> off_total(detectors.size()), on_total(detectors.size());
     for (std::size_t k = 0; k < detectors.size(); ++k) {
-      off_total[k] = score(frames, all_groups, k, -1.0, held_out(k), &off[k]);
+      off_total[k] = score(frames, all_groups, k, nullptr, held_out(k), ep, &off[k]);
       for (const std::string& g : groups) {
-        on_total[k] += score(frames, {g}, k, fold_threshold[g], held_out(k), &on[k]);
+        const Scored sg = score(frames, {g}, k, &fold_decision[g], held_out(k), ep, &on[k]);
+        on_total[k].score += sg.score;
+        on_total[k].all += sg.all;
+        on_total[k].breakdown += sg.breakdown;
       }
     }
-    std::printf("\nleave-one-sequence-out, intensity features %s, fragments %s\n",
-                tp.use_intensity ? "on" : "off", fragments_arg.c_str());
-    std::printf("%-8s %-18s %9s | %-43s | %-43s\n", "seq", "detector", "threshold",
+    std::printf(
+        "\nleave-one-sequence-out, intensity features %s, fragments %s, decision %s, class "
+        "balance %.2f; objects and detections under %ld points count only when matched (N = 1: "
+        "every object)\n",
+        tp.use_intensity ? "on" : "off", fragments_arg.c_str(), decision_arg.c_str(),
+        tp.class_balance, min_points);
+    std::printf("%-8s %-18s %-22s | %-43s | %-43s\n", "seq", "detector", "object/veh/ped/cyc/unc",
                 "classifier off: NO MO FO P R F", "classifier on: NO MO FO P R F");
+    auto decisionText = [](const core::ClassDecision& d) {
+      char b[64];
+      std::snprintf(b, sizeof b, "%.2f/%.2f/%.2f/%.2f/%.2f", d.object_threshold,
+                    d.class_thresholds[0], d.class_thresholds[1], d.class_thresholds[2],
+                    d.uncertain_threshold);
+      return std::string(b);
+    };
+    auto decisionJson = [](const core::ClassDecision& d) {
+      std::ostringstream o;
+      o << "{\"object\": " << jsonNumber(d.object_threshold)
+        << ", \"vehicle\": " << jsonNumber(d.class_thresholds[0])
+        << ", \"pedestrian\": " << jsonNumber(d.class_thresholds[1])
+        << ", \"cyclist\": " << jsonNumber(d.class_thresholds[2])
+        << ", \"uncertain\": " << jsonNumber(d.uncertain_threshold) << "}";
+      return o.str();
+    };
     json << "{\n  \"dataset\": \"semantic_kitti\",\n  \"path\": \"" << jsonEscape(skitti_dir)
          << "\",\n  \"scans\": " << frames.size()
          << ",\n  \"intensity_features\": " << (tp.use_intensity ? "true" : "false")
          << ",\n  \"fragments\": \"" << fragments_arg << "\",\n  \"trees\": " << tp.trees
-         << ",\n  \"loso\": {";
+         << ",\n  \"min_points\": " << min_points << ",\n  \"decision\": \"" << decision_arg
+         << "\",\n  \"class_balance\": " << jsonNumber(tp.class_balance) << ",\n  \"loso\": {";
     for (std::size_t k = 0; k < detectors.size(); ++k) {
       json << (k ? ",\n" : "\n") << "    \"" << detectors[k]->name() << "\": {\"sequences\": {";
       bool first = true;
       for (const std::string& g : groups) {
-        std::printf("%-8s %-18s %9.2f | %s | %s\n", g.c_str(), detectors[k]->name().c_str(),
-                    fold_threshold[g], scoreRow(off[k][g]).c_str(), scoreRow(on[k][g]).c_str());
+        std::printf("%-8s %-18s %-22s | %s | %s\n", g.c_str(), detectors[k]->name().c_str(),
+                    decisionText(fold_decision[g]).c_str(), scoreRow(off[k][g].score).c_str(),
+                    scoreRow(on[k][g].score).c_str());
         json << (first ? "" : ", ") << "\"" << g
-             << "\": {\"threshold\": " << jsonNumber(fold_threshold[g])
-             << ", \"off\": " << scoreJson(off[k][g]) << ", \"on\": " << scoreJson(on[k][g]) << "}";
+             << "\": {\"decision\": " << decisionJson(fold_decision[g])
+             << ", \"off\": " << scoreJson(off[k][g].score)
+             << ", \"on\": " << scoreJson(on[k][g].score) << "}";
         first = false;
       }
-      std::printf("%-8s %-18s %9s | %s | %s\n", "pooled", detectors[k]->name().c_str(), "",
-                  scoreRow(off_total[k]).c_str(), scoreRow(on_total[k]).c_str());
+      std::printf("%-8s %-18s %-22s | %s | %s\n", "pooled", detectors[k]->name().c_str(), "",
+                  scoreRow(off_total[k].score).c_str(), scoreRow(on_total[k].score).c_str());
+      std::printf("%-8s %-18s %-22s | %s | %s\n", "N = 1", detectors[k]->name().c_str(), "",
+                  scoreRow(off_total[k].all).c_str(), scoreRow(on_total[k].all).c_str());
       double min_f = 1.0;
-      for (const std::string& g : groups) min_f = std::min(min_f, on[k][g].fRate());
-      json << "}, \"pooled_off\": " << scoreJson(off_total[k])
-           << ", \"pooled_on\": " << scoreJson(on_total[k])
+      for (const std::string& g : groups) min_f = std::min(min_f, on[k][g].score.fRate());
+      json << "}, \"pooled_off\": " << scoreJson(off_total[k].score)
+           << ", \"pooled_on\": " << scoreJson(on_total[k].score)
+           << ", \"pooled_off_all_objects\": " << scoreJson(off_total[k].all)
+           << ", \"pooled_on_all_objects\": " << scoreJson(on_total[k].all)
+           << ", \"breakdown_off\": " << off_total[k].breakdown.json()
+           << ", \"breakdown_on\": " << on_total[k].breakdown.json()
            << ", \"min_sequence_f_on\": " << jsonNumber(min_f) << "}";
     }
     json << "\n  },\n";
-    // Pooled confusion matrix of the held-out predictions (hierarchical grid, argmax rule of
-    // the classification stage with each fold's threshold).
+    for (std::size_t k = 0; k < detectors.size(); ++k) {
+      std::printf("\n%s, held out, classifier off:\n%s", detectors[k]->name().c_str(),
+                  off_total[k].breakdown.table("  ").c_str());
+      std::printf("%s, held out, classifier on:\n%s", detectors[k]->name().c_str(),
+                  on_total[k].breakdown.table("  ").c_str());
+    }
+    // Pooled confusion matrix of the held-out predictions (hierarchical grid, each fold's
+    // decision).
     std::array<std::array<std::size_t, core::kNumObjectCategories>, core::kNumObjectCategories>
         confusion{};
     for (const FrameData& fd : frames) {
+      if (fd.augmented) continue;
       const DetectorFrame& d = fd.detectors[0];
       for (std::size_t i = 0; i < d.objects.size(); ++i) {
         if (d.labels[i] == core::ObjectCategory::kUnknown) continue;
-        const Probabilities& p = d.held_out[i];
-        int pred = 0;
-        if (1.0 - p[0] >= fold_threshold[fd.group]) {
-          pred = 1;
-          for (int c = 2; c < core::kNumObjectCategories; ++c) {
-            if (p[c] > p[pred]) pred = c;
-          }
-        }
+        float confidence = 0.0f;
+        const int pred = static_cast<int>(
+            core::decideClass(d.held_out[i], fold_decision[fd.group], true, &confidence));
         ++confusion[static_cast<int>(d.labels[i])][pred];
       }
     }
@@ -493,19 +722,24 @@ int main(int argc, char** argv) {
       std::printf("\n");
     }
     json << "],\n";
-    // 4. The shipped threshold: best pooled F of the held-out predictions.
-    if (auto_threshold) shipped_threshold = bestThreshold(frames, all_groups, held_out(0));
+    // 4. The shipped decision: chosen on the pooled held-out predictions.
+    if (auto_threshold) {
+      shipped_decision = bestDecision(frames, all_groups, held_out(0), ep, rule);
+    }
   } else if (auto_threshold) {
     std::printf("no leave-one-sequence-out run: threshold 0.5\n");
-    shipped_threshold = 0.5;
+    shipped_decision.object_threshold = 0.5;
   }
 
   if (!out_path.empty()) {
     core::ClassifierTrainingParams final_tp = tp;
-    final_tp.object_threshold = shipped_threshold;
+    final_tp.object_threshold = shipped_decision.object_threshold;
+    final_tp.class_thresholds = shipped_decision.class_thresholds;
+    final_tp.uncertain_threshold = shipped_decision.uncertain_threshold;
     std::ostringstream desc;
     desc << "random forest, " << tp.trees << " trees, max depth " << tp.max_depth
-         << ", min samples " << tp.min_sample_count << ", intensity features "
+         << ", min samples " << tp.min_sample_count << ", class balance " << tp.class_balance
+         << ", decision " << decision_arg << ", intensity features "
          << (tp.use_intensity ? "on" : "off") << ", fragments " << fragments_arg << "; trained on "
          << frames.size() << " SemanticKITTI scans of sequences";
     for (const std::string& g : groups) desc << " " << g;
@@ -519,13 +753,23 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "error: %s\n", e.what());
       return 1;
     }
-    std::printf("\nmodel: %s (threshold %.2f)\n", out_path.c_str(), shipped_threshold);
+    std::printf(
+        "\nmodel: %s (thresholds object %.2f, vehicle %.2f, pedestrian %.2f, cyclist %.2f, "
+        "uncertain %.2f)\n",
+        out_path.c_str(), shipped_decision.object_threshold, shipped_decision.class_thresholds[0],
+        shipped_decision.class_thresholds[1], shipped_decision.class_thresholds[2],
+        shipped_decision.uncertain_threshold);
   }
   if (!json_path.empty()) {
     if (json.tellp() == 0) {
       json << "{\n  \"dataset\": \"semantic_kitti\",\n  \"scans\": " << frames.size() << ",\n";
     }
-    json << "  \"threshold\": " << jsonNumber(shipped_threshold) << "\n}\n";
+    json << "  \"threshold\": " << jsonNumber(shipped_decision.object_threshold)
+         << ",\n  \"class_thresholds\": [" << jsonNumber(shipped_decision.class_thresholds[0])
+         << ", " << jsonNumber(shipped_decision.class_thresholds[1]) << ", "
+         << jsonNumber(shipped_decision.class_thresholds[2])
+         << "],\n  \"uncertain_threshold\": " << jsonNumber(shipped_decision.uncertain_threshold)
+         << "\n}\n";
     std::ofstream out(json_path);
     out << json.str();
     if (!out) {

@@ -275,6 +275,100 @@ TEST(AssignMaxIou, AgreesWithBruteForce) {
   }
 }
 
+// ------------------------------------------------------------------------------------------
+// Small objects count only when matched (min_points; SemanticKITTI's panoptic convention).
+
+TEST(DetectionEvaluatorMinPoints, UnmatchedSmallDetectionIsNotFalse) {
+  // A 29-point detection of background points: false with every object counting, ignored
+  // under the 30-point rule.
+  const auto gt = frame(200, {{0, 49}});
+  EvaluationParams p;
+  p.min_points = 30;
+  DetectionEvaluator small_rule(p);
+  DetectionEvaluator all;
+  FrameMatch m;
+  const std::vector<DetectedObject> dets = {det(0, 49), det(100, 128)};  // 50 + 29 points
+  small_rule.evaluate(gt, dets, &m);
+  EXPECT_EQ(m.score.no, 1u);
+  EXPECT_EQ(m.score.tp, 1u);
+  EXPECT_EQ(m.score.fo, 0u);
+  EXPECT_EQ(m.score.ignored, 1u);
+  EXPECT_EQ(m.verdict[1], DetectionVerdict::kIgnored);
+  all.evaluate(gt, dets, &m);
+  EXPECT_EQ(m.score.fo, 1u);
+  EXPECT_EQ(m.verdict[1], DetectionVerdict::kFalse);
+  // 30 points is not small: false under both rules.
+  small_rule.evaluate(gt, {det(0, 49), det(100, 129)}, &m);
+  EXPECT_EQ(m.score.fo, 1u);
+}
+
+TEST(DetectionEvaluatorMinPoints, MatchedSmallObjectCounts) {
+  // GT objects of 20 and 40 points. Found: the small one counts as a true positive and in NO.
+  const auto gt = frame(200, {{0, 19}, {50, 89}});
+  EvaluationParams p;
+  p.min_points = 30;
+  DetectionEvaluator ev(p);
+  FrameMatch m;
+  ev.evaluate(gt, {det(0, 19), det(50, 89)}, &m);
+  EXPECT_EQ(m.score.no, 2u);
+  EXPECT_EQ(m.score.tp, 2u);
+  EXPECT_EQ(m.verdict[0], DetectionVerdict::kTrue);
+  // Missed: the small one is not counted at all, the large one is a miss.
+  ev.evaluate(gt, {}, &m);
+  EXPECT_EQ(m.score.no, 1u);
+  EXPECT_EQ(m.score.mo, 1u);
+  // A 29-point detection matching a 29-point object is a true positive.
+  const auto gt29 = frame(200, {{0, 28}});
+  ev.evaluate(gt29, {det(0, 28)}, &m);
+  EXPECT_EQ(m.score.no, 1u);
+  EXPECT_EQ(m.score.tp, 1u);
+  EXPECT_EQ(m.score.fo, 0u);
+  // Under N = 1 the missed small object is a miss too.
+  DetectionEvaluator all;
+  all.evaluate(gt, {}, &m);
+  EXPECT_EQ(m.score.no, 2u);
+  EXPECT_EQ(m.score.mo, 2u);
+}
+
+TEST(RecallBreakdown, CountsPerClassPointsAndRange) {
+  EvalFrame gt = frame(400, {{0, 19}, {20, 119}, {200, 399}});
+  gt.objects[0].label = "person";
+  gt.objects[1].label = "person";
+  gt.objects[2].label = "car";
+  EvaluationParams p;
+  p.min_points = 30;
+  DetectionEvaluator ev(p);
+  FrameMatch m;
+  std::vector<DetectedObject> dets = {det(20, 119), det(200, 399)};
+  dets[0].category = ObjectCategory::kPedestrian;
+  dets[1].category = ObjectCategory::kPedestrian;  // a car called pedestrian
+  ev.evaluate(gt, dets, &m);
+  RecallBreakdown b;
+  b.addFrame(gt, m, dets, {5.0f, 25.0f, 45.0f}, p.min_points);
+  // Persons: the 20-point one is missed and small (not counted), the 100-point one found.
+  EXPECT_EQ(b.by_class[1].total, 1u);
+  EXPECT_EQ(b.by_class[1].found, 1u);
+  EXPECT_EQ(b.by_class[0].total, 1u);
+  EXPECT_EQ(b.by_class[0].found, 1u);
+  EXPECT_EQ(b.class_kept[0], 1u);
+  EXPECT_EQ(b.class_correct[0], 0u);
+  EXPECT_DOUBLE_EQ(b.classAccuracy(1), 1.0);
+  // By points and range every object counts: <30 (missed), 100-300 (found), >=300... the car
+  // has 200 points: 100-300.
+  EXPECT_EQ(b.by_points[0].total, 1u);
+  EXPECT_EQ(b.by_points[0].found, 0u);
+  EXPECT_EQ(b.by_points[2].total, 2u);
+  EXPECT_EQ(b.by_points[2].found, 2u);
+  EXPECT_EQ(b.by_range[0].found, 0u);
+  EXPECT_EQ(b.by_range[1].found, 1u);
+  EXPECT_EQ(b.by_range[2].found, 1u);
+  EXPECT_EQ(b.class_by_range[1][0].total, 1u);
+  RecallBreakdown twice = b;
+  twice += b;
+  EXPECT_EQ(twice.by_points[2].total, 4u);
+  EXPECT_NE(b.json().find("\"pedestrian\""), std::string::npos);
+}
+
 }  // namespace
 }  // namespace core
 }  // namespace urban_detection

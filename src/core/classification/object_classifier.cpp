@@ -47,44 +47,6 @@ bool parseObjectCategory(const std::string& name, ObjectCategory* c) {
   return false;
 }
 
-ObjectCategory categoryOfClassName(const std::string& name) {
-  static const char* const kVehicles[] = {"car",
-                                          "truck",
-                                          "bus",
-                                          "other-vehicle",
-                                          "on-rails",
-                                          "moving-car",
-                                          "moving-bus",
-                                          "moving-truck",
-                                          "moving-other-vehicle",
-                                          "moving-on-rails",
-                                          "Car",
-                                          "Van",
-                                          "Truck",
-                                          "Tram",
-                                          "van",
-                                          "vehicle"};
-  static const char* const kPedestrians[] = {"person", "moving-person", "Pedestrian",
-                                             "Person_sitting", "pedestrian"};
-  static const char* const kCyclists[] = {"bicyclist",  "motorcyclist",     "bicycle",
-                                          "motorcycle", "moving-bicyclist", "moving-motorcyclist",
-                                          "Cyclist",    "cyclist"};
-  static const char* const kOthers[] = {"other-object", "Misc", "bin", "bench", "other_object"};
-  for (const char* n : kVehicles) {
-    if (name == n) return ObjectCategory::kVehicle;
-  }
-  for (const char* n : kPedestrians) {
-    if (name == n) return ObjectCategory::kPedestrian;
-  }
-  for (const char* n : kCyclists) {
-    if (name == n) return ObjectCategory::kCyclist;
-  }
-  for (const char* n : kOthers) {
-    if (name == n) return ObjectCategory::kOtherObject;
-  }
-  return ObjectCategory::kUnknown;
-}
-
 std::string validate(const ClassifierTrainingParams& p) {
   std::string error;
   auto require = [&error](bool ok, const char* field, const char* range) {
@@ -99,7 +61,52 @@ std::string validate(const ClassifierTrainingParams& p) {
   require(
       std::isfinite(p.object_threshold) && p.object_threshold >= 0.0 && p.object_threshold <= 1.0,
       "object_threshold", "in [0, 1]");
+  for (const double t : p.class_thresholds) {
+    require(std::isfinite(t) && t >= 0.0 && t <= 1.0, "class_thresholds", "in [0, 1]");
+  }
+  require(std::isfinite(p.uncertain_threshold) && p.uncertain_threshold >= 0.0 &&
+              p.uncertain_threshold <= 1.0,
+          "uncertain_threshold", "in [0, 1]");
+  require(std::isfinite(p.class_balance) && p.class_balance >= 0.0 && p.class_balance <= 1.0,
+          "class_balance", "in [0, 1]");
   return error;
+}
+
+ObjectCategory decideClass(const std::array<float, 5>& p, const ClassDecision& d,
+                           bool keep_uncertain, float* confidence, bool* uncertain) {
+  if (uncertain) *uncertain = false;
+  static_assert(kNumObjectCategories == 5, "vote shares of five classes");
+  // An object class sure enough on its own (rare classes get lower thresholds).
+  int chosen = -1;
+  double best_ratio = 0.0;
+  for (int c = 1; c <= 3; ++c) {
+    const double t = d.class_thresholds[static_cast<std::size_t>(c - 1)];
+    if (p[c] > 0.0f && p[c] >= t) {
+      const double ratio = t > 0.0 ? p[c] / t : 1e9;
+      if (ratio > best_ratio) {
+        best_ratio = ratio;
+        chosen = c;
+      }
+    }
+  }
+  const double p_object = 1.0 - p[0];
+  if (chosen < 0 && p_object >= d.object_threshold) {
+    chosen = 1;
+    for (int c = 2; c < kNumObjectCategories; ++c) {
+      if (p[c] > p[chosen]) chosen = c;
+    }
+  }
+  if (chosen >= 0) {
+    *confidence = p[chosen];
+    return static_cast<ObjectCategory>(chosen);
+  }
+  if (keep_uncertain && p_object >= d.uncertain_threshold) {
+    if (uncertain) *uncertain = true;
+    *confidence = static_cast<float>(p_object);
+    return ObjectCategory::kOtherObject;
+  }
+  *confidence = p[0];
+  return ObjectCategory::kNonObject;
 }
 
 std::string validate(const ObjectClassifierParams& p) {
@@ -160,17 +167,28 @@ ObjectClassifierModel ObjectClassifierModel::train(const std::vector<ObjectFeatu
   }
   ObjectClassifierModel m;
   m.use_intensity_ = params.use_intensity;
-  m.object_threshold_ = params.object_threshold;
+  m.decision_.object_threshold = params.object_threshold;
+  m.decision_.class_thresholds = params.class_thresholds;
+  m.decision_.uncertain_threshold = params.uncertain_threshold;
   m.feature_params_ = feature_params;
   m.description_ = params.description;
   const int used = m.usedFeatures();
   const cv::Mat samples = sampleMatrix(rows, used);
   const cv::Mat responses(static_cast<int>(labels.size()), 1, CV_32S, labels.data());
+  // Class balance as row weights (the forest weighs its split impurity and leaf votes by them).
+  std::size_t present = 0;
+  for (const std::size_t n : count) present += n > 0;
+  cv::Mat weights(static_cast<int>(labels.size()), 1, CV_32F);
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    const double share = static_cast<double>(rows.size()) /
+                         (static_cast<double>(present) * static_cast<double>(count[labels[i]]));
+    weights.at<float>(static_cast<int>(i)) =
+        static_cast<float>(std::pow(share, params.class_balance));
+  }
   cv::Mat var_type(1, used + 1, CV_8U, cv::Scalar(cv::ml::VAR_ORDERED));
   var_type.at<std::uint8_t>(0, used) = cv::ml::VAR_CATEGORICAL;
-  const cv::Ptr<cv::ml::TrainData> data =
-      cv::ml::TrainData::create(samples, cv::ml::ROW_SAMPLE, responses, cv::noArray(),
-                                cv::noArray(), cv::noArray(), var_type);
+  const cv::Ptr<cv::ml::TrainData> data = cv::ml::TrainData::create(
+      samples, cv::ml::ROW_SAMPLE, responses, cv::noArray(), cv::noArray(), weights, var_type);
   cv::Ptr<cv::ml::RTrees> forest = cv::ml::RTrees::create();
   forest->setMaxDepth(params.max_depth);
   forest->setMinSampleCount(params.min_sample_count);
@@ -198,7 +216,11 @@ void ObjectClassifierModel::save(const std::string& path) const {
     }
     fs << "format" << kFormat << "version" << kVersion;
     fs << "description" << description_;
-    fs << "object_threshold" << object_threshold_;
+    fs << "object_threshold" << decision_.object_threshold;
+    fs << "class_thresholds"
+       << "[" << decision_.class_thresholds[0] << decision_.class_thresholds[1]
+       << decision_.class_thresholds[2] << "]";
+    fs << "uncertain_threshold" << decision_.uncertain_threshold;
     fs << "use_intensity" << static_cast<int>(use_intensity_);
     fs << "feature_params"
        << "{"
@@ -248,7 +270,25 @@ ObjectClassifierModel ObjectClassifierModel::load(const std::string& path) {
     double threshold = -1.0;
     fs["object_threshold"] >> threshold;
     if (!(threshold >= 0.0 && threshold <= 1.0)) refuse(path, "object_threshold not in [0, 1]");
-    m.object_threshold_ = threshold;
+    m.decision_.object_threshold = threshold;
+    // Optional (files without them: only the object threshold decides).
+    const cv::FileNode ct = fs["class_thresholds"];
+    if (!ct.empty()) {
+      std::vector<double> t;
+      ct >> t;
+      if (t.size() != 3) refuse(path, "class_thresholds must list 3 probabilities");
+      for (std::size_t k = 0; k < 3; ++k) {
+        if (!(t[k] >= 0.0 && t[k] <= 1.0)) refuse(path, "class_thresholds not in [0, 1]");
+        m.decision_.class_thresholds[k] = t[k];
+      }
+    }
+    const cv::FileNode ut = fs["uncertain_threshold"];
+    if (!ut.empty()) {
+      double u = -1.0;
+      ut >> u;
+      if (!(u >= 0.0 && u <= 1.0)) refuse(path, "uncertain_threshold not in [0, 1]");
+      m.decision_.uncertain_threshold = u;
+    }
     int use_intensity = -1;
     fs["use_intensity"] >> use_intensity;
     if (use_intensity != 0 && use_intensity != 1) refuse(path, "use_intensity must be 0 or 1");
@@ -412,13 +452,15 @@ double ObjectClassifier::threshold() const {
                                                : model_.objectThreshold();
 }
 
-void ObjectClassifier::setDecision(double min_object_probability, bool reject_non_objects) {
+void ObjectClassifier::setDecision(double min_object_probability, bool reject_non_objects,
+                                   bool keep_uncertain) {
   if (!std::isfinite(min_object_probability) || min_object_probability < -1.0 ||
       min_object_probability > 1.0) {
     throw std::invalid_argument("ObjectClassifier: min_object_probability must be in [-1, 1]");
   }
   params_.min_object_probability = min_object_probability;
   params_.reject_non_objects = reject_non_objects;
+  params_.keep_uncertain = keep_uncertain;
 }
 
 ObjectClassifierStats ObjectClassifier::apply(const LabeledCloud& foreground,
@@ -434,23 +476,19 @@ ObjectClassifierStats ObjectClassifier::apply(const LabeledCloud& foreground,
   }
   extractor_.computeAll(foreground, *objects, &features_);
   model_.predict(features_, &probabilities_);
-  const double t = threshold();
+  ClassDecision decision = model_.decision();
+  if (params_.min_object_probability >= 0.0) {
+    // An explicit object threshold replaces the model's whole decision by that one rule.
+    decision = ClassDecision();
+    decision.object_threshold = params_.min_object_probability;
+  }
   kept_.clear();
   for (std::size_t i = 0; i < objects->size(); ++i) {
     DetectedObject& o = (*objects)[i];
     const auto& p = probabilities_[i];
-    const double p_object = 1.0 - p[0];
-    int best = 1;
-    for (int c = 2; c < kNumObjectCategories; ++c) {
-      if (p[c] > p[best]) best = c;
-    }
-    if (p_object >= t) {
-      o.category = static_cast<ObjectCategory>(best);
-      o.class_confidence = p[best];
-    } else {
-      o.category = ObjectCategory::kNonObject;
-      o.class_confidence = p[0];
-    }
+    bool uncertain = false;
+    o.category = decideClass(p, decision, params_.keep_uncertain, &o.class_confidence, &uncertain);
+    s.uncertain += uncertain;
     ++s.by_class[static_cast<int>(o.category)];
     if (o.category == ObjectCategory::kNonObject) {
       ++s.rejected;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <sstream>
 
 #include <dlib/optimization/max_cost_assignment.h>
 
@@ -172,16 +174,19 @@ void DetectionEvaluator::evaluate(const EvalFrame& gt,
   }
 
   DetectionScore& s = m.score;
-  for (const auto& o : gt.objects) {
-    if (!o.ignored) ++s.no;
+  // Small objects (min_points) count only when matched.
+  for (std::size_t g = 0; g < num_gt; ++g) {
+    const EvalObject& o = gt.objects[g];
+    if (!o.ignored && (o.num_points >= params_.min_points || m.matched_detection[g] >= 0)) ++s.no;
   }
   for (std::size_t d = 0; d < num_det; ++d) {
     DetectionVerdict v;
     if (m.matched_gt[d] >= 0) {
       v = gt.objects[m.matched_gt[d]].ignored ? DetectionVerdict::kIgnored
                                               : DetectionVerdict::kTrue;
-    } else if (scored[d] == 0 || static_cast<double>(dont_care[d]) >
-                                     params_.ignore_majority * static_cast<double>(scored[d])) {
+    } else if (scored[d] == 0 || scored[d] < params_.min_points ||
+               static_cast<double>(dont_care[d]) >
+                   params_.ignore_majority * static_cast<double>(scored[d])) {
       v = DetectionVerdict::kIgnored;
     } else {
       v = DetectionVerdict::kFalse;
@@ -194,6 +199,193 @@ void DetectionEvaluator::evaluate(const EvalFrame& gt,
   s.mo = s.no - s.tp;
   s.detections = num_det;
   total_ += s;
+}
+
+// ------------------------------------------------------------------------------------------
+// RecallBreakdown
+
+const char* RecallBreakdown::className(int c) {
+  static const char* const kNames[kClasses] = {"vehicle", "pedestrian", "cyclist", "other_object"};
+  return c >= 0 && c < kClasses ? kNames[c] : "?";
+}
+
+const char* RecallBreakdown::pointBinName(int b) {
+  static const char* const kNames[kPointBins] = {"<30", "30-100", "100-300", ">=300"};
+  return b >= 0 && b < kPointBins ? kNames[b] : "?";
+}
+
+const char* RecallBreakdown::rangeBinName(int b) {
+  static const char* const kNames[kRangeBins] = {"<20m", "20-40m", ">=40m"};
+  return b >= 0 && b < kRangeBins ? kNames[b] : "?";
+}
+
+int RecallBreakdown::classIndex(const std::string& gt_label) {
+  switch (categoryOfClassName(gt_label)) {
+    case ObjectCategory::kVehicle:
+      return 0;
+    case ObjectCategory::kPedestrian:
+      return 1;
+    case ObjectCategory::kCyclist:
+      return 2;
+    case ObjectCategory::kOtherObject:
+      return 3;
+    default:
+      return -1;
+  }
+}
+
+namespace {
+
+int pointBin(std::size_t n) {
+  return n < 30 ? 0 : n < 100 ? 1 : n < 300 ? 2 : 3;
+}
+
+int rangeBin(float r) {
+  return r < 20.0f ? 0 : r < 40.0f ? 1 : 2;
+}
+
+ObjectCategory categoryOfIndex(int c) {
+  static const ObjectCategory kCats[RecallBreakdown::kClasses] = {
+      ObjectCategory::kVehicle, ObjectCategory::kPedestrian, ObjectCategory::kCyclist,
+      ObjectCategory::kOtherObject};
+  return kCats[c];
+}
+
+}  // namespace
+
+void RecallBreakdown::addFrame(const EvalFrame& gt, const FrameMatch& match,
+                               const std::vector<DetectedObject>& detections,
+                               const std::vector<float>& gt_range_m, std::size_t min_points) {
+  for (std::size_t g = 0; g < gt.objects.size(); ++g) {
+    const EvalObject& o = gt.objects[g];
+    if (o.ignored) continue;
+    const bool found = g < match.matched_detection.size() && match.matched_detection[g] >= 0;
+    const int c = classIndex(o.label);
+    const int pb = pointBin(o.num_points);
+    const int rb = rangeBin(g < gt_range_m.size() ? gt_range_m[g] : 0.0f);
+    by_points[pb].total += 1;
+    by_points[pb].found += found;
+    by_range[rb].total += 1;
+    by_range[rb].found += found;
+    if (c < 0) continue;
+    class_by_points[c][pb].total += 1;
+    class_by_points[c][pb].found += found;
+    class_by_range[c][rb].total += 1;
+    class_by_range[c][rb].found += found;
+    if (o.num_points >= min_points || found) {
+      by_class[c].total += 1;
+      by_class[c].found += found;
+    }
+    if (found) {
+      const std::int32_t d = match.matched_detection[g];
+      if (static_cast<std::size_t>(d) < detections.size()) {
+        ++class_kept[c];
+        class_correct[c] += detections[d].category == categoryOfIndex(c);
+      }
+    }
+  }
+}
+
+RecallBreakdown& RecallBreakdown::operator+=(const RecallBreakdown& o) {
+  for (int c = 0; c < kClasses; ++c) {
+    by_class[c] += o.by_class[c];
+    class_kept[c] += o.class_kept[c];
+    class_correct[c] += o.class_correct[c];
+    for (int b = 0; b < kPointBins; ++b) class_by_points[c][b] += o.class_by_points[c][b];
+    for (int b = 0; b < kRangeBins; ++b) class_by_range[c][b] += o.class_by_range[c][b];
+  }
+  for (int b = 0; b < kPointBins; ++b) by_points[b] += o.by_points[b];
+  for (int b = 0; b < kRangeBins; ++b) by_range[b] += o.by_range[b];
+  return *this;
+}
+
+double RecallBreakdown::classAccuracy(int c) const {
+  return class_kept[c] == 0 ? 1.0 : static_cast<double>(class_correct[c]) / class_kept[c];
+}
+
+std::string RecallBreakdown::table(const std::string& indent) const {
+  std::ostringstream o;
+  char b[200];
+  auto cell = [&b](const Count& k) {
+    std::snprintf(b, sizeof b, " %4zu/%-4zu %5.3f", k.found, k.total, k.recall());
+    return std::string(b);
+  };
+  o << indent << "recall per class (min-points rule) and class right of the kept:\n";
+  for (int c = 0; c < kClasses; ++c) {
+    std::snprintf(b, sizeof b, "%s  %-13s", indent.c_str(), className(c));
+    o << b << cell(by_class[c]);
+    std::snprintf(b, sizeof b, "   class right %4zu/%-4zu\n", class_correct[c], class_kept[c]);
+    o << b;
+  }
+  o << indent << "recall by points (every GT object): ";
+  for (int k = 0; k < kPointBins; ++k) o << " " << pointBinName(k) << cell(by_points[k]);
+  o << "\n" << indent << "recall by range (every GT object):  ";
+  for (int k = 0; k < kRangeBins; ++k) o << " " << rangeBinName(k) << cell(by_range[k]);
+  o << "\n";
+  for (int c = 0; c < 3; ++c) {
+    std::snprintf(b, sizeof b, "%s  %-11s points:", indent.c_str(), className(c));
+    o << b;
+    for (int k = 0; k < kPointBins; ++k) o << " " << pointBinName(k) << cell(class_by_points[c][k]);
+    o << "  range:";
+    for (int k = 0; k < kRangeBins; ++k) o << " " << rangeBinName(k) << cell(class_by_range[c][k]);
+    o << "\n";
+  }
+  return o.str();
+}
+
+std::string RecallBreakdown::json() const {
+  std::ostringstream o;
+  auto count = [](const Count& k) {
+    std::ostringstream c;
+    c << "{\"found\": " << k.found << ", \"total\": " << k.total << ", \"recall\": " << k.recall()
+      << "}";
+    return c.str();
+  };
+  o << "{\"by_class\": {";
+  for (int c = 0; c < kClasses; ++c) {
+    o << (c ? ", " : "") << "\"" << className(c) << "\": {\"recall\": " << count(by_class[c])
+      << ", \"kept\": " << class_kept[c] << ", \"class_right\": " << class_correct[c]
+      << ", \"by_points\": {";
+    for (int k = 0; k < kPointBins; ++k) {
+      o << (k ? ", " : "") << "\"" << pointBinName(k) << "\": " << count(class_by_points[c][k]);
+    }
+    o << "}, \"by_range\": {";
+    for (int k = 0; k < kRangeBins; ++k) {
+      o << (k ? ", " : "") << "\"" << rangeBinName(k) << "\": " << count(class_by_range[c][k]);
+    }
+    o << "}}";
+  }
+  o << "}, \"by_points\": {";
+  for (int k = 0; k < kPointBins; ++k) {
+    o << (k ? ", " : "") << "\"" << pointBinName(k) << "\": " << count(by_points[k]);
+  }
+  o << "}, \"by_range\": {";
+  for (int k = 0; k < kRangeBins; ++k) {
+    o << (k ? ", " : "") << "\"" << rangeBinName(k) << "\": " << count(by_range[k]);
+  }
+  o << "}}";
+  return o.str();
+}
+
+std::vector<float> gtObjectRanges(const EvalFrame& gt, const CloudXYZIRT& cloud) {
+  const std::size_t n = std::min(cloud.size(), gt.object_of_point.size());
+  const bool has_roles = gt.role.size() == gt.object_of_point.size();
+  std::vector<double> sx(gt.objects.size(), 0.0), sy(gt.objects.size(), 0.0);
+  std::vector<std::size_t> cnt(gt.objects.size(), 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t g = gt.object_of_point[i];
+    if (g < 0 || static_cast<std::size_t>(g) >= gt.objects.size()) continue;
+    if (has_roles && gt.role[i] == PointRole::kExcluded) continue;
+    if (!std::isfinite(cloud[i].x) || !std::isfinite(cloud[i].y)) continue;
+    sx[g] += cloud[i].x;
+    sy[g] += cloud[i].y;
+    ++cnt[g];
+  }
+  std::vector<float> r(gt.objects.size(), 0.0f);
+  for (std::size_t g = 0; g < r.size(); ++g) {
+    if (cnt[g] > 0) r[g] = static_cast<float>(std::hypot(sx[g] / cnt[g], sy[g] / cnt[g]));
+  }
+  return r;
 }
 
 }  // namespace core

@@ -45,12 +45,6 @@ constexpr int kNumObjectCategories = 5;
 /// Parses a class name of toString(); false for anything else (also "unknown").
 bool parseObjectCategory(const std::string& name, ObjectCategory* c);
 
-/// The classifier's class of a dataset's object class name: SemanticKITTI ("car", "truck",
-/// "moving-person", "bicyclist", "other-object", ...), KITTI object ("Car", "Van",
-/// "Pedestrian", "Cyclist", "Misc", ...) and the simulator ("car", "van", "pedestrian",
-/// "cyclist", "bin", "bench"). kUnknown for anything else (poles, trunks, signs, DontCare).
-ObjectCategory categoryOfClassName(const std::string& name);
-
 /// Options of the training (urban_detection_train_classifier).
 struct ClassifierTrainingParams {
   int trees = 32;                 // [-] trees of the forest
@@ -59,8 +53,35 @@ struct ClassifierTrainingParams {
   int active_var_count = 0;       // [-] features tried per split (0: sqrt of their number)
   bool use_intensity = true;      // [-] false: train without the intensity features
   double object_threshold = 0.5;  // [0..1] P(object) needed to keep an object
-  std::string description;        // free text stored in the model (data, seed, command)
+  /// [0..1] P(vehicle), P(pedestrian), P(cyclist) that alone keep an object as that class
+  /// (1: only the object threshold decides)
+  std::array<double, 3> class_thresholds{{1.0, 1.0, 1.0}};
+  /// [0..1] P(object) from which an object below the thresholds stays as an uncertain
+  /// other_object (1: none)
+  double uncertain_threshold = 1.0;
+  /// [0..1] class balance of the training rows: each row weighs (rows / (classes x rows of
+  /// its class))^class_balance (0: every row alike, 1: every class alike)
+  double class_balance = 0.0;
+  std::string description;  // free text stored in the model (data, seed, command)
 };
+
+/// How the vote shares become a class (stored in the model, chosen by the training tool).
+/// In order: an object class whose P(class) reaches its class threshold (the largest
+/// P(class) / threshold among those that do); else, when P(object) = 1 - P(non_object)
+/// reaches the object threshold, the object class with the most votes; else, when P(object)
+/// reaches the uncertain threshold, an uncertain other_object whose confidence is P(object);
+/// else non_object.
+struct ClassDecision {
+  double object_threshold = 0.5;
+  std::array<double, 3> class_thresholds{{1.0, 1.0, 1.0}};  // vehicle, pedestrian, cyclist
+  double uncertain_threshold = 1.0;
+};
+
+/// The class and confidence of one object's vote shares under `decision`; `keep_uncertain`
+/// false turns the uncertain band into non_object. `uncertain` (optional) tells whether the
+/// object was kept by the uncertain band.
+ObjectCategory decideClass(const std::array<float, 5>& p, const ClassDecision& decision,
+                           bool keep_uncertain, float* confidence, bool* uncertain = nullptr);
 
 /// Empty when valid, else a message naming the first out-of-range field and its range.
 std::string validate(const ClassifierTrainingParams& p);
@@ -89,8 +110,10 @@ class ObjectClassifierModel {
 
   bool trained() const;
   bool useIntensity() const { return use_intensity_; }
-  double objectThreshold() const { return object_threshold_; }
-  void setObjectThreshold(double t) { object_threshold_ = t; }
+  double objectThreshold() const { return decision_.object_threshold; }
+  void setObjectThreshold(double t) { decision_.object_threshold = t; }
+  const ClassDecision& decision() const { return decision_; }
+  void setDecision(const ClassDecision& d) { decision_ = d; }
   const ObjectFeatureParams& featureParams() const { return feature_params_; }
   const std::string& description() const { return description_; }
   int trees() const;
@@ -118,7 +141,7 @@ class ObjectClassifierModel {
   std::vector<FlatNode> flat_;
   std::vector<std::int32_t> roots_;
   bool use_intensity_ = true;
-  double object_threshold_ = 0.5;
+  ClassDecision decision_;
   ObjectFeatureParams feature_params_;
   std::string description_;
 };
@@ -132,6 +155,8 @@ struct ObjectClassifierParams {
                                          //   negative: the threshold stored in the model
   bool reject_non_objects = true;        // [-] false: non-objects stay in the output, labelled
                                          //     "non_object"
+  bool keep_uncertain = true;            // [-] objects the model is unsure of stay in the
+                                         //     output as other_object with their low confidence
 };
 
 /// ObjectClassifierParams' field table (core/common/param_fields.h).
@@ -147,6 +172,10 @@ struct ParamFields<ObjectClassifierParams> {
       p.min_object_probability);
     f({"reject_non_objects", "false: non-objects stay in the output, labelled non_object"},
       p.reject_non_objects);
+    f({"keep_uncertain",
+       "objects the model is unsure of stay in the output as other_object with their low "
+       "confidence; false: they are non-objects"},
+      p.keep_uncertain);
   }
 };
 
@@ -157,6 +186,7 @@ struct ObjectClassifierStats {
   std::size_t input = 0;                                     // objects given to apply()
   std::size_t kept = 0;                                      // objects in the output
   std::size_t rejected = 0;                                  // non-objects removed
+  std::size_t uncertain = 0;                                 // kept as uncertain other_object
   std::array<std::size_t, kNumObjectCategories> by_class{};  // decisions per class
 };
 
@@ -175,7 +205,8 @@ class ObjectClassifier {
   double threshold() const;
   /// Changes the decision (threshold override, rejection) without reloading the model; throws
   /// std::invalid_argument when min_object_probability is not in [-1, 1].
-  void setDecision(double min_object_probability, bool reject_non_objects);
+  void setDecision(double min_object_probability, bool reject_non_objects,
+                   bool keep_uncertain = true);
 
   /// Classifies the objects of one frame (`foreground` is the detector's input) and fills
   /// category and class_confidence. Non-objects are moved to `rejected` (when not null) and

@@ -45,6 +45,12 @@ inline const char* toString(ObjectCategory c) {
   }
 }
 
+/// The classifier's class of a dataset's object class name: SemanticKITTI ("car", "truck",
+/// "moving-person", "bicyclist", "other-object", ...), KITTI object ("Car", "Van",
+/// "Pedestrian", "Cyclist", "Misc", ...) and the simulator ("car", "van", "pedestrian",
+/// "cyclist", "bin", "bench"). kUnknown for anything else (poles, trunks, signs, DontCare).
+ObjectCategory categoryOfClassName(const std::string& name);
+
 /// One detected urban object: a distinct group of foreground points.
 struct DetectedObject {
   std::uint32_t id = 0;                // 1.. within one frame

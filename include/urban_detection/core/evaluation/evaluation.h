@@ -11,6 +11,7 @@
 /// EvalFrame; the scoring itself is dataset independent.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -60,6 +61,11 @@ struct EvaluationParams {
   double ignore_majority = 0.5;  ///< [0..1] an unmatched detection is ignored when more than
                                  ///< this fraction of its scored points is don't-care or
                                  ///< belongs to ignored GT objects
+  /// Small objects count only when they match (SemanticKITTI's panoptic convention): a GT
+  /// object with fewer scored points is not counted as missed, and a detection with fewer
+  /// scored points is not counted as false, unless the two match each other (then it is a
+  /// true positive and the object counts in NO). 1: every object counts (the paper's rule).
+  std::size_t min_points = 1;
 };
 
 /// Verdict on one detection.
@@ -132,6 +138,59 @@ class DetectionEvaluator {
   std::vector<std::uint32_t> gt_hits_;  // per GT: intersection with the current detection
   std::vector<std::int32_t> touched_;   // GT objects touched by the current detection
 };
+
+/// Where recall goes: per class, by size and by range, of one detector's matched GT objects,
+/// and whether the kept objects carry the right class. Filled frame by frame with
+/// addFrame(); the class of a GT object is categoryOfClassName() of its label.
+struct RecallBreakdown {
+  /// found / total of one group of GT objects.
+  struct Count {
+    std::size_t found = 0;
+    std::size_t total = 0;
+    double recall() const { return total == 0 ? 1.0 : static_cast<double>(found) / total; }
+    Count& operator+=(const Count& o) {
+      found += o.found;
+      total += o.total;
+      return *this;
+    }
+  };
+  static constexpr int kClasses = 4;  ///< vehicle, pedestrian, cyclist, other_object
+  static const char* className(int c);
+  static constexpr int kPointBins = 4;  ///< < 30, 30-100, 100-300, >= 300 points
+  static const char* pointBinName(int b);
+  static constexpr int kRangeBins = 3;  ///< < 20, 20-40, >= 40 m
+  static const char* rangeBinName(int b);
+
+  /// Per class, the objects counted under the min_points convention (as the score's NO).
+  std::array<Count, kClasses> by_class{};
+  /// Every non-ignored GT object (whatever its size), by points and by range, all classes and
+  /// per class.
+  std::array<Count, kPointBins> by_points{};
+  std::array<Count, kRangeBins> by_range{};
+  std::array<std::array<Count, kPointBins>, kClasses> class_by_points{};
+  std::array<std::array<Count, kRangeBins>, kClasses> class_by_range{};
+  /// Matched detections by true class: how many carry that class (class_correct) of all
+  /// matched (class_kept).
+  std::array<std::size_t, kClasses> class_kept{};
+  std::array<std::size_t, kClasses> class_correct{};
+
+  /// Adds one scored frame. `gt_range_m[g]` is GT object g's horizontal distance from the
+  /// sensor; `min_points` the convention the score used.
+  void addFrame(const EvalFrame& gt, const FrameMatch& match,
+                const std::vector<DetectedObject>& detections, const std::vector<float>& gt_range_m,
+                std::size_t min_points);
+  RecallBreakdown& operator+=(const RecallBreakdown& o);
+  /// Share of the matched objects of class c given class c (1 when none).
+  double classAccuracy(int c) const;
+  /// Index of a GT label's class in by_class, or -1 (not one of the four).
+  static int classIndex(const std::string& gt_label);
+  /// Multi-line text table and a JSON object (no trailing newline).
+  std::string table(const std::string& indent = "") const;
+  std::string json() const;
+};
+
+/// Horizontal distance of each GT object's centroid (scored points) from the sensor origin.
+std::vector<float> gtObjectRanges(const EvalFrame& gt, const CloudXYZIRT& cloud);
 
 }  // namespace core
 }  // namespace urban_detection
