@@ -202,7 +202,8 @@ enum class DecisionRule { kObject, kClass };
 template <class ProbFn>
 core::ClassDecision bestDecision(const std::vector<FrameData>& frames,
                                  const std::set<std::string>& groups, ProbFn probs,
-                                 const core::EvaluationParams& ep, DecisionRule rule) {
+                                 const core::EvaluationParams& ep, DecisionRule rule,
+                                 double uncertain_band) {
   core::ClassDecision best;
   double best_j = -1.0;
   auto consider = [&](const core::ClassDecision& d) {
@@ -217,7 +218,10 @@ core::ClassDecision bestDecision(const std::vector<FrameData>& frames,
     d.object_threshold = t;
     consider(d);
   }
-  if (rule == DecisionRule::kObject) return best;
+  if (rule == DecisionRule::kObject) {
+    best.uncertain_threshold = std::max(0.0, best.object_threshold - uncertain_band);
+    return best;
+  }
   for (int round = 0; round < 2; ++round) {
     for (std::size_t c = 0; c < 3; ++c) {
       const core::ClassDecision base = best;
@@ -244,7 +248,8 @@ core::ClassDecision innerDecision(std::vector<FrameData>* frames,
                                   const std::vector<std::string>& groups,
                                   const core::ClassifierTrainingParams& params,
                                   const core::ObjectFeatureParams& fp,
-                                  const core::EvaluationParams& ep, DecisionRule rule) {
+                                  const core::EvaluationParams& ep, DecisionRule rule,
+                                  double uncertain_band) {
   const int folds = std::min<int>(3, static_cast<int>(groups.size()));
   if (folds < 2) {
     core::ClassDecision d;
@@ -272,7 +277,7 @@ core::ClassDecision innerDecision(std::vector<FrameData>* frames,
       [&](std::size_t fi, std::size_t i) {
         return oof[{fi, i}];
       },
-      ep, rule);
+      ep, rule, uncertain_band);
 }
 
 std::string scoreRow(const core::DetectionScore& s) {
@@ -315,6 +320,8 @@ void usage() {
       "  --decision      object: one P(object) threshold; class (default): also a threshold\n"
       "                  per class and an uncertain band kept as other_object, all chosen on\n"
       "                  the training sequences\n"
+      "  --uncertain-band W  with --decision object: objects with P(object) within W below\n"
+      "                  the threshold stay as uncertain other_object (default 0: none)\n"
       "  --class-balance B  row weights (rows / (classes x class rows))^B (default 0.5)\n"
       "  --augment P[,V]  training examples made from the training sequences' objects: P\n"
       "                  copies of each person and cyclist, V of each vehicle (default 0,0:\n"
@@ -332,6 +339,7 @@ int main(int argc, char** argv) {
   bool loso = true, kdtree = true;
   long max_frames = -1, min_points = 30;
   std::string decision_arg = "class";
+  double uncertain_band = 0.0;
   core::AugmentParams augment;
   augment.person_copies = 0;
   augment.vehicle_copies = 0;
@@ -599,7 +607,8 @@ int main(int argc, char** argv) {
       core::ClassifierTrainingParams fold_tp = tp;
       core::ClassDecision d;
       d.object_threshold = tp.object_threshold;
-      if (auto_threshold) d = innerDecision(&frames, train_groups, tp, fp, ep, rule);
+      if (auto_threshold)
+        d = innerDecision(&frames, train_groups, tp, fp, ep, rule, uncertain_band);
       fold_decision[held] = d;
       const core::ObjectClassifierModel m = trainOn(
           frames, std::set<std::string>(train_groups.begin(), train_groups.end()), fold_tp, fp);
@@ -724,7 +733,7 @@ int main(int argc, char** argv) {
     json << "],\n";
     // 4. The shipped decision: chosen on the pooled held-out predictions.
     if (auto_threshold) {
-      shipped_decision = bestDecision(frames, all_groups, held_out(0), ep, rule);
+      shipped_decision = bestDecision(frames, all_groups, held_out(0), ep, rule, uncertain_band);
     }
   } else if (auto_threshold) {
     std::printf("no leave-one-sequence-out run: threshold 0.5\n");

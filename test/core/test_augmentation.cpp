@@ -28,9 +28,9 @@ struct Cylinder {
   std::uint32_t label;
 };
 
-// Scans a flat ground inside a round building with vertical cylinders, row after row, each row a sweep of azimuth from
-// -180 deg (the order of KITTI files); returns the cloud and its SemanticKITTI labels (ground:
-// road 40).
+// Scans a flat ground inside a round building with vertical cylinders, row after row, each row a
+// sweep of azimuth from -180 deg (the order of KITTI files); returns the cloud and its
+// SemanticKITTI labels (ground: road 40).
 LabelledScan scan(const std::vector<Cylinder>& cylinders, float max_range = 70.0f) {
   LabelledScan s;
   const int steps = static_cast<int>(std::lround(360.0f / kStepDeg));
@@ -199,7 +199,8 @@ TEST(Augmentation, PastingRemovesWhatTheObjectHides) {
 
 TEST(Augmentation, SequenceIsDeterministicAndPlacesOnFreeGround) {
   std::vector<LabelledScan> scans;
-  scans.push_back(scan({{7.0f, 2.0f, 0.3f, 1.8f, kPerson}, {-9.0f, 4.0f, 1.0f, 1.5f, 10u | (3u << 16)}}));
+  scans.push_back(
+      scan({{7.0f, 2.0f, 0.3f, 1.8f, kPerson}, {-9.0f, 4.0f, 1.0f, 1.5f, 10u | (3u << 16)}}));
   scans.push_back(scan({{10.0f, -3.0f, 0.3f, 1.7f, 30u | (9u << 16)}}));
   std::vector<const LabelledScan*> in = {&scans[0], &scans[1]};
   AugmentParams p;

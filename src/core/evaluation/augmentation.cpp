@@ -409,11 +409,11 @@ std::vector<LabelledScan> augmentSequence(const std::vector<const LabelledScan*>
         float ground_z = 0.0f;
         if (!freeGroundAt(open[t].cloud, free, x, y, o.radius_m + 0.3f, 3, &ground_z)) continue;
         const std::vector<PointXYZIRT> points =
-            resampleObject(o.sample, rows[t], azimuth - o.azimuth_rad, range,
-                           ground_z - o.ground_z, params.resample, &rng);
+            resampleObject(o.sample, rows[t], azimuth - o.azimuth_rad, range, ground_z - o.ground_z,
+                           params.resample, &rng);
         if (points.size() < params.min_points) break;  // too far for this object: next copy
-        const std::uint32_t label = (o.sample.label & 0xFFFFu) |
-                                    (static_cast<std::uint32_t>(next_instance[t]++) << 16);
+        const std::uint32_t label =
+            (o.sample.label & 0xFFFFu) | (static_cast<std::uint32_t>(next_instance[t]++) << 16);
         if (pasteObject(points, label, rows[t], &open[t].cloud, &open[t].labels) <
             params.min_points) {
           break;

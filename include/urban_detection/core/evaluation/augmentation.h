@@ -35,9 +35,10 @@ int assignRingsFromOrder(CloudXYZIRT* cloud, std::size_t min_row_points = 200);
 /// Elevation of each scan row as seen from the sensor, and the azimuth step of a row.
 struct RingModel {
   static constexpr int kRows = 64;
-  std::array<float, kRows> elevation_deg{};  ///< median elevation of the row's returns 2.5-60 m away
-  std::array<bool, kRows> valid{};           ///< row seen in the scan
-  float azimuth_step_deg = 0.17f;            ///< HDL-64E at 10 Hz: about 2,080 returns per row
+  std::array<float, kRows>
+      elevation_deg{};              ///< median elevation of the row's returns 2.5-60 m away
+  std::array<bool, kRows> valid{};  ///< row seen in the scan
+  float azimuth_step_deg = 0.17f;   ///< HDL-64E at 10 Hz: about 2,080 returns per row
 
   /// Measures the rows of a scan whose rings are set (assignRingsFromOrder).
   static RingModel measure(const CloudXYZIRT& cloud);
@@ -103,14 +104,14 @@ struct LabelledScan {
 
 /// How many examples to make from one sequence's scans.
 struct AugmentParams {
-  int person_copies = 8;          ///< [-] copies of each person and cyclist (rider, bicycle)
-  int vehicle_copies = 1;         ///< [-] copies of each vehicle
-  int max_objects_per_scan = 4;   ///< [-] pasted into one augmented scan
-  float max_range_m = 50.0f;      ///< [m] copies are placed between the object's range and this
+  int person_copies = 8;         ///< [-] copies of each person and cyclist (rider, bicycle)
+  int vehicle_copies = 1;        ///< [-] copies of each vehicle
+  int max_objects_per_scan = 4;  ///< [-] pasted into one augmented scan
+  float max_range_m = 50.0f;     ///< [m] copies are placed between the object's range and this
   std::size_t min_source_points = 10;  ///< [-] smaller labelled objects are not copied
-  std::size_t min_points = 5;     ///< [-] copies left with fewer returns are not pasted
-  int placement_tries = 30;       ///< [-] random places tried for each copy
-  std::uint32_t seed = 1;         ///< the same seed and scans give the same examples
+  std::size_t min_points = 5;          ///< [-] copies left with fewer returns are not pasted
+  int placement_tries = 30;            ///< [-] random places tried for each copy
+  std::uint32_t seed = 1;              ///< the same seed and scans give the same examples
   ResampleParams resample;
 };
 
