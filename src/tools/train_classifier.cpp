@@ -387,6 +387,14 @@ int main(int argc, char** argv) {
       }
       augment.person_copies = pc;
       augment.vehicle_copies = n == 2 ? vc : 0;
+    } else if (a == "--uncertain-band") {
+      const std::string v = arg.value("--uncertain-band");
+      char* end = nullptr;
+      uncertain_band = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !(uncertain_band >= 0.0 && uncertain_band <= 1.0)) {
+        std::fprintf(stderr, "error: --uncertain-band needs a probability in [0, 1]\n");
+        return 2;
+      }
     } else if (a == "--decision")
       decision_arg = arg.value("--decision");
     else if (a == "--class-balance") {
