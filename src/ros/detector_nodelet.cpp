@@ -31,6 +31,9 @@ void DetectorNodelet::onInit() {
     ros_conv::loadObjectClassifierParams(ros::NodeHandle(getPrivateNodeHandle(), "classifier"),
                                          &classifier_params);
     classifier_ = std::make_unique<core::ObjectClassifier>(classifier_params);
+    core::BoxFittingParams box_params;
+    loadFields(ros::NodeHandle(getPrivateNodeHandle(), "box_fitting"), &box_params);
+    box_fitter_ = std::make_unique<core::BoxFitter>(box_params);
   } catch (const std::exception& e) {
     refusal_ = ros_conv::RefusalDiagnostics::report(
         getNodeHandle(), getPrivateNodeHandle(), getName(),
@@ -110,6 +113,7 @@ void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& 
           classified.by_class[c], false);
     }
   }
+  box_fitter_->fit(*foreground, &objects_);
   std_msgs::Header header;
   pcl_conversions::fromPCL(foreground->header, header);
   if (objects_pub_.getNumSubscribers() > 0) {

@@ -405,12 +405,13 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: no frame could be read\n");
     return 1;
   }
-  // The tracker (issue 28) on a synthetic street of 100 objects (tracker_bench.h).
-  urban_detection::tools::benchTracker(100, 300, [&](const std::function<void()>& update) {
-    StageTimer t;
-    update();
-    t.stop("tracker_100_objects", &stage, &cpu_stage);
-  });
+  // Box fitting and the tracker on a synthetic street of 100 objects (tracker_bench.h).
+  urban_detection::tools::benchTracker(100, 300,
+                                       [&](const char* name, const std::function<void()>& call) {
+                                         StageTimer t;
+                                         call();
+                                         t.stop(name, &stage, &cpu_stage);
+                                       });
 
   struct rusage ru {};
   getrusage(RUSAGE_SELF, &ru);
@@ -434,17 +435,12 @@ int main(int argc, char** argv) {
           ? median(stage["kdtree_detection_pcl_default"]) / median(stage["hierarchical_detection"])
           : std::nan("");
 
-  const char* order[] = {"packet_decode",
-                         "segmentation",
-                         "hough_refinement",
-                         "foreground_extraction",
-                         "hierarchical_detection",
-                         "object_filter",
-                         "classification",
-                         "markers",
-                         "tracker_100_objects",
-                         "kdtree_detection",
-                         "kdtree_detection_pcl_default"};
+  const char* order[] = {"packet_decode",           "segmentation",
+                         "hough_refinement",        "foreground_extraction",
+                         "hierarchical_detection",  "object_filter",
+                         "classification",          "markers",
+                         "box_fitting_100_objects", "tracker_100_objects",
+                         "kdtree_detection",        "kdtree_detection_pcl_default"};
   std::printf("%s: %zu revolutions (%ld pass%s over", label.c_str(), frames, repeat,
               repeat > 1 ? "es" : "");
   for (const auto& s : sources) std::printf(" [%s]", s->describe().c_str());
@@ -460,7 +456,8 @@ int main(int argc, char** argv) {
                 percentile(it->second, 0.95), median(cpu_stage[name]),
                 std::string(name) == "hough_refinement" ? "  (inside segmentation)"
                 : std::string(name) == "markers"        ? "  (rviz output, lazy, not in pipeline)"
-                : std::string(name) == "tracker_100_objects"
+                : std::string(name) == "tracker_100_objects" ||
+                        std::string(name) == "box_fitting_100_objects"
                     ? "  (synthetic street, 100 objects, not in pipeline)"
                 : std::string(name) == "kdtree_detection" ? "  (baseline, not in pipeline)"
                 : std::string(name) == "kdtree_detection_pcl_default"

@@ -4,7 +4,8 @@
 //   urban_detection_eval (--kitti-object DIR | --semantic-kitti DIR | --sim GTFILE --pcap PCAP)
 //                        [--detector hierarchical|kdtree|both] [--config FILE]...
 //                        [--json FILE] [--max-frames N] [--min-points N] [--details]
-//   urban_detection_eval --tracking --sim GTFILE --pcap PCAP | --kitti-tracking DIR  (CLEAR-MOT
+//   urban_detection_eval --tracking (--sim GTFILE --pcap PCAP | --semantic-kitti DIR |
+//                        --kitti-tracking DIR)  (CLEAR-MOT
 //                        of the tracker after the pipeline; rules in tracking_eval.h)
 //
 // The ground-truth rules of each dataset (KITTI object, SemanticKITTI, simulated drive) are
@@ -25,6 +26,7 @@
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_filter.h"
 #include "urban_detection/core/common/object_class.h"
+#include "urban_detection/core/detection/box_fitting.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
@@ -37,6 +39,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "box_quality_eval.h"
 #include "datasets.h"
 #include "tool_common.h"
 #include "tracking_eval.h"
@@ -454,7 +457,8 @@ void usage() {
       "  --png DIR       write a top view per frame (first detector): ground truth left,\n"
       "                  detections right; yellow boxes missed objects, red false detections\n"
       "  --png-view CX,CY,HALF_M   the square shown [m] (default 0,0,30)\n"
-      "  --tracking      with --sim: the tracker after the pipeline, scored with CLEAR-MOT\n"
+      "  --tracking      with --sim, --semantic-kitti or --kitti-tracking: the tracker after\n"
+      "                  the pipeline, scored with CLEAR-MOT\n"
       "  --tracker-config FILE  the tracker's parameters (config/object_tracker.yaml's\n"
       "                  tracker: map; default: the in-class defaults it mirrors)\n"
       "  --kitti-tracking DIR  the same on the KITTI tracking layout (velodyne/<seq>/, label_02/,\n"
@@ -545,7 +549,7 @@ int main(int argc, char** argv) {
   }
   if ((!kitti_dir.empty() + !skitti_dir.empty() + !sim_gt.empty() + !kitti_tracking_dir.empty()) !=
           1 ||
-      (tracking && sim_gt.empty())) {
+      (tracking && !kitti_dir.empty())) {
     std::fprintf(stderr, "error: give exactly one dataset\n");
     usage();
     return 2;
@@ -618,6 +622,14 @@ int main(int argc, char** argv) {
     }
   }
 
+  std::unique_ptr<core::BoxFitter> box_fitter;  // whole-object boxes after the classifier
+  try {
+    box_fitter.reset(new core::BoxFitter(params.box_fitting));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+
   std::vector<std::unique_ptr<core::ObjectDetector>> detectors;
   ExternalDetections* external = nullptr;
   try {
@@ -649,6 +661,7 @@ int main(int argc, char** argv) {
     tp.detector = detectors[0].get();
     tp.object_filter = object_filter.get();
     tp.classifier = classifier.get();
+    tp.box_fitter = box_fitter.get();
     tp.min_gt_points = static_cast<std::size_t>(min_points);
     if (max_frames >= 0) tp.max_frames = static_cast<std::size_t>(max_frames);
     std::string tracker_error;
@@ -659,6 +672,9 @@ int main(int argc, char** argv) {
     }
     if (!kitti_tracking_dir.empty()) {
       return urban_detection::tools::runKittiTracking(tp, kitti_tracking_dir, json_path);
+    }
+    if (!skitti_dir.empty()) {
+      return urban_detection::tools::runSemanticKittiTracking(tp, skitti_dir, json_path);
     }
     try {
       return urban_detection::tools::runSimTracking(
@@ -729,6 +745,9 @@ int main(int argc, char** argv) {
   std::vector<std::map<std::string, core::DetectionScore>> by_group(detectors.size());
   std::vector<std::map<std::string, std::size_t>> class_pairs(detectors.size());
   std::map<std::string, std::size_t> fg_composition;  // foreground points by dataset class
+  std::unique_ptr<urban_detection::tools::KittiBoxQuality> box_quality;  // first detector's
+  if (!kitti_dir.empty())
+    box_quality.reset(new urban_detection::tools::KittiBoxQuality(kitti_dir, params.box_fitting));
   std::ostringstream rows;
   bool first_row = true;
   std::size_t failed = 0, frames = 0;
@@ -788,9 +807,11 @@ int main(int argc, char** argv) {
           ++classified_out[k][detectionContent(f, *dataset, o)];
         }
       }
+      box_fitter->fit(foreground, &objects);
       evaluators_all[k].evaluate(f.gt, objects, nullptr);
       evaluators[k].evaluate(f.gt, objects, &match);
       breakdown[k].addFrame(f.gt, match, objects, gt_range, eval_params.min_points);
+      if (box_quality && k == 0) box_quality->addFrame(f.id, f.cloud, f.gt, objects, match);
       by_group[k][urban_detection::tools::frameGroup(f.id, dataset->name())] += match.score;
       for (std::size_t d = 0; d < objects.size() && classifier; ++d) {
         if (match.verdict[d] != core::DetectionVerdict::kTrue) continue;
@@ -857,6 +878,7 @@ int main(int argc, char** argv) {
                   t.mo, t.fo, t.ignored, t.precision(), t.recall(), t.fRate());
     }
   }
+  if (box_quality) box_quality->print();
   std::printf("classifier: %s\n",
               classifier ? params.classifier.model_path.c_str() : "off (objects unclassified)");
   std::printf("foreground points by class: %s\n", countsJson(fg_composition).c_str());
@@ -925,7 +947,9 @@ int main(int argc, char** argv) {
       }
       out << "}}";
     }
-    out << "\n  },\n  \"foreground_points_by_class\": " << countsJson(fg_composition) << "\n}\n";
+    out << "\n  },\n  \"foreground_points_by_class\": " << countsJson(fg_composition);
+    if (box_quality) out << ",\n  \"box_quality\": " << box_quality->json();
+    out << "\n}\n";
     if (!out) {
       std::fprintf(stderr, "error: writing %s failed\n", json_path.c_str());
       return 1;

@@ -59,6 +59,10 @@ int main(int argc, char** argv) {
       "Object classifier (after either detector)",
       "`config/classification.yaml`, map `classifier:`; nodelet parameters `~classifier/<name>`; "
       "`min_object_probability` and `reject_non_objects` tunable.");
+  section<core::BoxFittingParams>(
+      "Box fitting (after the classifier)",
+      "`config/classification.yaml`, map `box_fitting:`; nodelet parameters "
+      "`~box_fitting/<name>`.");
   section<ros_conv::ObjectMarkerParams>(
       "Markers (ObjectMarkers)",
       "`config/markers.yaml`, map `markers:`; nodelet parameters `~markers/<name>`; tunable.");

@@ -76,6 +76,7 @@ struct PipelineParams {
   core::KdTreeDetectorParams kdtree;
   core::ObjectFilterParams object_filter;
   core::ObjectClassifierParams classifier;
+  core::BoxFittingParams box_fitting;
 };
 
 /// Applies the pipeline config files in order over the in-class defaults of `params`. Prints
@@ -86,7 +87,8 @@ inline bool loadConfigs(const std::vector<std::string>& paths, PipelineParams* p
     if (!core::loadPipelineParamsYaml(path, &params->segmentation, &params->hierarchical,
                                       &params->kdtree, &err) ||
         !core::loadObjectFilterParamsYaml(path, &params->object_filter, &err) ||
-        !core::loadObjectClassifierParamsYaml(path, &params->classifier, &err)) {
+        !core::loadObjectClassifierParamsYaml(path, &params->classifier, &err) ||
+        !core::loadBoxFittingParamsYaml(path, &params->box_fitting, &err)) {
       std::fprintf(stderr, "error: %s\n", err.c_str());
       return false;
     }

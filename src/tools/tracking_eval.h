@@ -1,11 +1,11 @@
-// Tracking evaluation of urban_detection_eval (issue 28): the pipeline (segmentation, detector,
-// object filter, classifier) followed by the Tracker, scored with CLEAR-MOT (clear_mot.h).
-// Not a tool itself (only src/tools/*.cpp are executables).
+// Tracking evaluation of urban_detection_eval: the pipeline (segmentation, detector, object
+// filter, classifier, box fitting) followed by the Tracker, scored with CLEAR-MOT
+// (clear_mot.h). Not a tool itself (only src/tools/*.cpp are executables).
 //
 //   --tracking (with --sim GT --pcap PCAP): the simulated drive. The tracker gets each
 //     revolution's sensor pose from the ground-truth file (world_T_velodyne), as the nodelet
 //     gets odom -> velodyne from tf. GT objects are the scene's street objects (cars, vans,
-//     pedestrians, cyclists, bins, benches) with at least --min-gt-points returns in the
+//     pedestrians, cyclists, bins, benches) with at least --min-points returns in the
 //     revolution, at their box centre in the world frame; street objects with fewer returns and
 //     trunks, poles and signs are ignored (a track on them is neither true nor false); a track
 //     anywhere else (vegetation, walls, ground) is a false positive. Hypotheses are the
@@ -14,14 +14,27 @@
 //     faster than 0.5 m/s. The detector's own recall and precision under the same matching
 //     (every detection a hypothesis) are printed beside: MOTA cannot exceed that recall by
 //     more than what coasting adds.
+//   --tracking --semantic-kitti DIR (the dataset root with sequences/NN/, or one sequence
+//     folder): each sequence's scans in order, the tracker in the world frame of poses.txt
+//     (world_T_velodyne = Tr^-1 * pose_i * Tr, Tr from calib.txt, or the nominal KITTI
+//     camera-from-LiDAR axes when calib.txt has no Tr), a fresh tracker per sequence. GT
+//     objects: the thing instances (vehicles, persons, riders, two-wheelers; SemanticKITTI's
+//     instance ids are stable through a sequence) with at least --min-points points, at the
+//     centroid of their points in the world frame; emptier ones are ignored. Hypotheses:
+//     confirmed tracks detected in this scan, at the centroid of their detection's points in
+//     the world frame (SemanticKITTI has no boxes: both sides are centroids of points); one
+//     whose detection is mostly don't-care points (poles, trunks, signs, other-object,
+//     unlabelled) is not a false positive when unmatched. Match: distance <= 2 m.
 //   --kitti-tracking DIR: velodyne/<seq>/*.bin, label_02/<seq>.txt, calib/<seq>.txt. No poses
 //     are read (KITTI tracking's oxts are not used): the tracker runs in the sensor frame, so
-//     velocities include the ego motion and are not scored. GT: Car, Pedestrian and Cyclist
-//     labels with at least --min-gt-points LiDAR points in their box; Van, Truck, Tram,
-//     Person_sitting, Misc and those with fewer points are ignored. Hypotheses: confirmed
-//     tracks the classifier calls vehicle, pedestrian or cyclist whose centre projects into
-//     image 2 (1242 x 375); a hypothesis whose centre projects into a DontCare rectangle is
-//     not a false positive when unmatched. Match: centre distance <= 2 m.
+//     velocities include the ego motion and are not scored. GT: Car and Van (vehicle),
+//     Pedestrian and Cyclist labels with at least --min-points LiDAR points in their box;
+//     Truck, Tram, Person_sitting, Misc and those with fewer points are ignored. Hypotheses:
+//     confirmed tracks the classifier calls vehicle, pedestrian or cyclist (any confirmed
+//     track with the classifier off) whose centre
+//     projects into image 2 (1242 x 375); a hypothesis whose centre projects into a DontCare
+//     rectangle is not a false positive when unmatched. Match: distance of the box centres on
+//     the ground plane <= 2 m (not the devkit's image-box overlap).
 #pragma once
 
 #include <algorithm>
@@ -33,12 +46,16 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_filter.h"
 #include "urban_detection/core/common/object_class.h"
+#include "urban_detection/core/detection/box_fitting.h"
 #include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
@@ -60,6 +77,7 @@ struct TrackingPipeline {
   core::ObjectDetector* detector = nullptr;
   core::ObjectFilter* object_filter = nullptr;
   core::ObjectClassifier* classifier = nullptr;  // may be null (off)
+  core::BoxFitter* box_fitter = nullptr;         // may be null (points' own boxes)
   core::TrackerParams tracker;
   std::size_t min_gt_points = 10;
   std::size_t max_frames = static_cast<std::size_t>(-1);
@@ -75,6 +93,7 @@ class TrackingPipelineRunner {
     p_.detector->detect(foreground_, &objects_);
     p_.object_filter->apply(foreground_, &objects_, &rejected_);
     if (p_.classifier) p_.classifier->apply(foreground_, &objects_, &rejected_);
+    if (p_.box_fitter) p_.box_fitter->fit(foreground_, &objects_);
     return objects_;
   }
 
@@ -370,7 +389,8 @@ inline int runKittiTracking(const TrackingPipeline& p, const std::string& dir,
       std::vector<core::MotGroundTruth> gts;
       for (const core::KittiTrackingLabel& l : frame_labels) {
         if (l.dontCare() || l.track_id < 0) continue;
-        const bool scored = l.type == "Car" || l.type == "Pedestrian" || l.type == "Cyclist";
+        const bool scored =
+            l.type == "Car" || l.type == "Van" || l.type == "Pedestrian" || l.type == "Cyclist";
         std::size_t points = 0;
         if (scored) {
           for (const auto& pt : cloud) {
@@ -386,7 +406,7 @@ inline int runKittiTracking(const TrackingPipeline& p, const std::string& dir,
       std::vector<core::MotHypothesis> hyps;
       for (const core::Track& t : tracker.tracks()) {
         if (t.state != core::TrackState::kConfirmed) continue;
-        if (t.category != core::ObjectCategory::kVehicle &&
+        if (p.classifier && t.category != core::ObjectCategory::kVehicle &&
             t.category != core::ObjectCategory::kPedestrian &&
             t.category != core::ObjectCategory::kCyclist) {
           continue;
@@ -421,6 +441,222 @@ inline int runKittiTracking(const TrackingPipeline& p, const std::string& dir,
     std::ofstream out(json_path);
     out << "{\n  \"dataset\": \"kitti_tracking\",\n  \"path\": \"" << jsonEscape(dir)
         << "\",\n  \"sequences\": " << sequences << ",\n  \"tracker\": " << motJson(r) << "\n}\n";
+    if (!out) {
+      std::fprintf(stderr, "error: cannot write %s\n", json_path.c_str());
+      return 1;
+    }
+  }
+  return 0;
+}
+
+// world_T_velodyne of every scan of a SemanticKITTI sequence folder (poses.txt: the left
+// camera's pose per scan in the first scan's camera frame; calib.txt: Tr = camera <- LiDAR).
+// False with `error` set when poses.txt is missing or malformed; `nominal_tr` tells whether
+// calib.txt had no Tr (the nominal axes were used).
+inline bool readSemanticKittiPoses(const std::string& seq_dir, std::vector<Eigen::Isometry3d>* out,
+                                   bool* nominal_tr, std::string* error) {
+  out->clear();
+  Eigen::Isometry3d tr = Eigen::Isometry3d::Identity();
+  // Nominal KITTI axes: camera x = -LiDAR y, camera y = -LiDAR z, camera z = LiDAR x.
+  tr.linear() << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+  *nominal_tr = true;
+  {
+    std::ifstream in(seq_dir + "/calib.txt");
+    std::string line;
+    while (std::getline(in, line)) {
+      std::istringstream ls(line);
+      std::string key;
+      ls >> key;
+      if (key != "Tr:" && key != "Tr") continue;
+      double v[12];
+      int k = 0;
+      while (k < 12 && (ls >> v[k]) && std::isfinite(v[k])) ++k;
+      if (k != 12) {
+        *error = seq_dir + "/calib.txt: Tr needs 12 numbers";
+        return false;
+      }
+      Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+      for (int j = 0; j < 12; ++j) m(j / 4, j % 4) = v[j];
+      tr.matrix() = m;
+      *nominal_tr = false;
+    }
+  }
+  std::ifstream in(seq_dir + "/poses.txt");
+  if (!in) {
+    *error = seq_dir + "/poses.txt: cannot open";
+    return false;
+  }
+  const Eigen::Isometry3d tr_inv = tr.inverse();
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::istringstream ls(line);
+    Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+    for (int j = 0; j < 12; ++j) {
+      if (!(ls >> m(j / 4, j % 4)) || !std::isfinite(m(j / 4, j % 4))) {
+        *error = seq_dir + "/poses.txt:" + std::to_string(number) + ": needs 12 numbers";
+        return false;
+      }
+    }
+    Eigen::Isometry3d pose;
+    pose.matrix() = m;
+    out->push_back(tr_inv * pose * tr);
+  }
+  return true;
+}
+
+// --tracking --semantic-kitti DIR. Returns the process exit code.
+inline int runSemanticKittiTracking(const TrackingPipeline& p, const std::string& dir,
+                                    const std::string& json_path) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> seqs;
+  if (fs::is_directory(dir + "/velodyne")) {
+    seqs.push_back(dir);
+  } else {
+    for (const auto& s : core::listFiles(dir + "/sequences", "")) {
+      if (fs::is_directory(s + "/velodyne")) seqs.push_back(s);
+    }
+  }
+  if (seqs.empty()) {
+    std::fprintf(stderr, "error: no SemanticKITTI sequence (velodyne/) in %s\n", dir.c_str());
+    return 1;
+  }
+  TrackingPipelineRunner pipeline(p);
+  core::ClearMot pooled, detections_pooled;
+  core::SemanticKittiGroundTruthParams gt_params;
+  gt_params.min_points = p.min_gt_points;
+  std::vector<std::pair<std::string, core::ClearMotResult>> per_sequence;
+  std::size_t frames = 0;
+  std::uint32_t next_gt_id = 1, detection_ids = 0, id_base = 0;
+  std::vector<double> update_ms;
+  CloudXYZIRT cloud;
+  std::vector<std::uint32_t> labels;
+  core::EvalFrame gt;
+  bool any_nominal = false;
+  for (const std::string& seq : seqs) {
+    const std::string name = fs::path(seq).filename().string();
+    std::vector<Eigen::Isometry3d> poses;
+    bool nominal = false;
+    std::string error;
+    if (!readSemanticKittiPoses(seq, &poses, &nominal, &error)) {
+      std::fprintf(stderr, "warning: skipping sequence %s: %s\n", name.c_str(), error.c_str());
+      continue;
+    }
+    any_nominal = any_nominal || nominal;
+    core::Tracker tracker(p.tracker);
+    core::ClearMot mot;
+    std::map<std::uint32_t, std::uint32_t> gt_id;  // full label (class | instance) -> GT id
+    id_base += 1000000u;
+    for (const std::string& bin : core::listFiles(seq + "/velodyne", ".bin")) {
+      if (frames >= p.max_frames) break;
+      const std::string stem = fs::path(bin).stem().string();
+      std::size_t scan = 0;
+      try {
+        scan = static_cast<std::size_t>(std::stoul(stem));
+      } catch (const std::exception&) {
+        continue;
+      }
+      if (scan >= poses.size() || !core::readKittiBin(bin, &cloud, &error) ||
+          !core::readSemanticKittiLabels(seq + "/labels/" + stem + ".label", &labels, &error) ||
+          labels.size() != cloud.size()) {
+        std::fprintf(stderr, "warning: skipping %s/%s: %s\n", name.c_str(), stem.c_str(),
+                     scan >= poses.size() ? "no pose" : error.c_str());
+        continue;
+      }
+      ++frames;
+      core::buildSemanticKittiGroundTruth(labels, gt_params, &gt);
+      const std::vector<core::DetectedObject>& objects = pipeline.run(cloud);
+      const Eigen::Isometry3d& pose = poses[scan];
+      const double t0 = steadySeconds();
+      tracker.update(objects, pose, 0.1 * static_cast<double>(scan));
+      update_ms.push_back(1e3 * (steadySeconds() - t0));
+
+      // GT: centroids of the instances' points, in the world frame.
+      std::vector<Eigen::Vector3d> sum(gt.objects.size(), Eigen::Vector3d::Zero());
+      std::vector<std::size_t> count(gt.objects.size(), 0);
+      std::vector<std::uint32_t> label_of(gt.objects.size(), 0);
+      for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const std::int32_t g = gt.object_of_point[i];
+        if (g < 0) continue;
+        sum[g] += Eigen::Vector3d(cloud[i].x, cloud[i].y, cloud[i].z);
+        ++count[g];
+        label_of[g] = labels[i];
+      }
+      std::vector<core::MotGroundTruth> gts;
+      for (std::size_t g = 0; g < gt.objects.size(); ++g) {
+        if (count[g] == 0) continue;
+        auto it = gt_id.find(label_of[g]);
+        if (it == gt_id.end()) it = gt_id.emplace(label_of[g], next_gt_id++).first;
+        core::MotGroundTruth m;
+        m.id = it->second;
+        m.position = (pose * (sum[g] / static_cast<double>(count[g]))).head<2>();
+        m.ignored = gt.objects[g].ignored;
+        gts.push_back(m);
+      }
+      // A detection made mostly of don't-care points (poles, trunks, unlabelled) is neither
+      // true nor false when it matches nothing.
+      auto dontCare = [&](const core::DetectedObject& o) {
+        std::size_t dc = 0;
+        for (const std::uint32_t i : o.indices) {
+          dc += i < gt.role.size() && gt.role[i] == core::PointRole::kDontCare;
+        }
+        return 2 * dc > o.indices.size();
+      };
+      std::vector<core::MotHypothesis> hyps;
+      for (const core::Track& t : tracker.tracks()) {
+        if (t.state != core::TrackState::kConfirmed || t.detection < 0) continue;
+        // Like the GT, the centroid of its detection's points (SemanticKITTI has no boxes; the
+        // box centres are scored against KITTI's boxes by --kitti-object).
+        const core::DetectedObject& o = objects[static_cast<std::size_t>(t.detection)];
+        core::MotHypothesis h;
+        h.id = id_base + t.id;
+        h.position = (pose * o.centroid.cast<double>()).head<2>();
+        h.dont_care = dontCare(o);
+        hyps.push_back(h);
+      }
+      mot.addFrame(gts, hyps);
+      pooled.addFrame(gts, hyps);
+      std::vector<core::MotHypothesis> dets;
+      for (const core::DetectedObject& o : objects) {
+        core::MotHypothesis h;
+        h.id = ++detection_ids;
+        h.position = (pose * o.centroid.cast<double>()).head<2>();
+        h.dont_care = dontCare(o);
+        dets.push_back(h);
+      }
+      detections_pooled.addFrame(gts, dets);
+    }
+    if (mot.result().frames > 0) per_sequence.emplace_back(name, mot.result());
+  }
+  if (frames == 0) {
+    std::fprintf(stderr, "error: no scans read from %s\n", dir.c_str());
+    return 1;
+  }
+  const core::ClearMotResult r = pooled.result();
+  const core::ClearMotResult d = detections_pooled.result();
+  std::printf(
+      "tracking on SemanticKITTI (%zu sequences, %zu scans), world frame (poses.txt%s), "
+      "detector %s, classifier %s, min GT points %zu\n",
+      per_sequence.size(), frames, any_nominal ? ", nominal Tr" : ", calib Tr",
+      p.detector->name().c_str(), p.classifier ? "on" : "off", p.min_gt_points);
+  for (const auto& s : per_sequence) printMot(("  sequence " + s.first).c_str(), s.second);
+  printMot("tracker, pooled", r);
+  std::printf("%-28s recall %.3f  precision %.3f\n", "detector alone", d.recall(), d.precision());
+  std::printf("tracker update: median %.4f ms per scan\n", median(update_ms));
+  if (!json_path.empty()) {
+    std::ofstream out(json_path);
+    out << "{\n  \"dataset\": \"semantic_kitti_tracking\",\n  \"path\": \"" << jsonEscape(dir)
+        << "\",\n  \"scans\": " << frames << ",\n  \"min_gt_points\": " << p.min_gt_points
+        << ",\n  \"nominal_tr\": " << (any_nominal ? "true" : "false")
+        << ",\n  \"tracker\": " << motJson(r) << ",\n  \"detector_alone\": " << motJson(d)
+        << ",\n  \"by_sequence\": {";
+    for (std::size_t k = 0; k < per_sequence.size(); ++k) {
+      out << (k ? ",\n    " : "\n    ") << "\"" << jsonEscape(per_sequence[k].first)
+          << "\": " << motJson(per_sequence[k].second);
+    }
+    out << "\n  }\n}\n";
     if (!out) {
       std::fprintf(stderr, "error: cannot write %s\n", json_path.c_str());
       return 1;

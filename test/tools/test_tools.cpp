@@ -273,3 +273,89 @@ TEST_F(ToolsTest, EvalTrackingWritesClearMotAndBenchTimesTheTracker) {
   const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("birth_hits"), std::string::npos) << text;
 }
+
+// The documented `urban_detection_eval --tracking --kitti-tracking DIR` on a KITTI tracking
+// layout written here: a flat road, a car driving away along x and a parked van beside the road
+// (both labelled: Car and Van are scored as vehicles), a labelled pedestrian with no points
+// (ignored) and a DontCare row. Classifier off (synthetic shapes): every confirmed track is a
+// hypothesis.
+TEST_F(ToolsTest, EvalKittiTrackingRunsOnAWrittenSequence) {
+  const std::string root = dir_ + "/kitti_tracking";
+  fs::create_directories(root + "/velodyne/0000");
+  fs::create_directories(root + "/label_02");
+  fs::create_directories(root + "/calib");
+  {
+    std::ofstream calib(root + "/calib/0000.txt");
+    calib << "P2: 721.5 0 609.6 44.9 0 721.5 172.9 0.2 0 0 1 0.003\n"
+             "R_rect 1 0 0 0 1 0 0 0 1\n"
+             "Tr_velo_cam 0 -1 0 0 0 0 -1 0 1 0 0 0\n";
+  }
+  const double sensor_h = 1.73;
+  // Points on the faces of an upright box (velodyne frame, x forward, y left, z up).
+  auto box = [](std::vector<float>* out, double cx, double cy, double l, double w, double h,
+                double z0) {
+    const double step = 0.06;
+    auto add = [out](double x, double y, double z) {
+      out->insert(out->end(),
+                  {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z), 0.3f});
+    };
+    for (double z = z0 + 0.1; z <= z0 + h; z += step) {
+      for (double a = -0.5 * l; a <= 0.5 * l; a += step) {
+        add(cx + a, cy - 0.5 * w, z);
+        add(cx + a, cy + 0.5 * w, z);
+      }
+      for (double b = -0.5 * w; b <= 0.5 * w; b += step) {
+        add(cx - 0.5 * l, cy + b, z);
+        add(cx + 0.5 * l, cy + b, z);
+      }
+    }
+  };
+  std::ofstream labels(root + "/label_02/0000.txt");
+  const int frames = 8;
+  for (int f = 0; f < frames; ++f) {
+    std::vector<float> pts;
+    for (double x = -30.0; x <= 40.0; x += 0.25) {
+      for (double y = -20.0; y <= 20.0; y += 0.25) {
+        pts.insert(pts.end(), {static_cast<float>(x), static_cast<float>(y),
+                               static_cast<float>(-sensor_h), 0.2f});
+      }
+    }
+    const double car_x = 12.0 + 0.5 * f, car_y = 0.0, van_x = 18.0, van_y = -5.0;
+    box(&pts, car_x, car_y, 4.0, 1.7, 1.5, -sensor_h);
+    box(&pts, van_x, van_y, 5.0, 2.0, 2.0, -sensor_h);
+    char name[64];
+    std::snprintf(name, sizeof(name), "/velodyne/0000/%06d.bin", f);
+    std::ofstream bin(root + name, std::ios::binary);
+    bin.write(reinterpret_cast<const char*>(pts.data()),
+              static_cast<std::streamsize>(pts.size() * sizeof(float)));
+    // Label: frame id type trunc occl alpha bbox(4) h w l x y z (camera: x = -y_velo,
+    // y = -z_velo (bottom), z = x_velo) rotation_y (-pi/2: along the LiDAR's x).
+    labels << f << " 0 Car 0 0 0 500 150 700 250 1.5 1.7 4.0 " << -car_y << " " << sensor_h << " "
+           << car_x << " -1.5708\n";
+    labels << f << " 1 Van 0 0 0 800 150 900 250 2.0 2.0 5.0 " << -van_y << " " << sensor_h << " "
+           << van_x << " -1.5708\n";
+    labels << f << " 2 Pedestrian 0 0 0 300 150 320 250 1.7 0.6 0.8 3.0 " << sensor_h
+           << " 30.0 -1.5708\n";
+    labels << f << " -1 DontCare -1 -1 -10 0 0 100 100 -1000 -1000 -1000 -10 -1 -1 -10\n";
+  }
+  labels.close();
+  const std::string path = dir_ + "/kitti_tracking.json";
+  ASSERT_EQ(0, run(kTools + "/urban_detection_eval --tracking --kitti-tracking " + root +
+                       configs() + " --classifier off --json " + path,
+                   dir_ + "/kitti_tracking.log"))
+      << "see " << dir_ << "/kitti_tracking.log";
+  const pt::ptree j = readJson(path);
+  EXPECT_EQ(j.get<std::string>("dataset"), "kitti_tracking");
+  const pt::ptree& r = j.get_child("tracker");
+  EXPECT_EQ(r.get<int>("frames"), frames);
+  EXPECT_EQ(r.get<int>("gt_tracks"), 2);  // the car and the van; the empty pedestrian ignored
+  EXPECT_EQ(r.get<int>("gt"), 2 * frames);
+  EXPECT_EQ(r.get<int>("id_switches"), 0);
+  // A track is confirmed on its third detection: at most two misses per object.
+  EXPECT_GE(r.get<int>("matches"), 2 * (frames - 2));
+  EXPECT_GE(r.get<double>("mota"), 0.7);
+  // --kitti-tracking implies the tracking evaluation: the form without --tracking runs too.
+  EXPECT_EQ(0, run(kTools + "/urban_detection_eval --kitti-tracking " + root + configs() +
+                       " --classifier off --max-frames 2",
+                   dir_ + "/kitti_tracking_short.log"));
+}

@@ -35,6 +35,7 @@
 #include "urban_detection/ObjectClassifierConfig.h"
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/detection/box_fitting.h"
 #include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/stage_diagnostics.h"
@@ -66,6 +67,7 @@ class DetectorNodelet : public nodelet::Nodelet {
   std::unique_ptr<core::ObjectDetector> detector_;
   std::unique_ptr<core::ObjectFilter> filter_;
   std::unique_ptr<core::ObjectClassifier> classifier_;
+  std::unique_ptr<core::BoxFitter> box_fitter_;  // whole-object boxes, after the classifier
   // ~classifier: threshold and rejection, while the classifier is enabled.
   std::unique_ptr<ros_conv::ValidatedReconfigure<ObjectClassifierConfig>> classifier_reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;

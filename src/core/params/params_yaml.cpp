@@ -127,6 +127,11 @@ bool loadObjectClassifierParamsYaml(const std::string& path, ObjectClassifierPar
   return true;
 }
 
+bool loadBoxFittingParamsYaml(const std::string& path, BoxFittingParams* params,
+                              std::string* error) {
+  return loadDetectionSection(path, "box_fitting", params, error);
+}
+
 bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& section,
                                  GridSegmenterParams* p, std::string* error) {
   YAML::Node root;

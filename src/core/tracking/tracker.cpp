@@ -35,28 +35,6 @@ double wrapPi(double a) {
   return a;
 }
 
-using Polygon = std::array<Eigen::Vector2d, 16>;
-
-int rectangle(const Eigen::Vector2d& c, double l, double w, double yaw, Polygon* out) {
-  const Eigen::Vector2d ax(std::cos(yaw) * 0.5 * l, std::sin(yaw) * 0.5 * l);
-  const Eigen::Vector2d ay(-std::sin(yaw) * 0.5 * w, std::cos(yaw) * 0.5 * w);
-  (*out)[0] = c + ax + ay;  // counter-clockwise
-  (*out)[1] = c - ax + ay;
-  (*out)[2] = c - ax - ay;
-  (*out)[3] = c + ax - ay;
-  return 4;
-}
-
-double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  return a.x() * b.y() - a.y() * b.x();
-}
-
-double area(const Polygon& p, int n) {
-  double s = 0.0;
-  for (int k = 0; k < n; ++k) s += cross(p[k], p[(k + 1) % n]);
-  return 0.5 * std::fabs(s);
-}
-
 }  // namespace
 
 std::string validate(const TrackerParams& p) {
@@ -79,36 +57,6 @@ const char* toString(TrackState s) {
     default:
       return "lost";
   }
-}
-
-double bevIoU(const Eigen::Vector2d& c1, double l1, double w1, double yaw1,
-              const Eigen::Vector2d& c2, double l2, double w2, double yaw2) {
-  if (!(l1 > 0 && w1 > 0 && l2 > 0 && w2 > 0)) return 0.0;
-  // Quick reject on the circumscribed circles.
-  const double r1 = 0.5 * std::hypot(l1, w1), r2 = 0.5 * std::hypot(l2, w2);
-  if ((c1 - c2).squaredNorm() >= (r1 + r2) * (r1 + r2)) return 0.0;
-  // Sutherland-Hodgman: clip rectangle 1 by the four edges of rectangle 2 (both convex).
-  Polygon clip, a, b;
-  rectangle(c2, l2, w2, yaw2, &clip);
-  int n = rectangle(c1, l1, w1, yaw1, &a);
-  for (int e = 0; e < 4 && n > 0; ++e) {
-    const Eigen::Vector2d& p0 = clip[e];
-    const Eigen::Vector2d edge = clip[(e + 1) % 4] - p0;
-    int m = 0;
-    for (int k = 0; k < n; ++k) {
-      const Eigen::Vector2d& cur = a[k];
-      const Eigen::Vector2d& nxt = a[(k + 1) % n];
-      const double sc = cross(edge, cur - p0), sn = cross(edge, nxt - p0);
-      if (sc >= 0) b[m++] = cur;
-      if ((sc >= 0) != (sn >= 0)) b[m++] = cur + (nxt - cur) * (sc / (sc - sn));
-      if (m >= 14) break;  // cannot happen for two rectangles; keeps the array bounded
-    }
-    a = b;
-    n = m;
-  }
-  const double inter = n >= 3 ? area(a, n) : 0.0;
-  const double uni = l1 * w1 + l2 * w2 - inter;
-  return uni > 0 ? std::min(1.0, inter / uni) : 0.0;
 }
 
 Tracker::Tracker(const TrackerParams& params) {
@@ -401,20 +349,15 @@ void Tracker::updateTrack(std::size_t t, const Measurement& m) {
   ++track.hits;
   track.misses = 0;
   track.detection = m.index;
-  if (track.state == TrackState::kLost || (track.state == TrackState::kTentative &&
-                                           static_cast<int>(track.hits) >= params_.birth_hits)) {
+  f.class_evidence.add(m.category, m.confidence);
+  if (f.class_evidence.count() > 0) {
+    track.category = f.class_evidence.category();
+    track.class_confidence = f.class_evidence.probability();
+  }
+  if (track.state == TrackState::kLost ||
+      (track.state == TrackState::kTentative &&
+       (static_cast<int>(track.hits) >= params_.birth_hits || confidentBirth(track)))) {
     track.state = TrackState::kConfirmed;
-  }
-  const int c = static_cast<int>(m.category);
-  if (c >= 0 && c < 5) f.class_score[c] += std::max(0.0f, m.confidence) + 1e-3;
-  int best = -1;
-  for (int k = 0; k < 5; ++k) {
-    if (f.class_score[k] > 0.0 && (best < 0 || f.class_score[k] > f.class_score[best])) best = k;
-  }
-  if (best >= 0) {
-    track.category = static_cast<ObjectCategory>(best);
-    track.class_confidence =
-        static_cast<float>(std::min(1.0, f.class_score[best] / static_cast<double>(track.hits)));
   }
   // Heading: along the velocity when moving (the box yaw turned by pi if it points backwards).
   if (track.speed() > params_.moving_speed_mps) {
@@ -423,6 +366,13 @@ void Tracker::updateTrack(std::size_t t, const Measurement& m) {
       track.yaw_rad = wrapPi(track.yaw_rad + kPi);
     }
   }
+}
+
+bool Tracker::confidentBirth(const Track& t) const {
+  return params_.confident_birth_probability > 0.0 &&
+         (t.category == ObjectCategory::kVehicle || t.category == ObjectCategory::kPedestrian ||
+          t.category == ObjectCategory::kCyclist) &&
+         t.class_confidence >= params_.confident_birth_probability;
 }
 
 void Tracker::startTrack(const Measurement& m) {
@@ -441,12 +391,12 @@ void Tracker::startTrack(const Measurement& m) {
   const double r = params_.measurement_std_m * params_.measurement_std_m;
   const double v = params_.initial_velocity_std_mps * params_.initial_velocity_std_mps;
   f.P = Eigen::Vector4d(r, r, v, v).asDiagonal();
-  const int c = static_cast<int>(m.category);
-  if (c >= 0 && c < 5) {
-    f.class_score[c] += std::max(0.0f, m.confidence) + 1e-3;
-    track.category = m.category;
-    track.class_confidence = m.confidence;
+  f.class_evidence.add(m.category, m.confidence);
+  if (f.class_evidence.count() > 0) {
+    track.category = f.class_evidence.category();
+    track.class_confidence = f.class_evidence.probability();
   }
+  if (confidentBirth(track)) track.state = TrackState::kConfirmed;
   track.velocity_covariance = f.P.bottomRightCorner<2, 2>();
   track.position_covariance = f.P.topLeftCorner<2, 2>();
   tracks_.push_back(track);

@@ -8,6 +8,7 @@
 
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/detection/box_fitting.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
@@ -51,6 +52,12 @@ bool loadObjectFilterParamsYaml(const std::string& path, ObjectFilterParams* par
 /// folder of that file. A file without the map changes nothing.
 bool loadObjectClassifierParamsYaml(const std::string& path, ObjectClassifierParams* params,
                                     std::string* error);
+
+/// Overrides the fields of `params` from the `box_fitting:` map of a detection.yaml style file
+/// (config/classification.yaml; top level, or under `detection:`). A file without it changes
+/// nothing.
+bool loadBoxFittingParamsYaml(const std::string& path, BoxFittingParams* params,
+                              std::string* error);
 
 /// Overrides the fields of `params` from the `tracker:` map of a file (config/object_tracker.yaml),
 /// or from its root when it has no such map.

@@ -18,7 +18,9 @@
 ///      gated pairs split each stage into independent groups, each solved on its own (a street
 ///      of 100 objects is many 1x1 and 2x2 problems);
 ///   4. matched tracks are updated; unmatched detections start tentative tracks; a tentative
-///      track becomes confirmed after `birth_hits` hits and is deleted after
+///      track becomes confirmed after `birth_hits` hits (or as soon as its class evidence,
+///      class_evidence.h, gives vehicle, pedestrian or cyclist a posterior of at least
+///      `confident_birth_probability`, when that is above 0) and is deleted after
 ///      `tentative_max_misses` consecutive misses; a confirmed track that misses becomes lost
 ///      (coasting on its prediction) and is deleted after `death_misses` consecutive misses;
 ///      a lost track that is matched again is confirmed again, keeping its id.
@@ -33,7 +35,9 @@
 #include <Eigen/Geometry>
 
 #include "urban_detection/core/common/param_fields.h"
+#include "urban_detection/core/detection/box_fitting.h"  // bevIoU
 #include "urban_detection/core/detection/object_detector.h"
+#include "urban_detection/core/tracking/class_evidence.h"
 
 namespace urban_detection {
 namespace core {
@@ -54,6 +58,9 @@ struct TrackerParams {
   double default_dt_s = 0.1;              // [s] revolution period used when stamps do not advance
   double max_dt_s = 1.0;                  // [s] a larger gap between stamps restarts the tracker
   double moving_speed_mps = 0.5;          // [m/s] above it the heading follows the velocity
+  double confident_birth_probability = 0.0;  // [0..1] a tentative track whose class evidence
+                                             //   gives vehicle, pedestrian or cyclist at least
+                                             //   this posterior is confirmed (0: off)
 };
 
 /// "" when every value is in its table range (ParamFields<TrackerParams> below) and
@@ -95,6 +102,10 @@ struct ParamFields<TrackerParams> {
       p.max_dt_s);
     f(FieldInfo("moving_speed_mps", "m/s", 0, 100, "above it the heading follows the velocity"),
       p.moving_speed_mps);
+    f(FieldInfo("confident_birth_probability", "", 0, 1,
+                "a tentative track whose class evidence gives vehicle, pedestrian or cyclist at "
+                "least this posterior is confirmed before birth_hits (0: off)"),
+      p.confident_birth_probability);
   }
 };
 
@@ -121,10 +132,11 @@ struct Track {
   Eigen::Matrix2d position_covariance = Eigen::Matrix2d::Identity();  // [m^2]
   Eigen::Vector3d size = Eigen::Vector3d::Zero();  // [m] length, width, height (smoothed)
   double yaw_rad = 0.0;                            // [rad] box yaw; along the velocity when moving
-  ObjectCategory category = ObjectCategory::kUnknown;  // most confident class over its hits
-  float class_confidence = 0.0f;  // [0..1] mean confidence of `category` over its hits
-  int detection = -1;             // index of the detection it was matched to in the latest
-                                  // revolution, -1 when it was not matched
+  ObjectCategory category = ObjectCategory::kUnknown;  // class with the most evidence over its
+                                                       //   hits (class_evidence.h)
+  float class_confidence = 0.0f;                       // [0..1] posterior probability of `category`
+  int detection = -1;  // index of the detection it was matched to in the latest
+                       // revolution, -1 when it was not matched
 
   double speed() const { return velocity.norm(); }  // [m/s]
 };
@@ -172,7 +184,7 @@ class Tracker {
   struct Filter {  // Kalman state of one track, in the same order as tracks_
     Eigen::Vector4d x = Eigen::Vector4d::Zero();
     Eigen::Matrix4d P = Eigen::Matrix4d::Identity();
-    double class_score[5] = {0, 0, 0, 0, 0};  // summed confidences per ObjectCategory 0..4
+    ClassEvidence class_evidence;  // accumulated class probabilities of its detections
   };
   struct Measurement {  // one detection in the fixed frame
     Eigen::Vector3d center;
@@ -188,6 +200,7 @@ class Tracker {
   void associateStage(bool tentative);
   void updateTrack(std::size_t t, const Measurement& m);
   void startTrack(const Measurement& m);
+  bool confidentBirth(const Track& t) const;
 
   TrackerParams params_;
   std::vector<Track> tracks_;
@@ -213,11 +226,6 @@ class Tracker {
   };
   std::vector<Pair> pairs_;
 };
-
-/// Bird's-eye intersection over union of two yaw-oriented rectangles (centre [m], length and
-/// width [m], yaw [rad]); 0 when either has no area.
-double bevIoU(const Eigen::Vector2d& c1, double l1, double w1, double yaw1,
-              const Eigen::Vector2d& c2, double l2, double w2, double yaw2);
 
 }  // namespace core
 }  // namespace urban_detection
