@@ -27,6 +27,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -46,6 +47,7 @@
 
 #include "datasets.h"
 #include "tool_common.h"
+#include "tracking_eval.h"
 
 namespace core = urban_detection::core;
 using urban_detection::tools::jsonEscape;
@@ -117,10 +119,14 @@ struct Scored {
 // Scores the frames of `groups` for detector k, classified by `decision` (null: the detector
 // alone, every detection kept) with the probabilities `probs(frame, detection)`. Adds per
 // group to `by_group` when not null.
+// Per frame and detection, the class a later stage gave (kUnknown: the decision's own).
+using ClassOverride = std::map<std::size_t, std::vector<core::ObjectCategory>>;
+
 template <class ProbFn>
 Scored score(const std::vector<FrameData>& frames, const std::set<std::string>& groups,
              std::size_t k, const core::ClassDecision* decision, ProbFn probs,
-             const core::EvaluationParams& ep, std::map<std::string, Scored>* by_group) {
+             const core::EvaluationParams& ep, std::map<std::string, Scored>* by_group,
+             const ClassOverride* override_class = nullptr) {
   core::DetectionEvaluator eval(ep);
   core::EvaluationParams ep_all = ep;
   ep_all.min_points = 1;
@@ -139,7 +145,14 @@ Scored score(const std::vector<FrameData>& frames, const std::set<std::string>& 
         continue;
       }
       float confidence = 0.0f;
-      const core::ObjectCategory c = core::decideClass(probs(fi, i), *decision, true, &confidence);
+      core::ObjectCategory c = core::decideClass(probs(fi, i), *decision, true, &confidence);
+      if (override_class) {
+        const auto it = override_class->find(fi);
+        if (it != override_class->end() && i < it->second.size() &&
+            it->second[i] != core::ObjectCategory::kUnknown) {
+          c = it->second[i];
+        }
+      }
       if (c == core::ObjectCategory::kNonObject) continue;
       kept.push_back(d.objects[i]);
       kept.back().category = c;
@@ -192,6 +205,82 @@ core::ObjectClassifierModel trainOn(const std::vector<FrameData>& frames,
   std::vector<core::ObjectCategory> y;
   trainingSet(frames, groups, &x, &y);
   return core::ObjectClassifierModel::train(x, y, params, fp);
+}
+
+// Time as evidence: a sequence's scans in order through the tracker in the world frame of
+// poses.txt, every detection with its class (non-objects included, with P(non_object)). A
+// confirmed track whose accumulated class (class_evidence.h) is an object class, or that has
+// moved at least kMovedM from where it was first seen at kMovingMps or more, makes its
+// detection an object: that class, or the detection's most likely object class when it is
+// kept for moving. Returns the classes per frame (kUnknown: the scan's own decision stands).
+struct TemporalStats {
+  std::size_t by_class = 0, by_motion = 0, dropped = 0;
+};
+constexpr double kMovedM = 1.5;
+constexpr double kMovingMps = 0.5;
+
+template <class ProbFn>
+void temporalClasses(const std::vector<FrameData>& frames, const std::string& group, std::size_t k,
+                     const core::ClassDecision& decision, ProbFn probs,
+                     const std::vector<Eigen::Isometry3d>& poses,
+                     const core::TrackerParams& tracker_params, ClassOverride* out,
+                     TemporalStats* stats) {
+  core::Tracker tracker(tracker_params);
+  std::map<std::uint32_t, Eigen::Vector2d> first_seen;
+  std::vector<core::DetectedObject> objects;
+  for (std::size_t fi = 0; fi < frames.size(); ++fi) {
+    const FrameData& f = frames[fi];
+    if (f.augmented || f.group != group) continue;
+    const std::size_t slash = f.id.find('/');
+    const std::size_t scan = std::strtoul(f.id.c_str() + (slash + 1), nullptr, 10);
+    if (scan >= poses.size()) continue;
+    const DetectorFrame& d = f.detectors[k];
+    objects = d.objects;
+    std::vector<core::ObjectCategory> own(objects.size());
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+      const Probabilities p = probs(fi, i);
+      float confidence = 0.0f;
+      own[i] = core::decideClass(p, decision, true, &confidence);
+      objects[i].category = own[i];
+      objects[i].class_confidence = confidence;
+    }
+    tracker.update(objects, poses[scan], 0.1 * static_cast<double>(scan));
+    std::vector<core::ObjectCategory>& cls = (*out)[fi];
+    cls.assign(objects.size(), core::ObjectCategory::kUnknown);
+    for (const core::Track& t : tracker.tracks()) {
+      if (t.detection < 0 || static_cast<std::size_t>(t.detection) >= objects.size()) continue;
+      const auto it = first_seen.emplace(t.id, t.center.head<2>()).first;
+      if (t.state == core::TrackState::kTentative) continue;
+      const std::size_t i = static_cast<std::size_t>(t.detection);
+      const bool moved =
+          (t.center.head<2>() - it->second).norm() >= kMovedM && t.speed() >= kMovingMps;
+      const bool object_class = t.category != core::ObjectCategory::kNonObject &&
+                                t.category != core::ObjectCategory::kUnknown;
+      if (own[i] != core::ObjectCategory::kNonObject) {
+        // Kept by its scan: a confirmed track's class replaces the scan's; a track whose
+        // evidence says non-object over several scans and that does not move drops it.
+        if (object_class) {
+          cls[i] = t.category;
+        } else if (t.category == core::ObjectCategory::kNonObject && t.hits >= 3 && !moved) {
+          cls[i] = core::ObjectCategory::kNonObject;
+          ++stats->dropped;
+        }
+        continue;
+      }
+      if (object_class) {
+        cls[i] = t.category;
+        ++stats->by_class;
+      } else if (moved) {
+        const Probabilities p = probs(fi, i);
+        int best = 1;
+        for (int c = 2; c < core::kNumObjectCategories; ++c) {
+          if (p[c] > p[best]) best = c;
+        }
+        cls[i] = static_cast<core::ObjectCategory>(best);
+        ++stats->by_motion;
+      }
+    }
+  }
 }
 
 enum class DecisionRule { kObject, kClass };
@@ -700,12 +789,67 @@ int main(int argc, char** argv) {
            << ", \"min_sequence_f_on\": " << jsonNumber(min_f) << "}";
     }
     json << "\n  },\n";
+    // Time as evidence (hierarchical grid): each held-out sequence in scan order with its poses.
+    ClassOverride over_time;
+    TemporalStats temporal_stats;
+    bool temporal_ok = true;
+    for (const std::string& g : groups) {
+      const std::string seq_dir = std::filesystem::is_directory(skitti_dir + "/velodyne")
+                                      ? skitti_dir
+                                      : skitti_dir + "/sequences/" + g;
+      std::vector<Eigen::Isometry3d> poses;
+      bool nominal = false;
+      std::string error;
+      if (!urban_detection::tools::readSemanticKittiPoses(seq_dir, &poses, &nominal, &error)) {
+        std::fprintf(stderr, "warning: no time evidence for %s: %s\n", g.c_str(), error.c_str());
+        temporal_ok = false;
+        continue;
+      }
+      temporalClasses(frames, g, 0, fold_decision[g], held_out(0), poses, core::TrackerParams(),
+                      &over_time, &temporal_stats);
+    }
+    Scored on_time;
+    std::map<std::string, Scored> on_time_by_group;
+    for (const std::string& g : groups) {
+      const Scored sg =
+          score(frames, {g}, 0, &fold_decision[g], held_out(0), ep, &on_time_by_group, &over_time);
+      on_time.score += sg.score;
+      on_time.all += sg.all;
+      on_time.breakdown += sg.breakdown;
+    }
+    std::printf("%-8s %-18s %-22s | %-43s | %s\n", "+ time", detectors[0]->name().c_str(),
+                temporal_ok ? "tracker, poses" : "(some poses missing)", "",
+                scoreRow(on_time.score).c_str());
+    std::printf("%-8s %-18s %-22s | %-43s | %s\n", "N = 1", detectors[0]->name().c_str(), "", "",
+                scoreRow(on_time.all).c_str());
+    std::printf(
+        "time as evidence: %zu detections kept by their track's class, %zu for moving, "
+        "%zu dropped by a non-object track\n",
+        temporal_stats.by_class, temporal_stats.by_motion, temporal_stats.dropped);
+    double min_f_time = 1.0;
+    for (const std::string& g : groups) {
+      min_f_time = std::min(min_f_time, on_time_by_group[g].score.fRate());
+    }
+    json << "  \"time_as_evidence\": {\"pooled\": " << scoreJson(on_time.score)
+         << ", \"pooled_all_objects\": " << scoreJson(on_time.all)
+         << ", \"breakdown\": " << on_time.breakdown.json()
+         << ", \"min_sequence_f\": " << jsonNumber(min_f_time)
+         << ", \"kept_by_class\": " << temporal_stats.by_class
+         << ", \"kept_for_moving\": " << temporal_stats.by_motion
+         << ", \"dropped\": " << temporal_stats.dropped << ", \"sequences\": {";
+    for (std::size_t gi = 0; gi < groups.size(); ++gi) {
+      json << (gi ? ", " : "") << "\"" << groups[gi]
+           << "\": " << scoreJson(on_time_by_group[groups[gi]].score);
+    }
+    json << "}},\n";
     for (std::size_t k = 0; k < detectors.size(); ++k) {
       std::printf("\n%s, held out, classifier off:\n%s", detectors[k]->name().c_str(),
                   off_total[k].breakdown.table("  ").c_str());
       std::printf("%s, held out, classifier on:\n%s", detectors[k]->name().c_str(),
                   on_total[k].breakdown.table("  ").c_str());
     }
+    std::printf("%s, held out, classifier on + time:\n%s", detectors[0]->name().c_str(),
+                on_time.breakdown.table("  ").c_str());
     // Pooled confusion matrix of the held-out predictions (hierarchical grid, each fold's
     // decision).
     std::array<std::array<std::size_t, core::kNumObjectCategories>, core::kNumObjectCategories>
