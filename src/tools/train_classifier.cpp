@@ -209,15 +209,14 @@ core::ObjectClassifierModel trainOn(const std::vector<FrameData>& frames,
 
 // Time as evidence: a sequence's scans in order through the tracker in the world frame of
 // poses.txt, every detection with its class (non-objects included, with P(non_object)). A
-// confirmed track whose accumulated class (class_evidence.h) is an object class, or that has
-// moved at least kMovedM from where it was first seen at kMovingMps or more, makes its
-// detection an object: that class, or the detection's most likely object class when it is
-// kept for moving. Returns the classes per frame (kUnknown: the scan's own decision stands).
+// confirmed track whose accumulated class (class_evidence.h) is an object class makes its
+// detection an object of that class. Returns the classes per frame (kUnknown: the scan's own
+// decision stands). Keeping small tracks that move and dropping detections of tracks whose
+// evidence says non-object were measured and are not used (docs/classification.md).
 struct TemporalStats {
-  std::size_t by_class = 0, by_motion = 0, dropped = 0;
+  std::size_t kept = 0;       // rejected by their scan, kept by their track's class
+  std::size_t reclassed = 0;  // kept by their scan, class taken from their track
 };
-constexpr double kMovedM = 1.5;
-constexpr double kMovingMps = 0.5;
 
 template <class ProbFn>
 void temporalClasses(const std::vector<FrameData>& frames, const std::string& group, std::size_t k,
@@ -226,7 +225,6 @@ void temporalClasses(const std::vector<FrameData>& frames, const std::string& gr
                      const core::TrackerParams& tracker_params, ClassOverride* out,
                      TemporalStats* stats) {
   core::Tracker tracker(tracker_params);
-  std::map<std::uint32_t, Eigen::Vector2d> first_seen;
   std::vector<core::DetectedObject> objects;
   for (std::size_t fi = 0; fi < frames.size(); ++fi) {
     const FrameData& f = frames[fi];
@@ -234,13 +232,11 @@ void temporalClasses(const std::vector<FrameData>& frames, const std::string& gr
     const std::size_t slash = f.id.find('/');
     const std::size_t scan = std::strtoul(f.id.c_str() + (slash + 1), nullptr, 10);
     if (scan >= poses.size()) continue;
-    const DetectorFrame& d = f.detectors[k];
-    objects = d.objects;
+    objects = f.detectors[k].objects;
     std::vector<core::ObjectCategory> own(objects.size());
     for (std::size_t i = 0; i < objects.size(); ++i) {
-      const Probabilities p = probs(fi, i);
       float confidence = 0.0f;
-      own[i] = core::decideClass(p, decision, true, &confidence);
+      own[i] = core::decideClass(probs(fi, i), decision, true, &confidence);
       objects[i].category = own[i];
       objects[i].class_confidence = confidence;
     }
@@ -248,37 +244,15 @@ void temporalClasses(const std::vector<FrameData>& frames, const std::string& gr
     std::vector<core::ObjectCategory>& cls = (*out)[fi];
     cls.assign(objects.size(), core::ObjectCategory::kUnknown);
     for (const core::Track& t : tracker.tracks()) {
-      if (t.detection < 0 || static_cast<std::size_t>(t.detection) >= objects.size()) continue;
-      const auto it = first_seen.emplace(t.id, t.center.head<2>()).first;
-      if (t.state == core::TrackState::kTentative) continue;
-      const std::size_t i = static_cast<std::size_t>(t.detection);
-      const bool moved =
-          (t.center.head<2>() - it->second).norm() >= kMovedM && t.speed() >= kMovingMps;
-      const bool object_class = t.category != core::ObjectCategory::kNonObject &&
-                                t.category != core::ObjectCategory::kUnknown;
-      if (own[i] != core::ObjectCategory::kNonObject) {
-        // Kept by its scan: a confirmed track's class replaces the scan's; a track whose
-        // evidence says non-object over several scans and that does not move drops it.
-        if (object_class) {
-          cls[i] = t.category;
-        } else if (t.category == core::ObjectCategory::kNonObject && t.hits >= 3 && !moved) {
-          cls[i] = core::ObjectCategory::kNonObject;
-          ++stats->dropped;
-        }
+      if (t.detection < 0 || static_cast<std::size_t>(t.detection) >= objects.size() ||
+          t.state == core::TrackState::kTentative ||
+          t.category == core::ObjectCategory::kNonObject ||
+          t.category == core::ObjectCategory::kUnknown) {
         continue;
       }
-      if (object_class) {
-        cls[i] = t.category;
-        ++stats->by_class;
-      } else if (moved) {
-        const Probabilities p = probs(fi, i);
-        int best = 1;
-        for (int c = 2; c < core::kNumObjectCategories; ++c) {
-          if (p[c] > p[best]) best = c;
-        }
-        cls[i] = static_cast<core::ObjectCategory>(best);
-        ++stats->by_motion;
-      }
+      const std::size_t i = static_cast<std::size_t>(t.detection);
+      cls[i] = t.category;
+      ++(own[i] == core::ObjectCategory::kNonObject ? stats->kept : stats->reclassed);
     }
   }
 }
@@ -823,9 +797,9 @@ int main(int argc, char** argv) {
     std::printf("%-8s %-18s %-22s | %-43s | %s\n", "N = 1", detectors[0]->name().c_str(), "", "",
                 scoreRow(on_time.all).c_str());
     std::printf(
-        "time as evidence: %zu detections kept by their track's class, %zu for moving, "
-        "%zu dropped by a non-object track\n",
-        temporal_stats.by_class, temporal_stats.by_motion, temporal_stats.dropped);
+        "time as evidence: %zu detections rejected by their scan kept by their track's "
+        "class, %zu kept ones given their track's class\n",
+        temporal_stats.kept, temporal_stats.reclassed);
     double min_f_time = 1.0;
     for (const std::string& g : groups) {
       min_f_time = std::min(min_f_time, on_time_by_group[g].score.fRate());
@@ -834,9 +808,8 @@ int main(int argc, char** argv) {
          << ", \"pooled_all_objects\": " << scoreJson(on_time.all)
          << ", \"breakdown\": " << on_time.breakdown.json()
          << ", \"min_sequence_f\": " << jsonNumber(min_f_time)
-         << ", \"kept_by_class\": " << temporal_stats.by_class
-         << ", \"kept_for_moving\": " << temporal_stats.by_motion
-         << ", \"dropped\": " << temporal_stats.dropped << ", \"sequences\": {";
+         << ", \"kept_by_track_class\": " << temporal_stats.kept
+         << ", \"class_from_track\": " << temporal_stats.reclassed << ", \"sequences\": {";
     for (std::size_t gi = 0; gi < groups.size(); ++gi) {
       json << (gi ? ", " : "") << "\"" << groups[gi]
            << "\": " << scoreJson(on_time_by_group[groups[gi]].score);
