@@ -323,6 +323,43 @@ void writeFramePng(const std::string& path, const Frame& f, const urban_detectio
 }
 
 // ------------------------------------------------------------------------------------------
+// Recall per class: GT objects counted and matched, by the category of their label.
+
+using ClassRecall = std::map<std::string, std::pair<std::size_t, std::size_t>>;
+
+void tallyClassRecall(const core::EvalFrame& gt, const core::FrameMatch& m, ClassRecall* tally) {
+  for (std::size_t g = 0; g < gt.objects.size(); ++g) {
+    if (gt.objects[g].ignored) continue;
+    auto& t = (*tally)[core::toString(core::categoryOfClassName(gt.objects[g].label))];
+    ++t.first;
+    t.second += g < m.matched_detection.size() && m.matched_detection[g] >= 0;
+  }
+}
+
+// "vehicle 0.912 (520/570), ..." or, with `json`, {"vehicle": {"no": 570, "tp": 520}, ...}.
+std::string classRecallText(const ClassRecall& tally, bool json) {
+  std::ostringstream o;
+  o << (json ? "{" : "");
+  bool first = true;
+  for (const auto& kv : tally) {
+    o << (first ? "" : ", ");
+    first = false;
+    if (json) {
+      o << "\"" << kv.first << "\": {\"no\": " << kv.second.first
+        << ", \"tp\": " << kv.second.second << "}";
+    } else {
+      char buf[96];
+      std::snprintf(buf, sizeof(buf), "%s %.3f (%zu/%zu)", kv.first.c_str(),
+                    kv.second.first ? double(kv.second.second) / kv.second.first : 1.0,
+                    kv.second.second, kv.second.first);
+      o << buf;
+    }
+  }
+  o << (json ? "}" : "");
+  return o.str();
+}
+
+// ------------------------------------------------------------------------------------------
 // Output
 
 std::string scoreJson(const core::DetectionScore& s) {
@@ -703,6 +740,7 @@ int main(int argc, char** argv) {
   // class given against the ground truth's ("vehicle->vehicle", ...).
   std::vector<std::map<std::string, core::DetectionScore>> by_group(detectors.size());
   std::vector<std::map<std::string, std::size_t>> class_pairs(detectors.size());
+  std::vector<ClassRecall> class_recall(detectors.size());
   std::map<std::string, std::size_t> fg_composition;  // foreground points by dataset class
   std::ostringstream rows;
   bool first_row = true;
@@ -759,6 +797,7 @@ int main(int argc, char** argv) {
         }
       }
       evaluators[k].evaluate(f.gt, objects, &match);
+      tallyClassRecall(f.gt, match, &class_recall[k]);
       by_group[k][urban_detection::tools::frameGroup(f.id, dataset->name())] += match.score;
       for (std::size_t d = 0; d < objects.size() && classifier; ++d) {
         if (match.verdict[d] != core::DetectionVerdict::kTrue) continue;
@@ -815,6 +854,8 @@ int main(int argc, char** argv) {
           detectors[k]->name().c_str(), countsJson(classified_out[k]).c_str(),
           countsJson(class_pairs[k]).c_str());
     }
+    std::printf("%s: recall by class %s\n", detectors[k]->name().c_str(),
+                classRecallText(class_recall[k], false).c_str());
     std::printf("%s: missed by cause %s; false by content %s\n", detectors[k]->name().c_str(),
                 countsJson(diags[k].missed_by_cause).c_str(),
                 countsJson(diags[k].false_by_class).c_str());
@@ -858,7 +899,9 @@ int main(int argc, char** argv) {
           << ", \"object_filter\": " << (params.object_filter.enabled ? "true" : "false")
           << ", \"rejected_by_content\": " << countsJson(rejected_by_content[k])
           << ", \"classifier_rejected_by_content\": " << countsJson(classified_out[k])
-          << ", \"class_truth_to_given\": " << countsJson(class_pairs[k]) << ", \"by_sequence\": {";
+          << ", \"class_truth_to_given\": " << countsJson(class_pairs[k])
+          << ", \"recall_by_class\": " << classRecallText(class_recall[k], true)
+          << ", \"by_sequence\": {";
       bool first_group = true;
       for (const auto& g : by_group[k]) {
         out << (first_group ? "" : ", ") << "\"" << jsonEscape(g.first) << "\": {"
