@@ -104,8 +104,7 @@ TEST(GroupSplitter, TwoAndThreePeopleSideBySideAreSplitIntoOneObjectEach) {
         // The scene is what the rule is for: without it the group is one object.
         const auto merged = detect(boxes, GridSegmenterParams(), splitOff(), &tags);
         EXPECT_LT(separatedTags(merged, tags).size(), all.size()) << what << ", rule off";
-        const auto split =
-            detect(boxes, GridSegmenterParams(), splitOn(), &tags);
+        const auto split = detect(boxes, GridSegmenterParams(), splitOn(), &tags);
         EXPECT_EQ(separatedTags(split, tags), all) << what;
         EXPECT_EQ(split.size(), all.size()) << what;
       }
@@ -126,8 +125,7 @@ TEST(GroupSplitter, OnePersonACarAndACyclistStayWhole) {
   boxes.push_back({14.9f, -5.45f, 1.55f, 15.1f, -5.25f, 1.8f, 3});
   boxes.push_back({14.8f, -5.2f, 1.2f, 15.2f, -4.4f, 1.3f, 3});
   std::vector<int> tags;
-  const auto objects =
-      detect(boxes, GridSegmenterParams(), splitOn(), &tags);
+  const auto objects = detect(boxes, GridSegmenterParams(), splitOn(), &tags);
   EXPECT_EQ(separatedTags(objects, tags), (std::vector<int>{1, 2, 3}));
   EXPECT_EQ(objects.size(), 3u);
 }
@@ -142,6 +140,14 @@ TEST(GroupSplitter, RejectsInconsistentParameters) {
   EXPECT_THROW(core::GroupSplitter{p}, std::invalid_argument);
   p.min_length_m = 0.0;  // off: the length range is not used
   EXPECT_EQ(core::validate(p), "");
+}
+
+// The segmentation with step 5b on (shipped off, see config/segmentation.yaml).
+GridSegmenterParams rulesOn() {
+  GridSegmenterParams p;
+  p.overhang_min_gap_m = 0.6;
+  p.thin_max_width_m = 0.3;
+  return p;
 }
 
 // Share of the points of box `tag` more than 0.16 m above the ground labelled `cls`.
@@ -164,18 +170,18 @@ TEST(GridSegmenterOverhang, PersonUnderATreeCanopyIsShortAndTheTreeTall) {
   addPerson(&boxes, 27.85f, 0.8f, 3);
   std::vector<int> tags;
   const CloudXYZIRT cloud = test::rayCast(kKittiHeight, boxes, &tags, 64, 4000);
-  GridSegmenterParams p;
+  GridSegmenterParams p = rulesOn();
   std::vector<SegmentClass> labels;
   p.overhang_min_gap_m = 0.0;
   GridSegmenter(p).segment(cloud, &labels);
   ASSERT_GT(shareOf(cloud, tags, labels, 3, SegmentClass::kTall), 0.5) << "the rule's case";
-  GridSegmenter seg;  // shipped defaults: the rule on
+  GridSegmenter seg(rulesOn());
   seg.segment(cloud, &labels);
   EXPECT_GT(shareOf(cloud, tags, labels, 3, SegmentClass::kShort), 0.95);
   EXPECT_GT(shareOf(cloud, tags, labels, 1, SegmentClass::kTall), 0.95);
   EXPECT_GT(shareOf(cloud, tags, labels, 2, SegmentClass::kTall), 0.95);
   // Beyond overhang_max_range_m a gap may be missing scan rings: the rule stays out.
-  p = GridSegmenterParams();
+  p = rulesOn();
   p.overhang_max_range_m = 25.0;
   GridSegmenter(p).segment(cloud, &labels);
   EXPECT_GT(shareOf(cloud, tags, labels, 3, SegmentClass::kTall), 0.5);
@@ -188,11 +194,11 @@ TEST(GridSegmenterOverhang, PersonBesideAPoleIsShortAndThePoleTall) {
   std::vector<int> tags;
   const CloudXYZIRT cloud = test::rayCast(kKittiHeight, boxes, &tags, 64, 4000);
   std::vector<SegmentClass> labels;
-  GridSegmenterParams p;
+  GridSegmenterParams p = rulesOn();
   p.thin_max_width_m = 0.0;
   GridSegmenter(p).segment(cloud, &labels);
   ASSERT_GT(shareOf(cloud, tags, labels, 2, SegmentClass::kTall), 0.3) << "the rule's case";
-  GridSegmenter seg;
+  GridSegmenter seg(rulesOn());
   seg.segment(cloud, &labels);
   EXPECT_GT(shareOf(cloud, tags, labels, 2, SegmentClass::kShort), 0.9);
   EXPECT_GT(shareOf(cloud, tags, labels, 1, SegmentClass::kTall), 0.99);
@@ -206,7 +212,7 @@ TEST(GridSegmenterOverhang, FacadeWithAPersonInFrontStaysTallAndThePersonShort) 
   std::vector<int> tags;
   const CloudXYZIRT cloud = test::rayCast(kKittiHeight, boxes, &tags, 64, 4000);
   std::vector<SegmentClass> labels;
-  GridSegmenter seg;
+  GridSegmenter seg(rulesOn());
   seg.segment(cloud, &labels);
   EXPECT_GT(shareOf(cloud, tags, labels, 1, SegmentClass::kTall), 0.99);
   EXPECT_GT(shareOf(cloud, tags, labels, 2, SegmentClass::kShort), 0.95);

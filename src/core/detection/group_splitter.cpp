@@ -89,9 +89,8 @@ bool GroupSplitter::split(const LabeledCloud& foreground, const DetectedObject& 
   // Heads: the highest cell within the spacing radius, high enough for a person.
   const float head_min_z = object.min_pt.z() + static_cast<float>(p.min_person_height_m);
   const int reach = static_cast<int>(std::floor(p.min_head_spacing_m * inv + 1e-6));
-  const int reach2 = static_cast<int>(std::floor(p.min_head_spacing_m * p.min_head_spacing_m *
-                                                     static_cast<double>(inv) * inv +
-                                                 1e-6));
+  const int reach2 = static_cast<int>(std::floor(
+      p.min_head_spacing_m * p.min_head_spacing_m * static_cast<double>(inv) * inv + 1e-6));
   heads_.clear();
   for (int iy = 0; iy < ny; ++iy) {
     for (int ix = 0; ix < nx; ++ix) {
@@ -102,8 +101,8 @@ bool GroupSplitter::split(const LabeledCloud& foreground, const DetectedObject& 
       for (int dy = -reach; dy <= reach && top; ++dy) {
         for (int dx = -reach; dx <= reach && top; ++dx) {
           const int jx = ix + dx, jy = iy + dy;
-          if ((dx == 0 && dy == 0) || dx * dx + dy * dy > reach2 || jx < 0 || jx >= nx ||
-              jy < 0 || jy >= ny) {
+          if ((dx == 0 && dy == 0) || dx * dx + dy * dy > reach2 || jx < 0 || jx >= nx || jy < 0 ||
+              jy >= ny) {
             continue;
           }
           const int o = jy * nx + jx;

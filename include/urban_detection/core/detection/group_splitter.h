@@ -14,7 +14,8 @@
 ///   - the highest point per cell of a `cell_m` xy grid over the object (the height map);
 ///   - heads: cells at least `min_person_height_m` above the object's lowest point and higher
 ///     than every other cell within `min_head_spacing_m` (ties: the first in row-major order);
-///   - two heads belong to the same top (a person, or one object) unless the height map between them,
+///   - two heads belong to the same top (a person, or one object) unless the height map between
+///   them,
 ///     sampled every half cell along the straight line and taking at each sample the highest of
 ///     the cell there and its two neighbours across the line (arms on both sides of a cyclist's
 ///     body, a car's roof), dips at least `min_saddle_drop_m` below the lower head somewhere

@@ -108,7 +108,9 @@ struct GridSegmenterParams {
                                        //     it the Hough refinement turns a facade's cells
                                        //     back to tall (a van seen to the upper edge of the
                                        //     field of view, within ~20 m, is short)
-  double overhang_min_gap_m = 0.6;     // [m] 0 = off; a tall cell whose heights above the
+  double overhang_min_gap_m = 0.0;     // [m] 0 = off (shipped off for its run time, see
+                                       //     docs/design.md; 0.6 when on); a tall
+                                       //     cell whose heights above the
                                        //     local ground leave an empty band at least this
                                        //     deep, with at most tall_min_height_m below it,
                                        //     holds a short object under an overhang (a person
@@ -121,7 +123,8 @@ struct GridSegmenterParams {
                                        //     that see above the road beyond ~12 m, 1/3 deg
                                        //     apart, lie <= 0.25 m apart there: an empty 0.6 m
                                        //     band is not a gap between two rings)
-  double thin_max_width_m = 0.3;       // [m] 0 = off; a tall cell of step 5b without an
+  double thin_max_width_m = 0.0;       // [m] 0 = off (shipped off, as step 5b's overhangs;
+                                       //     0.3 when on); a tall cell of step 5b without an
                                        //     overhang whose points above tall_min_height_m fit
                                        //     in an xy box this wide holds a thin upright (a
                                        //     pole, a post, a trunk): its points up to that
