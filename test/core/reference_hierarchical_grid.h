@@ -1,6 +1,7 @@
 // A plain, unoptimised re-statement of HierarchicalGridDetector::detect (the rules in the file
-// comment of hierarchical_grid_detector.h, steps 1 to 5; step 6 is the library's
-// FarObjectMerger, applied by the caller), used as the oracle that the optimised detector must
+// comment of hierarchical_grid_detector.h, steps 1 to 5; steps 6 and 7 are the library's
+// FarObjectMerger and GroupSplitter, applied by the caller), used as the oracle that the
+// optimised detector must
 // match object for object. Written for obviousness, not speed: everything is allocated per
 // call, cells live in std::map keyed by their (column, row), every neighbour is bounds-checked,
 // components are breadth-first searches over an explicit edge list, and every rule is tested

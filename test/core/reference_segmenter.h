@@ -11,6 +11,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -291,11 +292,19 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
         continue;
       }
       std::size_t tall = 0, cut = 0;
+      // Inside the Hough window (unless vehicle_fov_test_near) the test is left to the Hough
+      // refinement.
+      // ... for groups at least 3.5 m long (a van less a cell at each end).
+      const float window = p.hough.enabled && !p.vehicle_fov_test_near &&
+                                   len >= static_cast<float>(3.5 / p.cell_size_m)
+                               ? static_cast<float>(p.hough.max_range_m)
+                               : 0.0f;
       for (int c : members) {
         if (cls[c] != SegmentClass::kTall) continue;
         ++tall;
         float x, y;
         centre(c / side, c % side, &x, &y);
+        if (window > 0.0f && std::fabs(x) <= window && std::fabs(y) <= window) continue;
         const float d = std::max(0.0f, std::sqrt(x * x + y * y) - half_diag);
         if (grid[c].z_max - static_cast<float>(p.sensor_height_m) >= d * tan_top) ++cut;
       }
@@ -310,13 +319,99 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
       }
     }
   }
+  // Overhang candidates (below): tall before the Hough refinement (a cell it turns back to
+  // tall after the long-vehicle rule made it short is a wall), with a terrain estimate, a top
+  // more than tall_min_height_m above it and the centre within overhang_max_range_m.
+  std::vector<std::uint8_t> candidate(cells, 0);
+  for (int c : first_touch) {
+    if (cls[c] != SegmentClass::kTall || state[c] == kNone ||
+        !(grid[c].z_max - ground[c] > static_cast<float>(p.tall_min_height_m))) {
+      continue;
+    }
+    float x, y;
+    centre(c / side, c % side, &x, &y);
+    candidate[c] =
+        x * x + y * y <= static_cast<float>(p.overhang_max_range_m * p.overhang_max_range_m);
+  }
   if (p.hough.enabled) {
     core::HoughWallRefiner hough(p.hough);
     out.stats.hough = hough.refine(side, side, cell_m, &cls, &support);
   }
 
+  // Overhangs: a tall cell with a terrain estimate whose top is more than tall_min_height_m
+  // above it and whose centre is within overhang_max_range_m; the heights of its points above
+  // ground + tol in 0.125 m bins (bin 63 open); the lowest run of overhang_min_gap_m or more of
+  // empty bins above the lowest point ends the lower part, whose points are short when its top
+  // (upper edge of its highest bin, plus tol) is between overhang_min_height_m and
+  // tall_min_height_m; the cut is that edge.
+  std::vector<float> cut(cells, -std::numeric_limits<float>::infinity());  // none
+  // A thin upright's widened box, per cell where there is one.
+  std::vector<std::array<float, 4>> upright(cells);
+  std::vector<std::uint8_t> is_upright(cells, 0);
+  if (p.overhang_min_gap_m > 0.0 || p.thin_max_width_m > 0.0) {
+    const int gap_bins = static_cast<int>(std::ceil(p.overhang_min_gap_m * 8.0f - 1e-6));
+    std::vector<std::vector<bool>> bins(cells);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const int c = point_cell[i];
+      if (c < 0 || !candidate[c] || point_z[i] < ground[c] + tol) continue;
+      if (bins[c].empty()) bins[c].assign(64, false);
+      const float d = point_z[i] - (ground[c] + tol);
+      bins[c][std::min(63, static_cast<int>(d * 8.0f))] = true;
+    }
+    // Thin uprights: the xy box of the points more than tall_min_height_m above the ground.
+    const float upper = static_cast<float>(p.tall_min_height_m) - tol;
+    std::vector<std::array<float, 4>> top_box(
+        cells, {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                -std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()});
+    std::vector<std::vector<bool>> top_bins(cells);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const int c = point_cell[i];
+      if (c < 0 || !candidate[c] || !(point_z[i] - (ground[c] + tol) > upper)) continue;
+      if (top_bins[c].empty()) top_bins[c].assign(64, false);
+      top_bins[c][std::min(63, static_cast<int>((point_z[i] - (ground[c] + tol)) * 8.0f))] = true;
+      auto& b = top_box[c];
+      b[0] = std::min(b[0], cloud[i].x);
+      b[1] = std::min(b[1], cloud[i].y);
+      b[2] = std::max(b[2], cloud[i].x);
+      b[3] = std::max(b[3], cloud[i].y);
+    }
+    for (int c : first_touch) {
+      if (bins[c].empty()) continue;
+      const std::vector<bool>& b = bins[c];
+      int top = 0;
+      while (!b[top]) ++top;
+      // Walk up through the occupied bins until the next one lies above a deep enough run.
+      while (gap_bins > 0) {
+        int next = top + 1;
+        while (next < 64 && !b[next]) ++next;
+        if (next == 64) break;  // nothing above: no overhang
+        if (next - top - 1 >= gap_bins) {
+          const float edge = static_cast<float>(top + 1) / 8.0f;
+          int above = 0;  // occupied bins above the band: two scan rings at least
+          for (int k = next; k < 64; ++k) above += b[k];
+          if (tol + edge <= static_cast<float>(p.tall_min_height_m) &&
+              tol + edge >= static_cast<float>(p.overhang_min_height_m) && above >= 2) {
+            cut[c] = edge;
+          }
+          break;
+        }
+        top = next;
+      }
+      const auto& bx = top_box[c];
+      const float w = static_cast<float>(p.thin_max_width_m);
+      const int top_count =
+          static_cast<int>(std::count(top_bins[c].begin(), top_bins[c].end(), true));
+      if (p.thin_max_width_m > 0.0 && std::isinf(cut[c]) && top_count >= 2 && bx[2] - bx[0] <= w &&
+          bx[3] - bx[1] <= w) {
+        upright[c] = {bx[0] - 0.1f, bx[1] - 0.1f, bx[2] + 0.1f, bx[3] + 0.1f};
+        is_upright[c] = 1;
+      }
+    }
+  }
+
   // Points: in a short, tall or (with ground_in_sparse_cells) clutter cell that has a terrain
-  // estimate, points within ground_tolerance_m above it are ground; otherwise the cell class.
+  // estimate, points within ground_tolerance_m above it are ground; otherwise the cell class
+  // (in an overhang cell: short below the cut, tall above).
   out.labels.assign(cloud.size(), SegmentClass::kUnknown);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const int c = point_cell[i];
@@ -328,7 +423,16 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
     const bool split = (label == SegmentClass::kShort || label == SegmentClass::kTall ||
                         (label == SegmentClass::kClutter && p.ground_in_sparse_cells)) &&
                        state[c] != kNone;
-    if (split && point_z[i] < ground[c] + tol) label = SegmentClass::kGround;
+    if (split && point_z[i] < ground[c] + tol) {
+      label = SegmentClass::kGround;
+    } else if (label == SegmentClass::kTall && point_z[i] - (ground[c] + tol) < cut[c]) {
+      label = SegmentClass::kShort;
+    } else if (label == SegmentClass::kTall && is_upright[c] &&
+               point_z[i] - (ground[c] + tol) <= static_cast<float>(p.tall_min_height_m) - tol &&
+               !(cloud[i].x >= upright[c][0] && cloud[i].x <= upright[c][2] &&
+                 cloud[i].y >= upright[c][1] && cloud[i].y <= upright[c][3])) {
+      label = SegmentClass::kShort;
+    }
     out.labels[i] = label;
     switch (label) {
       case SegmentClass::kClutter:

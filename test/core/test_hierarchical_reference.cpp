@@ -57,6 +57,9 @@ std::vector<DetectedObject> referenceObjects(const LabeledCloud& cloud,
   }
   core::FarObjectMerger merger(p.far_merge);
   *far_joins = merger.apply(cloud, &objects);
+  // Step 7 works on the objects as step 6 does (its own plain code, no optimised twin).
+  core::GroupSplitter splitter(p.group_split);
+  splitter.apply(cloud, &objects);
   return objects;
 }
 

@@ -113,7 +113,16 @@ void expectSameAsReference(core::GridSegmenter* seg, const CloudXYZIRT& cloud,
 }
 
 std::vector<core::GridSegmenterParams> variants() {
-  std::vector<core::GridSegmenterParams> v(10);
+  std::vector<core::GridSegmenterParams> v(12);
+  // Step 5b (shipped off): overhangs and thin uprights, and the long-vehicle rule's test left to
+  // the Hough refinement near the sensor; then everywhere, over any object height.
+  v[10].overhang_min_gap_m = 0.6;
+  v[10].thin_max_width_m = 0.3;
+  v[10].vehicle_fov_test_near = false;
+  v[11].overhang_min_gap_m = 0.3;
+  v[11].overhang_min_height_m = 0.0;
+  v[11].overhang_max_range_m = 80.0;
+  v[11].thin_max_width_m = 1.0;
   v[9].curb_cells_ground = true;
   v[1].hough.enabled = false;
   v[2].ground_in_sparse_cells = false;

@@ -71,6 +71,9 @@ std::string validate(const HierarchicalGridDetectorParams& p) {
   }
   if (error.empty() && !(error = validate(p.weight)).empty()) error = "weight: " + error;
   if (error.empty() && !(error = validate(p.far_merge)).empty()) error = "far_merge: " + error;
+  if (error.empty() && !(error = validate(p.group_split)).empty()) {
+    error = "group_split: " + error;
+  }
   return error;
 }
 
@@ -78,6 +81,7 @@ HierarchicalGridDetector::HierarchicalGridDetector(const HierarchicalGridDetecto
     : params_(checked(params)),
       weight_(params.weight, (params.grid_half_extent_m + params.coarse_cell_m) * M_SQRT2 + 1.0),
       far_merger_(params.far_merge),
+      group_splitter_(params.group_split),
       dense_cell_m_(params.coarse_cell_m / params.xi),
       psi_max_f_(floatAtMost(params.psi_max_m)) {
   // An even number of super-cells with the sensor on a cell corner: cell borders lie on
@@ -740,6 +744,8 @@ void HierarchicalGridDetector::detect(const LabeledCloud& foreground,
   emitObjects(foreground, ncomp, nobj, objects);
   // Step 6 (far_object_merger.h).
   stats_.far_joins = far_merger_.apply(foreground, objects);
+  // Step 7 (group_splitter.h).
+  stats_.group_splits = group_splitter_.apply(foreground, objects);
   stats_.objects = objects->size();
 }
 

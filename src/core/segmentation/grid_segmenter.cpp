@@ -22,6 +22,37 @@ SimpleGridParams gridParamsOf(const GridSegmenterParams& p) {
   return g;
 }
 
+// Per-point label of the points of an overhang candidate cell (step 5b) until it is resolved;
+// never left in the output.
+constexpr std::uint8_t kPendingLabel = 5;
+// Step 4b: inside the Hough window a group at least this long (the shortest van, 4.5 m, less
+// a cell at each end) is exempt from the field-of-view test (vehicle_fov_test_near).
+constexpr double kVanMinLength_m = 3.5;
+// Step 5b's height bins: 1 / kOverhangBinsPerM m each, 64 of them (the last one open).
+constexpr float kOverhangBinsPerM = 8.0f;
+// Step 5b: an overhang or a thin upright's top occupies at least this many bins (seen by two
+// scan rings at least: one stray return is no structure).
+constexpr int kMinUpperBins = 2;
+
+// Calls f(i) for every i < n with labels[i] == kPendingLabel, in increasing order.
+template <class F>
+void forEachPending(const std::uint8_t* labels, std::size_t n, F&& f) {
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  const __m128i pending = _mm_set1_epi8(static_cast<char>(kPendingLabel));
+  for (; i + 16 <= n; i += 16) {
+    const __m128i bytes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(labels + i));
+    for (unsigned m = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(bytes, pending)));
+         m != 0; m &= m - 1) {
+      f(i + static_cast<std::size_t>(__builtin_ctz(m)));
+    }
+  }
+#endif
+  for (; i < n; ++i) {
+    if (labels[i] == kPendingLabel) f(i);
+  }
+}
+
 constexpr int kDr[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
 constexpr int kDc[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
 
@@ -121,8 +152,9 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   static_assert(sizeof(SlotLabel) == 8, "slot table entries are loaded as 8 bytes");
   std::uint8_t* out = reinterpret_cast<std::uint8_t*>(labels->data());
   constexpr std::uint32_t kGroundLabel = static_cast<std::uint32_t>(SegmentClass::kGround);
-  // counts[k]: points labelled k, for k = 1..4 (kUnknown is the rest).
-  std::uint32_t counts[5] = {0, 0, 0, 0, 0};
+  // counts[k]: points labelled k, for k = 1..4 (kUnknown is the rest); pending points (step 5b)
+  // are counted once resolved.
+  std::uint32_t counts[6] = {0, 0, 0, 0, 0, 0};
   std::size_t i = 0;
 #if defined(__SSE2__)
   // 16 points per step: each point's 8-byte table entry is loaded and transposed into four
@@ -183,6 +215,7 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
     out[i] = static_cast<std::uint8_t>(label);
     ++counts[label];
   }
+  if (!overhang_slots_.empty()) resolveOverhangs(cloud, out, counts);
   counts[0] = static_cast<std::uint32_t>(n) - counts[1] - counts[2] - counts[3] - counts[4];
   stats_.points_unknown = counts[static_cast<int>(SegmentClass::kUnknown)];
   stats_.points_clutter = counts[static_cast<int>(SegmentClass::kClutter)];
@@ -490,6 +523,11 @@ void GridSegmenter::classifyCells() {
   const bool sparse_ground = params_.ground_in_sparse_cells;
   const float vehicle_h = static_cast<float>(params_.vehicle_max_height_m);
   vehicle_cells_.clear();
+  // Step 5b's candidates: tall by their top, with a terrain estimate, near enough.
+  const bool overhangs = params_.overhang_min_gap_m > 0.0 || params_.thin_max_width_m > 0.0;
+  const float overhang_r2 =
+      static_cast<float>(params_.overhang_max_range_m * params_.overhang_max_range_m);
+  overhang_slots_.clear();
   constexpr float kNoSplit = -std::numeric_limits<float>::infinity();
   slot_label_.resize(occupied.size() + 1);
   slot_label_[0] = SlotLabel{kNoSplit, static_cast<std::uint32_t>(SegmentClass::kUnknown)};
@@ -547,6 +585,14 @@ void GridSegmenter::classifyCells() {
     const bool split =
         (cls == SegmentClass::kShort || cls == SegmentClass::kTall) && state != kNoGround;
     table[s] = SlotLabel{split ? g + tol : kNoSplit, static_cast<std::uint32_t>(cls)};
+    if (overhangs && cls == SegmentClass::kTall && state != kNoGround && cell.z_max - g > tall_h) {
+      float x, y;
+      grid_.cellCenter(c, &x, &y);
+      if (x * x + y * y <= overhang_r2) {
+        table[s].label = kPendingLabel;
+        overhang_slots_.push_back(static_cast<std::int32_t>(s));
+      }
+    }
   }
 }
 
@@ -563,6 +609,7 @@ void GridSegmenter::shortenVehicles() {
   const int rows = grid_.rows(), cols = grid_.cols();
   const float max_len = static_cast<float>(params_.vehicle_max_length_m / params_.cell_size_m);
   const float max_wid = static_cast<float>(params_.vehicle_max_width_m / params_.cell_size_m);
+  const float min_len = static_cast<float>(kVanMinLength_m / params_.cell_size_m);
   const ConstArrayView<GridCell> stats = grid_.occupiedStats();
   float dir_c[8], dir_s[8];
   for (int d = 0; d < 8; ++d) {
@@ -572,6 +619,10 @@ void GridSegmenter::shortenVehicles() {
   const float sensor_h = static_cast<float>(params_.sensor_height_m);
   const float tan_top = static_cast<float>(std::tan(params_.fov_top_elevation_deg * M_PI / 180.0));
   const float half_diag = static_cast<float>(params_.cell_size_m * M_SQRT1_2);
+  // [m] half side of the Hough window, where the field-of-view test is left to step 5 (0: none)
+  const float hough_window = params_.hough.enabled && !params_.vehicle_fov_test_near
+                                 ? static_cast<float>(params_.hough.max_range_m)
+                                 : 0.0f;
   for (const std::int32_t seed : vehicle_cells_) {
     if (vehicle_state_[seed] != kVehicleCandidate) continue;
     // The group: breadth first over 8-neighbours that are candidates or short.
@@ -619,6 +670,9 @@ void GridSegmenter::shortenVehicles() {
       wid = std::min(wid, hi[d] - lo[d] + 1.0f);
     }
     if (!(len <= max_len && wid <= max_wid)) continue;
+    // Inside the Hough window the field-of-view test is left to step 5 for groups as long as a
+    // van; a pole, a post or a trunk seen to the upper edge keeps it.
+    const bool near_exempt = hough_window > 0.0f && len >= min_len;
     // Its height must be known: where most tops are at the upper edge of the field of view
     // (classifyCells' wall-support test) the structure may be any height, e.g. a facade beyond
     // the Hough window seen up to ~2.5 m.
@@ -628,6 +682,7 @@ void GridSegmenter::shortenVehicles() {
       ++tall;
       float x, y;
       grid_.cellCenter(c, &x, &y);
+      if (near_exempt && std::fabs(x) <= hough_window && std::fabs(y) <= hough_window) continue;
       const float dist = std::max(0.0f, std::sqrt(x * x + y * y) - half_diag);
       cut += stats[grid_.slotOf(c)].z_max - sensor_h >= dist * tan_top ? 1 : 0;
     }
@@ -645,6 +700,115 @@ void GridSegmenter::shortenVehicles() {
       wall_support_[c] = stats[s].z_max - sensor_h >= dist * tan_top ? 1 : 0;
     }
   }
+}
+
+// Step 5b. The candidate cells' points carry kPendingLabel after the per-point pass (unless
+// step 4b made their cell short); their heights above the split are binned per slot (and the
+// xy box of the points above tall_min_height_m kept), each slot's cut (or thin upright) is
+// found on its bins, and the points are labelled short below the cut or beside the upright,
+// tall otherwise. Only the pending points are visited (found 16 label bytes at a time), twice.
+void GridSegmenter::resolveOverhangs(const CloudXYZIRT& cloud, std::uint8_t* labels,
+                                     std::uint32_t* counts) {
+  const std::size_t n = cloud.size();
+  const std::size_t slots = slot_label_.size();
+  overhang_mask_.resize(slots);
+  overhang_upper_mask_.resize(slots);
+  overhang_cut_.resize(slots);
+  overhang_box_.resize(4 * slots);
+  overhang_upright_.resize(slots);
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  bool any = false;
+  for (const std::int32_t slot : overhang_slots_) {
+    const std::size_t s = static_cast<std::size_t>(slot) + 1;
+    if (slot_label_[s].label != kPendingLabel) continue;
+    overhang_mask_[s] = 0;
+    overhang_upper_mask_[s] = 0;
+    float* box = &overhang_box_[4 * s];
+    box[0] = box[1] = kInf;
+    box[2] = box[3] = -kInf;
+    any = true;
+  }
+  if (!any) return;
+  const std::int32_t* pc = grid_.pointSlots().data();
+  const float* pz = grid_.pointHeights().data();
+  const SlotLabel* table = slot_label_.data();
+  const PointXYZIRT* pts = cloud.points.data();
+  std::uint64_t* mask = overhang_mask_.data();
+  std::uint64_t* upper_mask = overhang_upper_mask_.data();
+  float* boxes = overhang_box_.data();
+  const float tall_h = static_cast<float>(params_.tall_min_height_m);
+  const float tol = static_cast<float>(params_.ground_tolerance_m);
+  const float upper = tall_h - tol;  // above the split: more than tall_h above the ground
+  const bool thin = params_.thin_max_width_m > 0.0;
+  forEachPending(labels, n, [&](std::size_t i) {
+    const std::int32_t s = pc[i];
+    const float d = pz[i] - table[s].split_z;  // >= 0: the point is not ground
+    const int bin = std::min(63, static_cast<int>(d * kOverhangBinsPerM));
+    mask[s] |= std::uint64_t{1} << bin;
+    if (thin && d > upper) {
+      upper_mask[s] |= std::uint64_t{1} << bin;
+      float* box = boxes + 4 * s;
+      box[0] = std::min(box[0], pts[i].x);
+      box[1] = std::min(box[1], pts[i].y);
+      box[2] = std::max(box[2], pts[i].x);
+      box[3] = std::max(box[3], pts[i].y);
+    }
+  });
+  const int gap_bins =
+      static_cast<int>(std::ceil(params_.overhang_min_gap_m * kOverhangBinsPerM - 1e-6));
+  const float thin_w = static_cast<float>(params_.thin_max_width_m);
+  const float min_h = static_cast<float>(params_.overhang_min_height_m);
+  constexpr float kThinMargin = 0.1f;  // [m] see thin_max_width_m
+  for (const std::int32_t slot : overhang_slots_) {
+    const std::size_t s = static_cast<std::size_t>(slot) + 1;
+    if (slot_label_[s].label != kPendingLabel) continue;
+    const std::uint64_t m = mask[s];
+    float cut = -kInf;  // none: no point lies below it
+    overhang_cut_[s] = -kInf;
+    overhang_upright_[s] = 0;
+    if (m == 0) continue;  // no point above the split (a tolerance above tall_min_height_m)
+    int top = __builtin_ctzll(m);
+    while (gap_bins > 0 && top < 63) {
+      const std::uint64_t rest = m >> (top + 1);
+      if (rest == 0) break;
+      const int next = top + 1 + __builtin_ctzll(rest);
+      if (next - top - 1 >= gap_bins) {
+        const float c = static_cast<float>(top + 1) / kOverhangBinsPerM;
+        if (tol + c <= tall_h && tol + c >= min_h &&
+            __builtin_popcountll(m >> next) >= kMinUpperBins) {
+          cut = c;
+        }
+        break;
+      }
+      top = next;
+    }
+    overhang_cut_[s] = cut;
+    // A thin upright: the points beside its box, widened by the margin, are short.
+    float* box = boxes + 4 * s;
+    const bool upright = thin && cut == -kInf &&
+                         __builtin_popcountll(upper_mask[s]) >= kMinUpperBins &&
+                         box[2] - box[0] <= thin_w && box[3] - box[1] <= thin_w;
+    overhang_upright_[s] = upright ? 1 : 0;
+    box[0] -= kThinMargin;
+    box[1] -= kThinMargin;
+    box[2] += kThinMargin;
+    box[3] += kThinMargin;
+  }
+  const std::uint8_t* upright = overhang_upright_.data();
+  const float* cut = overhang_cut_.data();
+  constexpr std::uint8_t kShortLabel = static_cast<std::uint8_t>(SegmentClass::kShort);
+  constexpr std::uint8_t kTallLabel = static_cast<std::uint8_t>(SegmentClass::kTall);
+  forEachPending(labels, n, [&](std::size_t i) {
+    const std::int32_t s = pc[i];
+    const float d = pz[i] - table[s].split_z;
+    const float* box = boxes + 4 * s;
+    const bool beside =
+        upright[s] && d <= upper &&
+        !(pts[i].x >= box[0] && pts[i].x <= box[2] && pts[i].y >= box[1] && pts[i].y <= box[3]);
+    const std::uint8_t label = d < cut[s] || beside ? kShortLabel : kTallLabel;
+    labels[i] = label;
+    ++counts[label];
+  });
 }
 
 void extractForeground(const CloudXYZIRT& cloud, const std::vector<SegmentClass>& labels,

@@ -69,6 +69,9 @@
 ///  6. Far pieces of one vehicle (ours, far_object_merger.h): objects at least
 ///     `far_merge.min_range_m` away whose boxes are at most `far_merge.max_gap_m` apart are
 ///     joined when the result still fits a vehicle box; `far_merge.max_gap_m` = 0: off.
+///  7. Groups of people (ours, group_splitter.h): an object of a group's size and a person's
+///     height whose height map shows several heads with a dip between them is split into one
+///     object per head; `group_split.min_length_m` = 0: off.
 ///
 /// Non-finite points, points outside the grid and points with |z| > max_abs_z_m are ignored
 /// (counted in the stats).
@@ -82,6 +85,7 @@
 #include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/detection/distance_weight.h"
 #include "urban_detection/core/detection/far_object_merger.h"
+#include "urban_detection/core/detection/group_splitter.h"
 #include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/detection/object_geometry.h"
 
@@ -121,6 +125,7 @@ struct HierarchicalGridDetectorParams {
   double max_extent_m = 20.0;              // [m] objects with a longer xy box side are dropped
   DistanceWeightParams weight;             // distance weight of sub-cell densities (paper Sec. 4)
   FarObjectMergerParams far_merge;         // step 6: far pieces of one vehicle joined (ours)
+  GroupSplitterParams group_split;         // step 7: groups of people split (ours)
 };
 
 /// HierarchicalGridDetectorParams' field table (core/common/param_fields.h).
@@ -167,6 +172,7 @@ struct ParamFields<HierarchicalGridDetectorParams> {
       p.max_extent_m);
     forEachField(p.weight, "weight", f);
     forEachField(p.far_merge, "far_merge", f);
+    forEachField(p.group_split, "group_split", f);
   }
 };
 
@@ -189,6 +195,7 @@ struct HierarchicalGridStats {
   std::size_t dropped_small = 0;   // components with < min_points points
   std::size_t dropped_large = 0;   // components longer than max_extent_m
   std::size_t far_joins = 0;       // far pieces joined by step 6
+  std::size_t group_splits = 0;    // objects added by step 7
   std::size_t objects = 0;
 };
 
@@ -241,6 +248,7 @@ class HierarchicalGridDetector : public ObjectDetector {
   DistanceWeight weight_;
   ObjectGeometry geometry_;
   FarObjectMerger far_merger_;
+  GroupSplitter group_splitter_;
   HierarchicalGridStats stats_;
   double dense_cell_m_;
   float psi_max_f_;  // [m] the largest float <= psi_max_m (the psi tests compare floats)

@@ -25,10 +25,26 @@
 ///     cells of a group that touches no other tall cell, fits an oriented box of
 ///     vehicle_max_length_m x vehicle_max_width_m (extents measured along 8 directions,
 ///     22.5 deg apart) and at most half of whose tall cells reach the upper edge of the field
-///     of view (fov_top_elevation_deg: their true height is unknown) become short: a truck, bus
+///     of view (fov_top_elevation_deg: their true height is unknown; counted only beyond
+///     the Hough window for groups at least 3.5 m long unless vehicle_fov_test_near, as
+///     step 5 turns a facade's cells inside it back to tall) become short: a truck, bus
 ///     or van, not a wall, hedge or facade, which are longer, higher, joined to higher
 ///     structure or cut by the field of view.
 ///  5. HoughWallRefiner turns short cells on long straight walls into tall.
+///  5b. Overhangs (ours): in a cell that is tall by its top (z_max - g > tall_min_height_m)
+///     after step 4b (a cell step 5 turns back to tall is a wall and not one of them),
+///     has a terrain estimate and whose centre is within overhang_max_range_m, the heights
+///     of its non-ground points above g + ground_tolerance_m are binned (64 bins of 0.125 m,
+///     the last one open); going up from the lowest bin, the first run of empty bins at least
+///     overhang_min_gap_m deep ends the lower part. When the lower part's top (the upper edge
+///     of its highest bin, plus the tolerance) is at least overhang_min_height_m and at most
+///     tall_min_height_m above g, its points
+///     are short and the points above the run tall: a person, a car or a bin under a tree
+///     canopy, a balcony or an awning is not a tall structure. Without such a gap, when the
+///     points more than tall_min_height_m above g fit in an xy box at most thin_max_width_m
+///     on each side (a pole, a sign post, a trunk), the points up to that height lying more
+///     than kThinMargin_m (0.1 m: a wider foot) outside that box are short: a person beside a
+///     pole. The cell's class stays tall.
 ///  6. Per point: in ground-bearing cells a point within ground_tolerance_m of g is ground, the
 ///     others take the cell class (mixed cells are split per point). Sparse (clutter) cells of
 ///     far road get the same per-point test against the filled terrain when
@@ -87,6 +103,33 @@ struct GridSegmenterParams {
                                        //     fits a vehicle box (trucks, buses, vans: 2-4 m)
   double vehicle_max_length_m = 13.0;  // [m] ... that box's longer side at most this (a bus)
   double vehicle_max_width_m = 3.5;    // [m] ... and its shorter side at most this
+  bool vehicle_fov_test_near = true;   // the field-of-view test of step 4b also inside the
+                                       //     Hough window; false: only beyond it, since inside
+                                       //     it the Hough refinement turns a facade's cells
+                                       //     back to tall (a van seen to the upper edge of the
+                                       //     field of view, within ~20 m, is short)
+  double overhang_min_gap_m = 0.0;     // [m] 0 = off (shipped off for its run time, see
+                                       //     docs/design.md; 0.6 when on); a tall
+                                       //     cell whose heights above the
+                                       //     local ground leave an empty band at least this
+                                       //     deep, with at most tall_min_height_m below it,
+                                       //     holds a short object under an overhang (a person
+                                       //     under a canopy): the points below the band are
+                                       //     short, those above it tall
+  double overhang_min_height_m = 1.2;  // [m] ... and whose lower part reaches at least this
+                                       //     high (a person, a cyclist, a car; not the wall
+                                       //     under a window band, whose sill is at ~0.9 m)
+  double overhang_max_range_m = 40.0;  // [m] ... for cells this close to the sensor (the rings
+                                       //     that see above the road beyond ~12 m, 1/3 deg
+                                       //     apart, lie <= 0.25 m apart there: an empty 0.6 m
+                                       //     band is not a gap between two rings)
+  double thin_max_width_m = 0.0;       // [m] 0 = off (shipped off, as step 5b's overhangs;
+                                       //     0.3 when on); a tall cell of step 5b without an
+                                       //     overhang whose points above tall_min_height_m fit
+                                       //     in an xy box this wide holds a thin upright (a
+                                       //     pole, a post, a trunk): its points up to that
+                                       //     height more than 0.1 m outside the box
+                                       //     are short (a person beside a pole)
   double fov_top_elevation_deg = 1.0;  // [deg] a cell whose highest point is seen at this
                                        //     elevation or more may extend above the vertical
                                        //     field of view (HDL-64E: +2 deg); it supports Hough
@@ -140,6 +183,19 @@ struct ParamFields<GridSegmenterParams> {
       p.vehicle_max_length_m);
     f({"vehicle_max_width_m", "m", 0.5, 100.0, "... and its shorter side at most this"},
       p.vehicle_max_width_m);
+    f({"vehicle_fov_test_near",
+       "the vehicle group's field-of-view test also inside the Hough window"},
+      p.vehicle_fov_test_near);
+    f({"overhang_min_gap_m", "m", 0.0, 8.0,
+       "an empty height band this deep over a short object in a tall cell: overhang; 0 = off"},
+      p.overhang_min_gap_m);
+    f({"overhang_min_height_m", "m", 0.0, 20.0, "... over an object at least this high"},
+      p.overhang_min_height_m);
+    f({"overhang_max_range_m", "m", 0.0, 250.0, "... in cells this close to the sensor"},
+      p.overhang_max_range_m);
+    f({"thin_max_width_m", "m", 0.0, 5.0,
+       "points beside a thin upright (its top part this wide) in a tall cell are short; 0 = off"},
+      p.thin_max_width_m);
     f({"fov_top_elevation_deg", "deg", -30.0, 30.0,
        "a cell seen at this elevation or more may pass the top of the field of view"},
       p.fov_top_elevation_deg);
@@ -198,6 +254,9 @@ class GridSegmenter {
   void fillTerrain();
   void classifyCells();
   void shortenVehicles();
+  // Step 5b on the per-point labels (pending points of candidate slots); returns the points
+  // made short and adds them to counts[kShort], the others to counts[kTall].
+  void resolveOverhangs(const CloudXYZIRT& cloud, std::uint8_t* labels, std::uint32_t* counts);
 
   GridSegmenterParams params_;
   SimpleGrid grid_;
@@ -241,6 +300,16 @@ class GridSegmenter {
     std::uint32_t label;
   };
   std::vector<SlotLabel> slot_label_;
+  // Step 5b: the slots of the candidate cells, and per slot + 1 their height-bin mask and the
+  // height above split_z [m] below which a point is short (-inf: none).
+  std::vector<std::int32_t> overhang_slots_;
+  std::vector<std::uint64_t> overhang_mask_;
+  std::vector<std::uint64_t> overhang_upper_mask_;  // the bins above tall_min_height_m
+  std::vector<float> overhang_cut_;
+  // ... and the xy box [m] of their points above tall_min_height_m (min x, min y, max x, max y),
+  // then widened by the margin.
+  std::vector<float> overhang_box_;
+  std::vector<std::uint8_t> overhang_upright_;  // per slot + 1: the cell holds a thin upright
 };
 
 /// Builds the foreground cloud of the detectors: only the finite kShort points, label =
