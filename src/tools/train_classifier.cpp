@@ -4,7 +4,8 @@
 //   urban_detection_train_classifier --semantic-kitti DIR [--config FILE]... [--out MODEL]
 //       [--csv FILE] [--json FILE] [--no-intensity] [--trees N] [--max-depth N]
 //       [--min-samples N] [--fragments reject|skip] [--threshold auto|P] [--no-loso]
-//       [--no-kdtree]
+//       [--no-kdtree] [--min-points N] [--augment P,V] [--decision object|class]
+//       [--class-balance B] [--uncertain-band W]
 //
 // 1. Runs the pipeline (segmentation, hierarchical grid and kd-tree detectors, shipped
 //    configs) over every scan and computes the features of every detection.
@@ -16,6 +17,9 @@
 //    (`--fragments skip`, the default: it looks like the object it is part of) or a
 //    non-object (`reject`: it costs a false object); detections of don't-care points (poles,
 //    trunks, signs) are left out.
+// 2b. Examples the sensor would have given (--augment, augmentation.h): each sequence's persons,
+//    cyclists and vehicles re-sampled farther away and pasted on free ground into its own
+//    scans; only the detections of pasted objects become training rows; never scored.
 // 3. Leave-one-sequence-out: for each sequence, a forest trained on the other sequences (the
 //    threshold on P(object) chosen on those sequences by an inner 3-fold cross-validation over
 //    sequences) classifies the held-out sequence's detections of both detectors; the kept ones
@@ -380,15 +384,15 @@ void usage() {
       "  --no-kdtree     do not score the kd-tree baseline with the same classifier\n"
       "  --min-points N  objects and detections under N points count only when matched\n"
       "                  (default 30; the N = 1 figure is printed beside it)\n"
-      "  --decision      object: one P(object) threshold; class (default): also a threshold\n"
+      "  --decision      object (default): one P(object) threshold; class: also a threshold\n"
       "                  per class and an uncertain band kept as other_object, all chosen on\n"
       "                  the training sequences\n"
       "  --uncertain-band W  with --decision object: objects with P(object) within W below\n"
       "                  the threshold stay as uncertain other_object (default 0: none)\n"
-      "  --class-balance B  row weights (rows / (classes x class rows))^B (default 0.5)\n"
+      "  --class-balance B  row weights (rows / (classes x class rows))^B (default 0)\n"
       "  --augment P[,V]  training examples made from the training sequences' objects: P\n"
-      "                  copies of each person and cyclist, V of each vehicle (default 0,0:\n"
-      "                  off), re-sampled farther away and pasted on free ground into the\n"
+      "                  copies of each person and cyclist, V of each vehicle (default 16,2;\n"
+      "                  0,0: off), re-sampled farther away and pasted on free ground into the\n"
       "                  sequence's scans (augmentation.h); trained on, never scored\n");
 }
 
@@ -401,12 +405,12 @@ int main(int argc, char** argv) {
   core::ClassifierTrainingParams tp;
   bool loso = true, kdtree = true;
   long max_frames = -1, min_points = 30;
-  std::string decision_arg = "class";
+  std::string decision_arg = "object";
   double uncertain_band = 0.0;
   core::AugmentParams augment;
-  augment.person_copies = 0;
-  augment.vehicle_copies = 0;
-  tp.class_balance = 0.5;
+  augment.person_copies = 16;
+  augment.vehicle_copies = 2;
+  tp.class_balance = 0.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const urban_detection::tools::OptionArgs arg{argc, argv, &i};
