@@ -6,8 +6,8 @@ unloading its nodelet (SIGKILL, OOM killer) leaves the nodelet in the manager un
 notices the broken bond, seconds later; a loader respawned meanwhile gets "Cannot load nodelet
 ... exists", exits and is respawned again. This wrapper first asks the manager to unload a
 nodelet of its own name (the dead loader's: ROS node names are unique, so no live loader holds
-it), then replaces itself with `nodelet load` and the same arguments. On a first start nothing
-is loaded yet and the unload call finds nothing (or no manager yet) and is skipped.
+it), then replaces itself with `nodelet load` and the same arguments. On a first start the
+manager does not list the name (or is not up yet) and nothing is unloaded.
 """
 import os
 import sys
@@ -15,7 +15,7 @@ import sys
 import rosgraph.names
 import roslib.packages
 import rospy
-from nodelet.srv import NodeletUnload
+from nodelet.srv import NodeletList, NodeletUnload
 
 
 def main():
@@ -28,10 +28,11 @@ def main():
     name = rosgraph.names.ns_join(namespace, mappings.get('__name', 'nodelet'))
     manager = rosgraph.names.ns_join(namespace, args[3]) if not args[3].startswith('/') else args[3]
     try:
-        rospy.wait_for_service(manager + '/unload_nodelet', timeout=0.5)
-        rospy.ServiceProxy(manager + '/unload_nodelet', NodeletUnload)(name=name)
+        rospy.wait_for_service(manager + '/list', timeout=0.5)
+        if name in rospy.ServiceProxy(manager + '/list', NodeletList)().nodelets:
+            rospy.ServiceProxy(manager + '/unload_nodelet', NodeletUnload)(name=name)
     except (rospy.ROSException, rospy.ServiceException, OSError):
-        pass  # no manager yet, or nothing of this name loaded: a first start
+        pass  # no manager yet: a first start
     nodelet = roslib.packages.find_node('nodelet', 'nodelet')[0]
     os.execv(nodelet, [nodelet] + sys.argv[1:])
 

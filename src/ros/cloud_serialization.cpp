@@ -33,7 +33,9 @@ const char* datatypeName(std::uint8_t datatype) {
   return datatype <= 8 ? kNames[datatype] : "?";
 }
 
-std::string u64(std::uint64_t v) { return std::to_string(v); }
+std::string u64(std::uint64_t v) {
+  return std::to_string(v);
+}
 
 }  // namespace
 
@@ -46,8 +48,8 @@ std::string checkCloudLayout(const CloudLayout& l, std::size_t max_points) {
   if (points > 0 && l.point_step == 0) return "point_step 0 with " + u64(points) + " points";
   const std::uint64_t min_row = static_cast<std::uint64_t>(l.width) * l.point_step;
   if (points > 0 && l.row_step < min_row) {
-    return "row_step too small: " + u64(l.row_step) + " bytes for width x point_step = " +
-           u64(min_row);
+    return "row_step too small: " + u64(l.row_step) +
+           " bytes for width x point_step = " + u64(min_row);
   }
   const std::uint64_t declared = static_cast<std::uint64_t>(l.row_step) * l.height;
   if (l.data_size > declared) {
@@ -67,15 +69,14 @@ std::string checkCloudLayout(const CloudLayout& l, std::size_t max_points) {
     }
     const std::uint64_t end = static_cast<std::uint64_t>(f.offset) + std::uint64_t{size} * f.count;
     if (end > l.point_step) {
-      return "field beyond point_step: '" + f.name + "' ends at byte " + u64(end) +
-             " of a " + u64(l.point_step) + "-byte point";
+      return "field beyond point_step: '" + f.name + "' ends at byte " + u64(end) + " of a " +
+             u64(l.point_step) + "-byte point";
     }
   }
   return "";
 }
 
-std::string mapCloudFields(const CloudLayout& layout,
-                           const std::vector<pcl::PCLPointField>& wanted,
+std::string mapCloudFields(const CloudLayout& layout, const std::vector<pcl::PCLPointField>& wanted,
                            std::vector<FieldCopy>* copies) {
   copies->clear();
   for (const pcl::PCLPointField& w : wanted) {
@@ -86,16 +87,16 @@ std::string mapCloudFields(const CloudLayout& layout,
       if (w.name == "x" || w.name == "y" || w.name == "z") {
         std::string present;
         for (const auto& m : layout.fields) present += (present.empty() ? "" : " ") + m.name;
-        return "missing field: no '" + w.name + "' (fields: " +
-               (present.empty() ? std::string("none") : present) + ")";
+        return "missing field: no '" + w.name +
+               "' (fields: " + (present.empty() ? std::string("none") : present) + ")";
       }
       continue;  // left zero
     }
     const std::uint32_t count = std::max<std::uint32_t>(w.count, 1);
     if (f->datatype != w.datatype || std::max<std::uint32_t>(f->count, 1) != count) {
-      return "field type: '" + w.name + "' is " + datatypeName(f->datatype) + " x" +
-             u64(f->count) + ", this topic needs " + datatypeName(w.datatype) + " x" +
-             u64(count) + " (CloudInput on points_in converts any numeric type)";
+      return "field type: '" + w.name + "' is " + datatypeName(f->datatype) + " x" + u64(f->count) +
+             ", this topic needs " + datatypeName(w.datatype) + " x" + u64(count) +
+             " (CloudInput on points_in converts any numeric type)";
     }
     copies->push_back({f->offset, w.offset, datatypeSize(w.datatype) * count});
   }

@@ -57,8 +57,7 @@ std::string checkCloudLayout(const CloudLayout& layout, std::size_t max_points =
 /// Maps the fields of `layout` onto the point struct's `wanted` fields by name: x, y and z
 /// must be present, the others are zero when absent; a present field must have the struct's
 /// datatype and count. Fills `copies` (adjacent fields merged); returns "" or what is wrong.
-std::string mapCloudFields(const CloudLayout& layout,
-                           const std::vector<pcl::PCLPointField>& wanted,
+std::string mapCloudFields(const CloudLayout& layout, const std::vector<pcl::PCLPointField>& wanted,
                            std::vector<FieldCopy>* copies);
 
 /// Prefix of the frame_id of a cloud the deserialiser refused (the reason follows).
@@ -210,7 +209,6 @@ struct Serializer<pcl::PointCloud<urban_detection::PointXYZIRT>>
     : urban_detection::ros_conv::detail::CheckedCloudSerializer<urban_detection::PointXYZIRT> {};
 template <>
 struct Serializer<pcl::PointCloud<urban_detection::LabeledPoint>>
-    : urban_detection::ros_conv::detail::CheckedCloudSerializer<urban_detection::LabeledPoint> {
-};
+    : urban_detection::ros_conv::detail::CheckedCloudSerializer<urban_detection::LabeledPoint> {};
 }  // namespace serialization
 }  // namespace ros
