@@ -39,6 +39,11 @@ std::string u64(std::uint64_t v) {
 
 }  // namespace
 
+std::string checkCloudStamp(const ros::Time& stamp) {
+  if (stamp.nsec < 1000000000u) return "";
+  return "bad stamp: nsec " + u64(stamp.nsec) + " not below 10^9";
+}
+
 std::string checkCloudLayout(const CloudLayout& l, std::size_t max_points) {
   const std::uint64_t points = static_cast<std::uint64_t>(l.width) * l.height;
   if (points > max_points) {

@@ -84,7 +84,8 @@ bool fromPointCloud2(const sensor_msgs::PointCloud2& msg, CloudXYZIRT* cloud,
   layout.point_step = msg.point_step;
   layout.row_step = msg.row_step;
   layout.data_size = msg.data.size();
-  *error = checkCloudLayout(layout, std::numeric_limits<std::size_t>::max());
+  *error = checkCloudStamp(msg.header.stamp);
+  if (error->empty()) *error = checkCloudLayout(layout, std::numeric_limits<std::size_t>::max());
   if (!error->empty()) return false;
   const Field fi = findField(msg, "intensity"), fr = findField(msg, "ring"),
               ft = findField(msg, "time");

@@ -26,9 +26,12 @@ namespace {
 
 template <typename PointT>
 void check(const std::uint8_t* data, std::size_t size) {
-  std::vector<std::uint8_t> bytes(data, data + size);
+  // Never a null buffer (roscpp never hands one over; ros::serialization's pointer arithmetic
+  // on it is undefined).
+  std::vector<std::uint8_t> bytes(size + 1);
+  if (size > 0) std::memcpy(bytes.data(), data, size);
   pcl::PointCloud<PointT> cloud;
-  ser::IStream in(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+  ser::IStream in(bytes.data(), static_cast<std::uint32_t>(size));
   ser::deserialize(in, cloud);  // an exception escapes: a finding
   const std::string refusal = rc::cloudRefusal(cloud);
   if (!refusal.empty()) {

@@ -151,6 +151,11 @@ TEST(CloudSerialization, MalformedCloudsAreRefusedNamingTheFault) {
   no_z.fields.erase(no_z.fields.begin() + 2);
   expectRefused(no_z, "missing field: no 'z'");
 
+  sensor_msgs::PointCloud2 stamp = velodyneStyle(10);  // would throw when published again
+  stamp.header.stamp.sec = 0xFFFFFFFFu;
+  stamp.header.stamp.nsec = 0xFFFFFFFFu;
+  expectRefused(stamp, "bad stamp: nsec 4294967295");
+
   sensor_msgs::PointCloud2 ring8 = velodyneStyle(10);
   ring8.fields[4].datatype = 2;  // uint8 ring
   expectRefused(ring8, "field type: 'ring' is UINT8");

@@ -54,6 +54,10 @@ struct FieldCopy {
 /// field named twice, a field beyond point_step or of an unknown datatype.
 std::string checkCloudLayout(const CloudLayout& layout, std::size_t max_points = kMaxCloudPoints);
 
+/// "" when `stamp` is a normalised time (nsec below 10^9), else what is wrong: PCL keeps
+/// stamps in microseconds, and converting an unnormalised one back for publishing throws.
+std::string checkCloudStamp(const ros::Time& stamp);
+
 /// Maps the fields of `layout` onto the point struct's `wanted` fields by name: x, y and z
 /// must be present, the others are zero when absent; a present field must have the struct's
 /// datatype and count. Fills `copies` (adjacent fields merged); returns "" or what is wrong.
@@ -128,7 +132,8 @@ struct CheckedCloudSerializer {
     stream.next(row_step);
     std::uint32_t data_size = row_step * height;
     stream.next(data_size);
-    std::memcpy(stream.advance(data_size), m.points.data(), data_size);
+    std::uint8_t* out = stream.advance(data_size);
+    if (data_size > 0) std::memcpy(out, m.points.data(), data_size);  // no point: data() is null
     std::uint8_t is_dense = m.is_dense;
     stream.next(is_dense);
   }
@@ -160,8 +165,10 @@ struct CheckedCloudSerializer {
               std::to_string(layout.data_size) + " bytes declared)";
     }
     std::vector<FieldCopy> copies;
+    if (error.empty()) error = checkCloudStamp(header.stamp);
     if (error.empty()) error = checkCloudLayout(layout);
     if (error.empty()) error = mapCloudFields(layout, pcl::getFields<T>(), &copies);
+    if (!error.empty()) header.stamp = ros::Time();  // possibly unnormalised: not converted
     pcl_conversions::toPCL(header, m.header);
     m.points.clear();
     if (!error.empty()) {
@@ -174,6 +181,7 @@ struct CheckedCloudSerializer {
     m.width = layout.width;
     m.is_dense = is_dense != 0;
     m.points.resize(static_cast<std::size_t>(layout.width) * layout.height);
+    if (m.points.empty()) return;  // e.g. width 0 and a height of 10^9: no row to walk
     auto* out = reinterpret_cast<std::uint8_t*>(m.points.data());
     for (std::uint32_t row = 0; row < layout.height; ++row) {
       const std::uint8_t* in = data + static_cast<std::size_t>(row) * layout.row_step;
