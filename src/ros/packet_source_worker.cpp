@@ -154,7 +154,7 @@ void PacketSourceWorker::pcapLoop() {
       if (result == core::PcapReader::Result::kTruncated) {
         diagnostics_->count("truncated_captures");
         const std::string text = "pcap '" + params_.pcap + "' is truncated after " +
-                                 std::to_string(packets_) + " packets; replay stopped";
+                                 std::to_string(packets_) + " packets; replay stops";
         diagnostics_->setError(text);
         ROS_ERROR("PacketSource: %s", text.c_str());
         break;
