@@ -14,11 +14,11 @@
 #include <string>
 
 #include <nodelet/nodelet.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <boost/make_shared.hpp>
 #include <pluginlib/class_list_macros.hpp>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/ros/lazy_outputs.h"
@@ -57,23 +57,18 @@ class CloudInputNodelet : public nodelet::Nodelet {
     const ros::WallTime start = ros::WallTime::now();
     diagnostics_->input(msg->header.seq);
     const std::uint64_t points = static_cast<std::uint64_t>(msg->width) * msg->height;
+    std::string error;
     if (points > static_cast<std::uint64_t>(max_points_)) {  // before any allocation of ours
-      NODELET_ERROR_THROTTLE(5,
-                             "CloudInput: refusing a PointCloud2 of %llu points (max_points "
-                             "%d); nothing of it is converted",
-                             static_cast<unsigned long long>(points), max_points_);
-      diagnostics_->rejected();
-      return;
+      error = "too many points: " + std::to_string(points) + " (max_points " +
+              std::to_string(max_points_) + ")";
     }
     auto cloud = boost::make_shared<CloudXYZIRT>();
     ros_conv::PointCloud2InputInfo info;
-    std::string error;
-    if (!ros_conv::fromPointCloud2(*msg, cloud.get(), &info, &error)) {
-      if (error != last_error_) {  // once per kind of malformed input; counted on /diagnostics
-        NODELET_ERROR("CloudInput: dropping a PointCloud2: %s", error.c_str());
-        last_error_ = error;
+    if (error.empty()) ros_conv::fromPointCloud2(*msg, cloud.get(), &info, &error);
+    if (!error.empty()) {  // one throttled ERROR per kind of fault; counted on /diagnostics
+      if (diagnostics_->refuse(error)) {
+        NODELET_ERROR("CloudInput: refusing a PointCloud2 on points_in: %s", error.c_str());
       }
-      diagnostics_->rejected();
       return;
     }
     if (!info.has_ring || !info.has_time) {
@@ -94,7 +89,6 @@ class CloudInputNodelet : public nodelet::Nodelet {
                                      core::kBlocksPerPacket * core::kLasersPerBlock);
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
-  std::string last_error_;  // last malformed-input reason logged (callbacks are serialised)
   std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher pub_;
   ros::Subscriber sub_;

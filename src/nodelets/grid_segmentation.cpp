@@ -2,7 +2,8 @@
 // and segmentation/foreground (paper Sec. 3.1). Thin wrapper around core::GridSegmenter;
 // thresholds tunable through dynamic_reconfigure (cfg/GridSegmentation.cfg). Subscribes with
 // the publisher's C++ type, so inside one manager the cloud of PacketSource / PacketToCloud
-// arrives as a pointer, never serialised (a PointCloud2 from elsewhere goes through CloudInput).
+// arrives as a pointer, never serialised; a PointCloud2 from another process is deserialised
+// with its sizes checked (cloud_serialization.h) and refused with an ERROR when malformed.
 // Runs its callback on a thread of its own (StageThread), never behind another stage.
 #include "urban_detection/core/common/point_types.h"
 
@@ -12,10 +13,10 @@
 #include <vector>
 
 #include <nodelet/nodelet.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <boost/make_shared.hpp>
 #include <pluginlib/class_list_macros.hpp>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include "urban_detection/GridSegmentationConfig.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
@@ -86,9 +87,17 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
     foreground_pub_ = lazy_->advertise<LabeledCloud>(nh, "segmentation/foreground", 2);
   }
 
-  void cloudCb(const boost::shared_ptr<const CloudXYZIRT>& cloud) {  // zero copy
+  void cloudCb(const ros::MessageEvent<const CloudXYZIRT>& event) {  // zero copy
     const ros::WallTime start = ros::WallTime::now();
-    diagnostics_->input(cloud->header.seq);
+    const boost::shared_ptr<const CloudXYZIRT>& cloud = event.getConstMessage();
+    diagnostics_->input(cloud->header.seq, event.getPublisherName());
+    const std::string refusal = cloudRefusal(*cloud);
+    if (!refusal.empty()) {  // a malformed cloud from another process (or a bad one in ours)
+      if (diagnostics_->refuse(refusal)) {
+        NODELET_ERROR("GridSegmentation: refusing a cloud on velodyne_points: %s", refusal.c_str());
+      }
+      return;
+    }
     // Kept at their index and labelled unknown by the segmenter; counted here.
     diagnostics_->count("non_finite_points", countNonFinite(*cloud), false);
     std::lock_guard<std::mutex> segment_lock(segment_mutex_);  // vs. reconfigure

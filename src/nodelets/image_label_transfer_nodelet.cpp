@@ -12,10 +12,10 @@
 #include <message_filters/sync_policies/approximate_time.h>
 #include <message_filters/synchronizer.h>
 #include <nodelet/nodelet.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include <atomic>
 #include <boost/make_shared.hpp>
@@ -172,7 +172,9 @@ class ImageLabelTransferNodelet : public nodelet::Nodelet {
         if (!ros_conv::imageToBgr(*frame->image, &scratch, &bgr, &error) ||
             !ros_conv::cameraFromInfo(*frame->info, &mask->camera, &error) ||
             !model_.run(bgr, &scores, &error)) {
-          NODELET_ERROR_THROTTLE(5.0, "ImageLabelTransfer: image skipped: %s", error.c_str());
+          if (diagnostics_->error("images_skipped", "image skipped: " + error)) {
+            NODELET_ERROR("ImageLabelTransfer: image skipped: %s", error.c_str());
+          }
           continue;
         }
         if (mask->camera.width_px != bgr.cols || mask->camera.height_px != bgr.rows) {
@@ -193,7 +195,9 @@ class ImageLabelTransferNodelet : public nodelet::Nodelet {
         NODELET_DEBUG_THROTTLE(5.0, "ImageLabelTransfer: network %.1f ms, %llu images dropped", ms,
                                static_cast<unsigned long long>(slot_.dropped()));
       } catch (const std::exception& e) {
-        NODELET_ERROR_THROTTLE(5.0, "ImageLabelTransfer: image skipped: %s", e.what());
+        if (diagnostics_->error("images_skipped", std::string("image skipped: ") + e.what())) {
+          NODELET_ERROR("ImageLabelTransfer: image skipped: %s", e.what());
+        }
       }
     }
   }
@@ -202,6 +206,14 @@ class ImageLabelTransferNodelet : public nodelet::Nodelet {
                        const boost::shared_ptr<const LabeledCloud>& points) {
     const auto t0 = std::chrono::steady_clock::now();
     diagnostics_->input(objects->header.seq);
+    const std::string refusal = ros_conv::cloudRefusal(*points);
+    if (!refusal.empty()) {  // a malformed cloud from another process
+      if (diagnostics_->refuse(refusal)) {
+        NODELET_ERROR("ImageLabelTransfer: refusing a cloud on objects/points: %s",
+                      refusal.c_str());
+      }
+      return;
+    }
     auto out = boost::make_shared<DetectedObjectArray>();
     std::string error;
     std::shared_ptr<const Mask> mask;

@@ -123,9 +123,12 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
       const core::TrackerStats& s = tracker_->update(objects_, pose, msg->header.stamp.toSec());
       const double association_s = (ros::WallTime::now() - t0).toSec();
       if (s.invalid_detections > 0) {
-        diagnostics_->count("invalid_objects", s.invalid_detections);
-        NODELET_ERROR_THROTTLE(5, "skipped %zu of %zu objects with a non-finite box or pose",
-                               s.invalid_detections, s.detections);
+        const std::string text =
+            "invalid objects: skipped " + std::to_string(s.invalid_detections) + " of " +
+            std::to_string(s.detections) + " objects with a non-finite box or pose";
+        if (diagnostics_->error("invalid_objects", text, s.invalid_detections)) {
+          NODELET_ERROR("%s", text.c_str());
+        }
       }
       if (s.restarted) {
         NODELET_WARN_THROTTLE(5, "objects' stamp went back or jumped: tracks restarted");

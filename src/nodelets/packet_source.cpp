@@ -11,7 +11,7 @@
 
 #include <memory>
 
-#include <pcl_ros/point_cloud.h>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include "urban_detection/ros/packet_params.h"
 #include "urban_detection/ros/packet_source_worker.h"
@@ -51,6 +51,7 @@ class PacketSourceNodelet : public nodelet::Nodelet {
           },
           [this] { return cloud_pub_ && cloud_pub_.getNumSubscribers() > 0; });
     } catch (const std::exception& e) {  // socket, file or calibration errors
+      diagnostics_.reset();              // no OK status beside the refusal's ERROR
       refusal_ =
           ros_conv::RefusalDiagnostics::report(getNodeHandle(), getPrivateNodeHandle(), getName(),
                                                "PacketSource inactive: " + std::string(e.what()));

@@ -3,9 +3,9 @@
 // transformed packet by packet at each packet's own timestamp (ros/scan_to_cloud.h).
 // Lazy: subscribed to the packets only while someone listens to the points.
 #include <nodelet/nodelet.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <pluginlib/class_list_macros.hpp>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include <memory>
 #include <mutex>
@@ -36,6 +36,7 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
     diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
         getNodeHandle(), getPrivateNodeHandle(), getName(), "decoding", "scans");
     diagnostics_->setActive(false);
+    diagnostics_->setInputTimeouts(kNoSensorDataWarnS, kNoSensorDataErrorS);
     // Input queue_size: the newest revolutions win when decoding is slow.
     lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
       diagnostics_->setActive(wanted);
@@ -47,20 +48,23 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
     pub_ = lazy_->advertise<CloudXYZIRT>(getNodeHandle(), "velodyne_points", params_.queue_size);
   }
 
-  void scanCb(const VelodyneScan::ConstPtr& scan) {
+  void scanCb(const ros::MessageEvent<const VelodyneScan>& event) {
     const ros::WallTime start = ros::WallTime::now();
-    diagnostics_->input(scan->header.seq);
+    const VelodyneScan::ConstPtr& scan = event.getConstMessage();
+    diagnostics_->input(scan->header.seq, event.getPublisherName());
     if (scan->packets.empty()) {
       diagnostics_->count("empty_scans");
       NODELET_WARN_THROTTLE(10, "dropping an empty VelodyneScan");
       return;
     }
     if (scan->packets.size() > static_cast<std::size_t>(params_.max_packets_per_scan)) {
-      diagnostics_->rejected();  // refused before any allocation of ours
-      NODELET_ERROR_THROTTLE(5,
-                             "refusing a VelodyneScan of %zu packets (max_packets_per_scan "
-                             "%d); nothing of it is decoded",
-                             scan->packets.size(), params_.max_packets_per_scan);
+      // Refused before any allocation of ours.
+      const std::string why =
+          "too many packets: a VelodyneScan of " + std::to_string(scan->packets.size()) +
+          " packets (max_packets_per_scan " + std::to_string(params_.max_packets_per_scan) + ")";
+      if (diagnostics_->refuse(why)) {
+        NODELET_ERROR("PacketToCloud: refusing %s; nothing of it is decoded", why.c_str());
+      }
       return;
     }
     auto cloud = boost::make_shared<CloudXYZIRT>();
@@ -70,6 +74,11 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
     diagnostics_->count("bad_packets", stats.decode.bad_packets);
     diagnostics_->count("tf_failures", stats.tf_failures);
     diagnostics_->count("points", cloud->size(), false);
+    const std::string empty = emptyRevolutionCause(stats.decode, converter_->decoder().params());
+    if (!empty.empty()) {
+      diagnostics_->count("revolutions without points");
+      NODELET_WARN_THROTTLE(10, "PacketToCloud: %s", empty.c_str());
+    }
     if (stats.decode.bad_packets > 0) {
       NODELET_WARN_THROTTLE(5, "dropped %zu of %zu packets of a revolution (last: %s)",
                             stats.decode.bad_packets, scan->packets.size(),

@@ -4,8 +4,8 @@
 #include <sstream>
 
 #include <pcl_conversions/pcl_conversions.h>
-#include <pcl_ros/point_cloud.h>
 #include <boost/make_shared.hpp>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/ros/detection_params.h"
@@ -94,9 +94,18 @@ void DetectorNodelet::replaceDetector(std::unique_ptr<core::ObjectDetector> dete
   detector_ = std::move(detector);
 }
 
-void DetectorNodelet::foregroundCb(const boost::shared_ptr<const LabeledCloud>& foreground) {
+void DetectorNodelet::foregroundCb(const ros::MessageEvent<const LabeledCloud>& event) {
   const ros::WallTime start = ros::WallTime::now();
-  diagnostics_->input(foreground->header.seq);
+  const boost::shared_ptr<const LabeledCloud>& foreground = event.getConstMessage();
+  diagnostics_->input(foreground->header.seq, event.getPublisherName());
+  const std::string refusal = cloudRefusal(*foreground);
+  if (!refusal.empty()) {  // a malformed cloud from another process (or a bad one in ours)
+    if (diagnostics_->refuse(refusal)) {
+      NODELET_ERROR("%s: refusing a cloud on segmentation/foreground: %s", getName().c_str(),
+                    refusal.c_str());
+    }
+    return;
+  }
   std::lock_guard<std::mutex> lock(detector_mutex_);  // one parameter set per revolution
   detector_->detect(*foreground, &objects_);
   const core::ObjectFilterStats filtered = filter_->apply(*foreground, &objects_);

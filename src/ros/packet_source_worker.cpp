@@ -71,8 +71,23 @@ std::string PacketSourceWorker::warning() const {
 void PacketSourceWorker::udpLoop() {
   core::RawPacket raw;
   std::size_t size = 0;
+  auto last_packet = std::chrono::steady_clock::now();
+  diagnostics_->setInputTimeouts(kNoSensorDataWarnS, kNoSensorDataErrorS);
   while (running_ && ros::ok()) {
-    switch (receiver_->receive(&raw, 100, &size)) {
+    const core::UdpReceiver::Result result = receiver_->receive(&raw, 100, &size);
+    const auto now = std::chrono::steady_clock::now();
+    if (result == core::UdpReceiver::Result::kPacket) last_packet = now;
+    const double silent_s = std::chrono::duration<double>(now - last_packet).count();
+    if (silent_s >= kNoSensorDataErrorS) {
+      ROS_ERROR_THROTTLE(30,
+                         "PacketSource: no HDL-64E packet on %s for %.0f s (sensor off, "
+                         "unplugged, another port or device_ip?)",
+                         describe().c_str(), silent_s);
+    } else if (silent_s >= kNoSensorDataWarnS) {
+      ROS_WARN_THROTTLE(30, "PacketSource: no HDL-64E packet on %s for %.1f s", describe().c_str(),
+                        silent_s);
+    }
+    switch (result) {
       case core::UdpReceiver::Result::kPacket:
         diagnostics_->setTotal("kernel_dropped_packets", receiver_->kernelDrops());
         addPacket(raw, ros::Time::now());
@@ -90,9 +105,9 @@ void PacketSourceWorker::udpLoop() {
                           params_.device_ip.c_str());
         break;
       case core::UdpReceiver::Result::kError:
-        diagnostics_->count("socket_errors");
-        ROS_ERROR_THROTTLE(5, "PacketSource: UDP receive failed: %s",
-                           receiver_->lastError().c_str());
+        if (diagnostics_->error("socket_errors", "UDP receive failed: " + receiver_->lastError())) {
+          ROS_ERROR("PacketSource: UDP receive failed: %s", receiver_->lastError().c_str());
+        }
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
         break;
       case core::UdpReceiver::Result::kTimeout:
@@ -103,17 +118,30 @@ void PacketSourceWorker::udpLoop() {
 
 // Replays at `rate` times the recorded speed (0: as fast as possible) on the capture's replay
 // timeline (core::ReplayTimeline: capture times where they are sane, the nominal packet period
-// where they go back, stand still or jump). Stamps are that timeline shifted so that the first
-// packet is stamped "now" (use_pcap_time: unshifted), and keep increasing across loops;
-// intra-revolution time differences stay those of the sensor.
+// where they go back, stand still or jump). Stamps are that timeline shifted so that the packet
+// after every (re)start of the pacing is stamped "now": the first one, and the first after a
+// pause without subscribers, so idle time never puts the stamps behind the clock
+// (use_pcap_time: unshifted). They keep increasing across loops; intra-revolution time
+// differences stay those of the sensor (a revolution open at a pause is shifted with it).
+// Invalid packets (what the revolution boundary refuses) are counted but never advance the
+// timeline, so garbage datagrams cannot slow the replay. Each pass over the file keeps its first
+// and last revolutions when they are whole (PcapRevolutionReader's rules), so a looped replay
+// gives every revolution of the file, as the offline tools read it.
 void PacketSourceWorker::pcapLoop() {
   using Clock = std::chrono::steady_clock;
   core::PcapPacket packet;
   core::ReplayTimeline timeline;
   bool anchored = false, first = true;
   Clock::time_point wall_anchor;
-  double replay_anchor_s = 0, stamp_offset_s = 0;
-  std::size_t in_pass = 0, anomalies = 0;
+  double replay_anchor_s = 0, stamp_offset_s = 0, replay_s = 0;
+  std::size_t in_pass = 0, valid_in_pass = 0, anomalies = 0;
+  ros::Time last_stamp;
+  const auto startPass = [&] {
+    assembler_.startFile(core::PcapRevolutionReader::kStartToleranceDeg);
+    if (streamer_) streamer_->startFile(core::PcapRevolutionReader::kStartToleranceDeg);
+    in_pass = valid_in_pass = 0;
+  };
+  startPass();
   while (running_ && ros::ok()) {
     if (!listened()) {  // lazy: pause, and resume without a burst
       anchored = false;
@@ -121,29 +149,39 @@ void PacketSourceWorker::pcapLoop() {
       continue;
     }
     const core::PcapReader::Result result = pcap_->next(&packet);
-    if (result == core::PcapReader::Result::kTruncated) {
-      diagnostics_->count("truncated_captures");
-      ROS_ERROR("PacketSource: pcap '%s' is truncated after %lu packets; replay stops",
-                params_.pcap.c_str(), static_cast<unsigned long>(packets_));
-      break;
-    }
-    if (result == core::PcapReader::Result::kEnd) {
-      if (in_pass == 0) {
-        ROS_ERROR("PacketSource: pcap '%s' has no HDL-64E packet for UDP port %d",
-                  params_.pcap.c_str(), params_.port);
+    if (result != core::PcapReader::Result::kPacket) {
+      finishPass();  // the open revolution, when whole
+      if (result == core::PcapReader::Result::kTruncated) {
+        diagnostics_->count("truncated_captures");
+        const std::string text = "pcap '" + params_.pcap + "' is truncated after " +
+                                 std::to_string(packets_) + " packets; replay stops";
+        diagnostics_->setError(text);
+        ROS_ERROR("PacketSource: %s", text.c_str());
+        break;
+      }
+      if (valid_in_pass == 0) {
+        const std::string text = "pcap '" + params_.pcap + "' has no HDL-64E packet for UDP port " +
+                                 std::to_string(params_.port);
+        diagnostics_->setError(text);
+        ROS_ERROR("PacketSource: %s", text.c_str());
         break;
       }
       if (!params_.loop) break;
       pcap_->rewind();
       timeline.restart();
-      assembler_.reset();  // never splice the end of the file to its start in one scan
-      if (streamer_) streamer_->reset();
-      in_pass = 0;
+      startPass();  // never splice the end of the file to its start in one scan
       continue;
     }
     ++in_pass;
+    if (core::PacketDecoder::validate(packet.data.data(), packet.data.size()) !=
+        core::PacketStatus::kOk) {
+      // Refused by the boundary (counted and warned there); never a step of the timeline.
+      addPacket(packet.data, last_stamp);
+      continue;
+    }
+    ++valid_in_pass;
     core::ReplayTimeline::Anomaly anomaly;
-    const double replay_s = timeline.next(packet.stamp_s, &anomaly);
+    replay_s = timeline.next(packet.stamp_s, &anomaly);
     if (anomaly != core::ReplayTimeline::Anomaly::kNone) {
       diagnostics_->setTotal("pcap_time_anomalies", ++anomalies);
       ROS_WARN_THROTTLE(5,
@@ -152,14 +190,20 @@ void PacketSourceWorker::pcapLoop() {
                         params_.pcap.c_str(), static_cast<unsigned long>(in_pass),
                         core::toString(anomaly), packet.stamp_s);
     }
-    if (first) {
-      stamp_offset_s = params_.use_pcap_time ? 0.0 : ros::Time::now().toSec() - replay_s;
-      first = false;
-    }
     if (!anchored) {
       wall_anchor = Clock::now();
       replay_anchor_s = replay_s;
       anchored = true;
+      if (!params_.use_pcap_time) {
+        // This packet is stamped now: after a pause the stamps move on by the idle time.
+        const double offset_s = ros::Time::now().toSec() - replay_s;
+        if (!first && offset_s > stamp_offset_s) {
+          assembler_.shiftOpen(offset_s - stamp_offset_s);
+          if (streamer_) streamer_->shiftOpen(offset_s - stamp_offset_s);
+        }
+        if (first || offset_s > stamp_offset_s) stamp_offset_s = offset_s;
+      }
+      first = false;
     }
     if (params_.rate > 0) {
       const auto due =
@@ -170,9 +214,10 @@ void PacketSourceWorker::pcapLoop() {
             std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(50)));
       }
     }
-    addPacket(packet.data, ros::Time(std::max(0.0, replay_s + stamp_offset_s)));
+    last_stamp = ros::Time(std::max(0.0, replay_s + stamp_offset_s));
+    addPacket(packet.data, last_stamp);
   }
-  assembler_.reset();  // the revolution open at the end of the file is partial
+  assembler_.reset();  // a revolution open when the replay stops is partial
   if (streamer_) streamer_->reset();
   diagnostics_->setTotal("partial_revolutions_dropped", assembler_.partialDropped(), false);
   if (pcap_->skipped() > 0) {
@@ -183,6 +228,16 @@ void PacketSourceWorker::pcapLoop() {
   ROS_INFO("PacketSource: pcap replay finished: %lu packets, %lu revolutions",
            static_cast<unsigned long>(packets_), static_cast<unsigned long>(scans_));
   running_ = false;
+}
+
+void PacketSourceWorker::finishPass() {
+  if (streamer_ && streaming_ && clouds_listened_()) {
+    boost::shared_ptr<CloudXYZIRT> cloud = streamer_->finishFile();
+    if (cloud) publish_cloud_(cloud);
+  }
+  VelodyneScan::Ptr scan = assembler_.finishFile();
+  diagnostics_->setTotal("partial_revolutions_dropped", assembler_.partialDropped(), false);
+  if (scan) emitScan(scan);
 }
 
 void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Time& stamp) {
@@ -197,6 +252,11 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
       if (cloud) {
         const ScanDecodeStats& stats = streamer_->lastStats();
         diagnostics_->count("bad_packets", stats.decode.bad_packets);
+        const std::string empty = emptyRevolutionCause(stats.decode, decoder_->params());
+        if (!empty.empty()) {
+          diagnostics_->count("revolutions without points");
+          ROS_WARN_THROTTLE(10, "PacketSource: %s", empty.c_str());
+        }
         if (stats.decode.bad_packets > 0) {
           ROS_WARN_THROTTLE(5,
                             "PacketSource: dropped %zu of %zu packets of a revolution "
@@ -245,7 +305,10 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
                       params_.cut_angle_deg, ScanAssembler::kMaxPacketsPerScan);
   }
   revolution_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (!scan) return;
+  if (scan) emitScan(scan);
+}
+
+void PacketSourceWorker::emitScan(const VelodyneScan::Ptr& scan) {
   ++scans_;
   if (*assembler_.lastSizeProblem()) {
     diagnostics_->count(std::string("revolutions with ") + assembler_.lastSizeProblem());

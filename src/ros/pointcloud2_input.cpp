@@ -1,7 +1,10 @@
 #include "urban_detection/ros/pointcloud2_input.h"
 
+#include "urban_detection/ros/cloud_serialization.h"
+
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include <pcl_conversions/pcl_conversions.h>
 
@@ -25,26 +28,6 @@ Field findField(const sensor_msgs::PointCloud2& msg, const char* name) {
     }
   }
   return f;
-}
-
-std::uint32_t sizeOf(std::uint8_t type) {
-  using PF = sensor_msgs::PointField;
-  switch (type) {
-    case PF::INT8:
-    case PF::UINT8:
-      return 1;
-    case PF::INT16:
-    case PF::UINT16:
-      return 2;
-    case PF::INT32:
-    case PF::UINT32:
-    case PF::FLOAT32:
-      return 4;
-    case PF::FLOAT64:
-      return 8;
-    default:
-      return 0;
-  }
 }
 
 template <typename T>
@@ -93,31 +76,20 @@ bool fromPointCloud2(const sensor_msgs::PointCloud2& msg, CloudXYZIRT* cloud,
              (present.empty() ? std::string("none") : present) + ")";
     return false;
   }
-  for (std::size_t i = 0; i < msg.fields.size(); ++i) {
-    for (std::size_t j = 0; j < i; ++j) {
-      if (msg.fields[i].name == msg.fields[j].name) {
-        *error = "PointCloud2 with the field '" + msg.fields[i].name + "' defined twice";
-        return false;
-      }
-    }
-  }
-  if (msg.is_bigendian) {
-    *error = "big-endian PointCloud2 is not supported";
-    return false;
-  }
+  CloudLayout layout;  // the checks of the typed subscriptions (cloud_serialization.h)
+  layout.height = msg.height;
+  layout.width = msg.width;
+  layout.fields = msg.fields;
+  layout.big_endian = msg.is_bigendian != 0;
+  layout.point_step = msg.point_step;
+  layout.row_step = msg.row_step;
+  layout.data_size = msg.data.size();
+  *error = checkCloudStamp(msg.header.stamp);
+  if (error->empty()) *error = checkCloudLayout(layout, std::numeric_limits<std::size_t>::max());
+  if (!error->empty()) return false;
   const Field fi = findField(msg, "intensity"), fr = findField(msg, "ring"),
               ft = findField(msg, "time");
-  for (const Field* f : {&fx, &fy, &fz, &fi, &fr, &ft}) {
-    if (f->type != 0 && (sizeOf(f->type) == 0 || f->offset + sizeOf(f->type) > msg.point_step)) {
-      *error = "PointCloud2 field outside point_step or of unknown datatype";
-      return false;
-    }
-  }
   const std::size_t w = msg.width, h = msg.height;
-  if (w * h > 0 && (msg.row_step < w * msg.point_step || msg.data.size() < h * msg.row_step)) {
-    *error = "PointCloud2 data shorter than width * height * point_step";
-    return false;
-  }
   info->has_intensity = fi.type != 0;
   info->has_ring = fr.type != 0;
   info->has_time = ft.type != 0;

@@ -11,6 +11,7 @@ StageDiagnostics::StageDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, cons
     : updater_(new diagnostic_updater::Updater(nh, pnh, name)),
       input_name_(input_name),
       load_warn_fraction_(load_warn_fraction),
+      last_input_(ros::WallTime::now()),
       window_start_(ros::WallTime::now()) {
   updater_->setHardwareID("none");
   updater_->add(task, this, &StageDiagnostics::diagnose);
@@ -19,11 +20,12 @@ StageDiagnostics::StageDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, cons
                               [this](const ros::WallTimerEvent&) { updater_->force_update(); });
 }
 
-void StageDiagnostics::input(std::uint32_t seq) {
+void StageDiagnostics::input(std::uint32_t seq, const std::string& source) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++inputs_.total;
   ++inputs_.window;
-  const std::uint32_t gap = gaps_.add(seq);
+  last_input_ = ros::WallTime::now();
+  const std::uint32_t gap = gaps_.add(seq, source);
   skipped_.total += gap;
   skipped_.window += gap;
 }
@@ -57,6 +59,32 @@ void StageDiagnostics::rejected() {
   count("rejected_inputs");
 }
 
+bool StageDiagnostics::refuse(const std::string& what) {
+  return report("rejected_inputs", "refusing input: " + what, what.substr(0, what.find(':')), 1);
+}
+
+bool StageDiagnostics::error(const std::string& key, const std::string& text, std::uint64_t n) {
+  return report(key, text, text.substr(0, text.find(':')), n);
+}
+
+bool StageDiagnostics::report(const std::string& key, const std::string& text,
+                              const std::string& kind, std::uint64_t n) {
+  count(key, n, false);
+  std::lock_guard<std::mutex> lock(mutex_);
+  window_error_ = text;
+  window_errors_ += n;
+  const ros::WallTime now = ros::WallTime::now();
+  const auto it = logged_.find(key + '\n' + kind);
+  if (it != logged_.end() && (now - it->second).toSec() < 5.0) return false;
+  logged_[key + '\n' + kind] = now;
+  return true;
+}
+
+void StageDiagnostics::setError(const std::string& text) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  error_ = text;
+}
+
 void StageDiagnostics::count(const std::string& key, std::uint64_t n, bool warn) {
   std::lock_guard<std::mutex> lock(mutex_);
   Counter& c = counters_[key];
@@ -76,8 +104,17 @@ void StageDiagnostics::setTotal(const std::string& key, std::uint64_t total, boo
 void StageDiagnostics::setActive(bool active) {
   std::lock_guard<std::mutex> lock(mutex_);
   // Revolutions that passed while nobody listened (a lazy stage unsubscribed) were not skipped.
-  if (active && !active_) gaps_.reset();
+  if (active && !active_) {
+    gaps_.reset();
+    last_input_ = ros::WallTime::now();
+  }
   active_ = active;
+}
+
+void StageDiagnostics::setInputTimeouts(double warn_s, double error_s) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  no_input_warn_s_ = warn_s;
+  no_input_error_s_ = error_s;
 }
 
 void StageDiagnostics::setExpectedRate(double hz) {
@@ -98,7 +135,17 @@ void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
   const auto grown = std::find_if(counters_.begin(), counters_.end(), [](const auto& kv) {
     return kv.second.warn && kv.second.window > 0;
   });
-  if (skipped_.window > 0) {
+  const double silent_s = (now - last_input_).toSec();
+  if (!error_.empty()) {
+    stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, error_);
+  } else if (active_ && no_input_error_s_ > 0.0 && silent_s >= no_input_error_s_) {
+    stat.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "no sensor data for %.0f s", silent_s);
+  } else if (active_ && no_input_warn_s_ > 0.0 && silent_s >= no_input_warn_s_) {
+    stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "no sensor data for %.0f s", silent_s);
+  } else if (window_errors_ > 0) {
+    stat.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "%s (%lu in %.1f s)",
+                  window_error_.c_str(), static_cast<unsigned long>(window_errors_), window_s);
+  } else if (skipped_.window > 0) {
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                   "falling behind: skipped %lu revolutions in %.1f s (newest revolution wins)",
                   static_cast<unsigned long>(skipped_.window), window_s);
@@ -155,6 +202,7 @@ void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
   window_start_ = now;
   inputs_.window = frames_.window = outputs_.window = skipped_.window = 0;
   window_sum_s_ = window_max_s_ = 0.0;
+  window_errors_ = 0;
 }
 
 std::unique_ptr<RefusalDiagnostics> RefusalDiagnostics::report(ros::NodeHandle nh,

@@ -1,10 +1,13 @@
 #include "urban_detection/ros/velodyne_scan.h"
 
+#include "urban_detection/core/sensor/pcap_io.h"
+
 #include <pcl_conversions/pcl_conversions.h>
 #include <boost/make_shared.hpp>
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 
 namespace urban_detection {
@@ -32,10 +35,7 @@ VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::T
     case core::RevolutionBoundary::Action::kAppend:
       break;
     case core::RevolutionBoundary::Action::kClose:
-      expected_packets_ = last_packets_ = current_->packets.size();
-      current_->header.seq = ++revolutions_;
-      if (stamp_ == ScanStamp::kLastPacket) current_->header.stamp = current_->packets.back().stamp;
-      finished.swap(current_);
+      finished = close();
       break;
     case core::RevolutionBoundary::Action::kDrop:
     case core::RevolutionBoundary::Action::kForcedCut:
@@ -54,9 +54,68 @@ VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::T
   return finished;
 }
 
+VelodyneScan::Ptr ScanAssembler::close() {
+  VelodyneScan::Ptr finished;
+  expected_packets_ = last_packets_ = current_->packets.size();
+  current_->header.seq = ++revolutions_;
+  if (stamp_ == ScanStamp::kLastPacket) current_->header.stamp = current_->packets.back().stamp;
+  finished.swap(current_);
+  return finished;
+}
+
 void ScanAssembler::reset() {
   boundary_.reset();
   current_.reset();
+}
+
+namespace {
+std::size_t endExpectation(std::size_t last, std::size_t nominal) {
+  if (last > 0) return last;
+  return nominal > 0 ? nominal : core::PcapRevolutionReader::kNominalPackets;
+}
+}  // namespace
+
+void ScanAssembler::startFile(double tolerance_deg) {
+  boundary_.startFile(tolerance_deg);
+  current_.reset();
+}
+
+VelodyneScan::Ptr ScanAssembler::finishFile() {
+  const bool whole = boundary_.finishFile(endExpectation(last_packets_, nominal_packets_));
+  if (!whole || !current_ || current_->packets.empty()) {
+    current_.reset();
+    return VelodyneScan::Ptr();
+  }
+  return close();
+}
+
+void ScanAssembler::shiftOpen(double s) {
+  if (!current_) return;
+  const ros::Duration d(s);
+  current_->header.stamp += d;
+  for (VelodynePacket& p : current_->packets) p.stamp += d;
+}
+
+std::string emptyRevolutionCause(const core::DecodeStats& stats,
+                                 const core::DecoderParams& params) {
+  if (stats.packets <= stats.bad_packets) return "";  // nothing decodable: counted elsewhere
+  char text[256];
+  if (stats.out_of_range > 0 && 100 * stats.points < stats.out_of_range) {
+    std::snprintf(text, sizeof(text),
+                  "a revolution with %zu points: %zu returns outside the range [%.1f, %.1f] m "
+                  "(every return at maximum range: sensor blinded or covered, or "
+                  "min_range_m / max_range_m wrong?)",
+                  stats.points, stats.out_of_range, params.min_range_m, params.max_range_m);
+    return text;
+  }
+  if (stats.points == 0) {
+    std::snprintf(text, sizeof(text),
+                  "a revolution of %zu packets without a single return (lasers off or the "
+                  "sensor covered?)",
+                  stats.packets - stats.bad_packets);
+    return text;
+  }
+  return "";
 }
 
 namespace {
@@ -127,7 +186,8 @@ StreamingScanDecoder::StreamingScanDecoder(const core::PacketDecoder* decoder, d
       boundary_(cut_angle_deg),
       frame_id_(frame_id),
       stamp_(stamp),
-      expected_packets_(expected_packets > 0 ? expected_packets : 700) {}
+      expected_packets_(expected_packets > 0 ? expected_packets : 700),
+      nominal_packets_(expected_packets) {}
 
 void StreamingScanDecoder::open(const ros::Time& stamp) {
   constexpr std::size_t kReturnsPerPacket = core::kBlocksPerPacket * core::kLasersPerBlock;
@@ -146,17 +206,9 @@ boost::shared_ptr<CloudXYZIRT> StreamingScanDecoder::add(const core::RawPacket& 
       return finished;  // invalid or stray: in no revolution
     case core::RevolutionBoundary::Action::kAppend:
       break;
-    case core::RevolutionBoundary::Action::kClose: {
-      last_packets_ = stats_.decode.packets;
-      expected_packets_ = last_packets_;
-      finishCloud(current_.get());
-      const ros::Time& header_stamp = stamp_ == ScanStamp::kLastPacket ? last_stamp_ : first_stamp_;
-      current_->header.stamp = pcl_conversions::toPCL(header_stamp);
-      current_->header.seq = ++revolutions_;
-      last_stats_ = stats_;
-      finished.swap(current_);
+    case core::RevolutionBoundary::Action::kClose:
+      finished = close();
       break;
-    }
     case core::RevolutionBoundary::Action::kDrop:
     case core::RevolutionBoundary::Action::kForcedCut:
     case core::RevolutionBoundary::Action::kOpen:
@@ -170,9 +222,42 @@ boost::shared_ptr<CloudXYZIRT> StreamingScanDecoder::add(const core::RawPacket& 
   return finished;
 }
 
+boost::shared_ptr<CloudXYZIRT> StreamingScanDecoder::close() {
+  boost::shared_ptr<CloudXYZIRT> finished;
+  last_packets_ = stats_.decode.packets;
+  expected_packets_ = last_packets_;
+  finishCloud(current_.get());
+  const ros::Time& header_stamp = stamp_ == ScanStamp::kLastPacket ? last_stamp_ : first_stamp_;
+  current_->header.stamp = pcl_conversions::toPCL(header_stamp);
+  current_->header.seq = ++revolutions_;
+  last_stats_ = stats_;
+  finished.swap(current_);
+  return finished;
+}
+
 void StreamingScanDecoder::reset() {
   boundary_.reset();
   current_.reset();
+}
+
+void StreamingScanDecoder::startFile(double tolerance_deg) {
+  boundary_.startFile(tolerance_deg);
+  current_.reset();
+}
+
+boost::shared_ptr<CloudXYZIRT> StreamingScanDecoder::finishFile() {
+  const bool whole = boundary_.finishFile(endExpectation(last_packets_, nominal_packets_));
+  if (!whole || !current_) {
+    current_.reset();
+    return boost::shared_ptr<CloudXYZIRT>();
+  }
+  return close();
+}
+
+void StreamingScanDecoder::shiftOpen(double s) {
+  const ros::Duration d(s);
+  first_stamp_ += d;
+  last_stamp_ += d;
 }
 
 }  // namespace ros_conv

@@ -288,6 +288,20 @@ TEST_F(BadPackets, DualReturnIsRejectedNotMisread) {
   expectNothingEmitted();
 }
 
+TEST_F(BadPackets, StoppedMotorIsNamedNotTakenForDualReturn) {
+  // A motor that stands still: every firing of the packet at one azimuth.
+  auto firings = emptyFirings(500);
+  for (auto& f : firings) {
+    f.distance.fill(5000);
+    f.azimuth = firings[0].azimuth;
+  }
+  const uc::RawPacket p = uc::PacketEncoder(cal_).encode(firings.data(), 0);
+  EXPECT_EQ(decode(p.data(), p.size()), uc::PacketStatus::kStoppedMotor);
+  EXPECT_NE(std::string(uc::toString(uc::PacketStatus::kStoppedMotor)).find("motor is stopped"),
+            std::string::npos);
+  expectNothingEmitted();
+}
+
 TEST_F(BadPackets, GarbageBytesNeverEmitHalfPackets) {
   std::mt19937 rng(42);
   std::uniform_int_distribution<int> byte(0, 255);

@@ -135,7 +135,7 @@ TEST(PointCloud2Input, RejectsMalformedMessages) {
   twice.fields.push_back(twice.fields[3]);
   twice.fields.back().name = "x";
   EXPECT_FALSE(ros_conv::fromPointCloud2(twice, &cloud, &info, &err));
-  EXPECT_NE(err.find("the field 'x' defined twice"), std::string::npos) << err;
+  EXPECT_NE(err.find("'x' defined twice"), std::string::npos) << err;
 
   sensor_msgs::PointCloud2 empty = kittiStyle(0);
   EXPECT_TRUE(ros_conv::fromPointCloud2(empty, &cloud, &info, &err));

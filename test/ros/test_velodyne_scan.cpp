@@ -231,3 +231,37 @@ TEST(StreamingScanDecoder, FirstPacketStampConvention) {
 
 }  // namespace ros_conv
 }  // namespace urban_detection
+
+namespace urban_detection {
+namespace ros_conv {
+namespace {
+
+// A revolution whose returns all lie beyond the decoder's range (a blinded or covered sensor)
+// gets a WARN naming that cause, as does one without any return; a normal one none.
+TEST(EmptyRevolutionCause, NamesReturnsOutOfRangeAndMissingReturns) {
+  const core::Calibration calibration = core::Calibration::nominalHdl64eS2();
+  core::DecoderParams params;
+  params.max_range_m = 20.0;
+  const core::PacketDecoder decoder(calibration, params);
+  const auto decodeAt = [&](std::uint16_t distance_raw) {
+    VelodyneScan scan;
+    for (const auto& raw : test::spinPackets(10, 0.5, 1.0, 1667, 40, 1, distance_raw)) {
+      scan.packets.emplace_back();
+      toMessage(raw, ros::Time(1.0), &scan.packets.back());
+    }
+    CloudXYZIRT cloud;
+    ScanDecodeStats stats;
+    decodeScan(decoder, scan, PacketTransformFn(), &cloud, &stats);
+    return emptyRevolutionCause(stats.decode, params);
+  };
+  EXPECT_EQ(decodeAt(5000), "");            // 10 m
+  const std::string far = decodeAt(60000);  // 120 m, beyond max_range 20 m
+  EXPECT_NE(far.find("outside the range [0.9, 20.0] m"), std::string::npos) << far;
+  EXPECT_NE(far.find("every return at maximum range"), std::string::npos) << far;
+  const std::string none = decodeAt(0);
+  EXPECT_NE(none.find("without a single return"), std::string::npos) << none;
+}
+
+}  // namespace
+}  // namespace ros_conv
+}  // namespace urban_detection

@@ -12,12 +12,12 @@
 #include <gtest/gtest.h>
 #include <nodelet/loader.h>
 #include <pcl_conversions/pcl_conversions.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <unistd.h>
 #include <urban_detection/VelodyneScan.h>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include <chrono>
 #include <cmath>

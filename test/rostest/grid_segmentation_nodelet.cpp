@@ -9,10 +9,10 @@
 
 #include <gtest/gtest.h>
 #include <pcl_conversions/pcl_conversions.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <boost/shared_ptr.hpp>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include "urban_detection/core/common/segment_class.h"
 

@@ -28,7 +28,6 @@
 #include <vector>
 
 #include <pcl_conversions/pcl_conversions.h>
-#include <pcl_ros/point_cloud.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <boost/make_shared.hpp>
 #include "rostest_util.h"
@@ -37,6 +36,7 @@
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/sensor/pcap_io.h"
 #include "urban_detection/core/simulation/simulation_config.h"
+#include "urban_detection/ros/cloud_serialization.h"
 
 namespace urban_detection {
 namespace {
@@ -266,7 +266,8 @@ TEST(HostileStreams, OversizedScanIsRefusedAndTheNextOneConverted) {
       [&] {
         return rosout.count(
                    rosgraph_msgs::Log::ERROR,
-                   "refusing a VelodyneScan of 20000 packets (max_packets_per_scan 2085)") == 1;
+                   "too many packets: a VelodyneScan of 20000 packets (max_packets_per_scan "
+                   "2085)") == 1;
       },
       10.0));
   const ros::WallTime sent = ros::WallTime::now();
@@ -308,7 +309,7 @@ TEST(HostileStreams, OversizedCloudIsRefusedBeforeConversion) {
   ASSERT_TRUE(waitFor(
       [&] {
         return rosout.count(rosgraph_msgs::Log::ERROR,
-                            "refusing a PointCloud2 of 4000000000 points (max_points 800640)") == 1;
+                            "too many points: 4000000000 (max_points 800640)") == 1;
       },
       10.0));
   sensor_msgs::PointCloud2 good;

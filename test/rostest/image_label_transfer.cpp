@@ -11,13 +11,13 @@
 #include <nodelet/NodeletList.h>
 #include <nodelet/loader.h>
 #include <pcl_conversions/pcl_conversions.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <unistd.h>
 #include <visualization_msgs/MarkerArray.h>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include <Eigen/Geometry>
 #include <chrono>

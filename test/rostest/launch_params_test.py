@@ -51,8 +51,9 @@ class LaunchParams(unittest.TestCase):
         self.assertLess(sum(1 for k in p if k.startswith('/hierarchical_grid_detector/')), 80)
 
     def test_loaders_respawn_and_the_manager_is_required(self):
-        # A loader that dies (bond broken) is restarted and loads its nodelet again; a dead
-        # manager stops the launch (roslaunch says so) instead of leaving idle loaders.
+        # A loader that dies (bond broken) is restarted and loads its nodelet again at the first
+        # try (load_nodelet.py unloads the dead loader's nodelet first); a dead manager stops
+        # the launch (roslaunch says so) instead of leaving idle loaders.
         import roslaunch.config
         import roslaunch.xmlloader
         import rospkg
@@ -61,8 +62,10 @@ class LaunchParams(unittest.TestCase):
             path = os.path.join(rospkg.RosPack().get_path(PKG), 'launch', launch)
             config = roslaunch.config.ROSLaunchConfig()
             roslaunch.xmlloader.XmlLoader().load(path, config, argv=argv, verbose=False)
-            loaders = [n for n in config.nodes
-                       if n.type == 'nodelet' and n.args.strip().startswith('load')]
+            loaders = [n for n in config.nodes if n.args.strip().startswith('load')]
+            for n in loaders:
+                self.assertEqual((n.package, n.type), (PKG, 'load_nodelet.py'),
+                                 '%s: %s is not loaded by load_nodelet.py' % (launch, n.name))
             managers = [n for n in config.nodes
                         if n.type == 'nodelet' and n.args.strip() == 'manager']
             self.assertGreaterEqual(len(loaders), 4, launch)

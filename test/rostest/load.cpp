@@ -14,11 +14,11 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <nodelet/loader.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <sys/socket.h>
 #include <unistd.h>
 #include <urban_detection/VelodyneScan.h>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include <atomic>
 #include <chrono>

@@ -9,7 +9,6 @@
 #include <netinet/in.h>
 #include <nodelet/loader.h>
 #include <pcl_conversions/pcl_conversions.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -17,6 +16,7 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <unistd.h>
 #include <urban_detection/VelodyneScan.h>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include <chrono>
 #include <cmath>
@@ -645,6 +645,169 @@ TEST(PacketSource, PcapLoopKeepsStampsIncreasing) {
                   static_cast<double>(count) * packet_period_s, 1e-5);
     }
   }
+}
+
+// Writes `packets` to a pcap, one packet period apart from t0 (600 rpm); returns its path.
+std::string writePcap(const std::string& tag, const std::vector<core::RawPacket>& packets,
+                      double packet_period_s, const std::vector<bool>& garbage_after = {}) {
+  const std::string pcap =
+      "/tmp/urban_detection_test_" + tag + "_" + std::to_string(getpid()) + ".pcap";
+  core::PcapWriter writer(pcap);
+  core::RawPacket garbage;
+  for (std::size_t b = 0; b < garbage.size(); ++b) garbage[b] = static_cast<std::uint8_t>(b * 7);
+  for (std::size_t i = 0; i < packets.size(); ++i) {
+    const double t = 1700000000.0 + static_cast<double>(i) * packet_period_s;
+    writer.write(packets[i], t);
+    // Another sender's datagram with the capture time of the packet before it.
+    if (i < garbage_after.size() && garbage_after[i]) writer.write(garbage, t);
+  }
+  return pcap;
+}
+
+// A capture of whole revolutions from the cut angle to the cut angle (as the simulator writes
+// them) gives every revolution, as the offline reader (PcapRevolutionReader) gives them: the
+// first, begun at the cut, and the last, ended by the file, included; looped, every pass gives
+// all of them and the stamps go on by one revolution period across the seam.
+TEST(PacketSource, PcapReplayKeepsTheRevolutionsAtTheFileEndsAndTheLoopSeam) {
+  const double packet_period_s = 0.1 / kPacketsPerRevolution;
+  const auto packets = makePackets(4 * kPacketsPerRevolution, 0.5);
+  const std::string pcap = writePcap("ends", packets, packet_period_s);
+  {
+    core::PcapRevolutionReader reader(pcap);
+    std::vector<core::PcapPacket> revolution;
+    std::size_t offline = 0;
+    while (reader.next(&revolution) == core::PcapRevolutionReader::Result::kRevolution) ++offline;
+    EXPECT_EQ(offline, 4u);
+  }
+  for (const bool loop : {false, true}) {
+    const std::string ns = loop ? "/seam_loop" : "/seam_once";
+    ros::NodeHandle nh(ns);
+    ros::param::set(ns + "/packet_source/pcap", pcap);
+    ros::param::set(ns + "/packet_source/rate", 4.0);
+    ros::param::set(ns + "/packet_source/loop", loop);
+    Collector<VelodyneScan> scans;
+    ros::Subscriber sub =
+        nh.subscribe("velodyne_packets", 100, &Collector<VelodyneScan>::callback, &scans);
+    nodelet::Loader manager(false);
+    ASSERT_TRUE(manager.load(ns + "/packet_source", "urban_detection/PacketSource", {}, {}));
+    const std::size_t wanted = loop ? 12 : 4;  // three passes when looped
+    ASSERT_TRUE(waitFor([&] { return scans.size() >= wanted; }, 30.0)) << scans.size();
+    if (!loop) {  // nothing more comes once the file ended
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      EXPECT_EQ(scans.size(), 4u);
+    }
+    sub.shutdown();
+    manager.clear();
+    for (std::size_t i = 0; i < wanted; ++i) {
+      EXPECT_EQ(scans.at(i)->packets.size(), static_cast<std::size_t>(kPacketsPerRevolution));
+      EXPECT_EQ(scans.at(i)->header.seq, i + 1);
+      if (i > 0) {
+        EXPECT_NEAR((scans.at(i)->header.stamp - scans.at(i - 1)->header.stamp).toSec(), 0.1, 1e-5)
+            << "revolution " << i << (loop ? " (looped)" : "");
+      }
+    }
+  }
+  std::remove(pcap.c_str());
+}
+
+// A replay paused while nobody listens resumes with stamps of the clock: the first packet
+// after the pause is stamped now, not where the replay timeline stood (which would put every
+// later stamp behind the clock by the idle time). The bound leaves a loaded machine ~1 s for
+// the replay to resume; the idle time is 3 s.
+TEST(PacketSource, PcapStampsFollowTheClockAfterIdleTime) {
+  const double packet_period_s = 0.1 / kPacketsPerRevolution;
+  const std::string pcap =
+      writePcap("idle", makePackets(100 * kPacketsPerRevolution, 0.5), packet_period_s);
+  ros::NodeHandle nh("/idle");
+  ros::param::set("/idle/packet_source/pcap", pcap);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/idle/packet_source", "urban_detection/PacketSource", {}, {}));
+  Collector<VelodyneScan> first, second;
+  ros::Subscriber sub =
+      nh.subscribe("velodyne_packets", 100, &Collector<VelodyneScan>::callback, &first);
+  ASSERT_TRUE(waitFor([&] { return first.size() >= 3; }, 20.0));
+  sub.shutdown();
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  sub = nh.subscribe("velodyne_packets", 100, &Collector<VelodyneScan>::callback, &second);
+  ASSERT_TRUE(waitFor([&] { return second.size() >= 3; }, 20.0));
+  const ros::Time now = ros::Time::now();
+  sub.shutdown();
+  manager.clear();
+  std::remove(pcap.c_str());
+  const auto last = second.at(2);
+  EXPECT_LT((now - last->header.stamp).toSec(), 1.0) << "stamps behind the clock";
+  EXPECT_GT(last->header.stamp, first.at(first.size() - 1)->header.stamp);
+  for (std::size_t i = 0; i < 3; ++i) {  // a revolution open at the pause moved with it
+    const auto& packets = second.at(i)->packets;
+    EXPECT_NEAR((packets.back().stamp - packets.front().stamp).toSec(),
+                (kPacketsPerRevolution - 1) * packet_period_s, 1e-5);
+  }
+}
+
+// Datagrams that are not HDL-64E packets (here after every packet, with its capture time) are
+// refused and counted but take no time of the replay: revolutions keep the sensor's 0.1 s.
+TEST(PacketSource, RefusedDatagramsDoNotSlowThePcapReplay) {
+  RosoutWatcher rosout;
+  const double packet_period_s = 0.1 / kPacketsPerRevolution;
+  const auto packets = makePackets(4 * kPacketsPerRevolution, 0.5);
+  const std::string pcap =
+      writePcap("garbage", packets, packet_period_s, std::vector<bool>(packets.size(), true));
+  ros::NodeHandle nh("/garbage");
+  ros::param::set("/garbage/packet_source/pcap", pcap);
+  ros::param::set("/garbage/packet_source/rate", 4.0);
+  Collector<VelodyneScan> scans;
+  ros::Subscriber sub =
+      nh.subscribe("velodyne_packets", 100, &Collector<VelodyneScan>::callback, &scans);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/garbage/packet_source", "urban_detection/PacketSource", {}, {}));
+  ASSERT_TRUE(waitFor([&] { return scans.size() >= 4; }, 30.0));
+  sub.shutdown();
+  manager.clear();
+  std::remove(pcap.c_str());
+  for (std::size_t i = 1; i < 4; ++i) {
+    EXPECT_NEAR((scans.at(i)->header.stamp - scans.at(i - 1)->header.stamp).toSec(), 0.1, 1e-5);
+  }
+  EXPECT_TRUE(rosout.contains(rosgraph_msgs::Log::WARN, "refusing invalid packets"));
+  EXPECT_FALSE(rosout.contains(rosgraph_msgs::Log::WARN, "capture time"));
+}
+
+// Faults that are logged as ERROR turn /diagnostics to ERROR too: a capture without a packet
+// for the port; a live source without data goes WARN, then ERROR; and a source that refused
+// to start shows only its ERROR, no OK status beside it.
+TEST(PacketSource, DiagnosticsTellTheFaultsItLogs) {
+  RosoutWatcher rosout;
+  DiagnosticsWatcher diagnostics;
+  const std::string empty = writePcap("noport", {}, 0.001);
+  ros::param::set("/noport/packet_source/pcap", empty);
+  const int port = freeUdpPort();
+  ros::param::set("/silent/packet_source/port", port);
+  ros::param::set("/badcal/packet_source/pcap", empty);
+  ros::param::set("/badcal/packet_source/decode", true);
+  ros::param::set("/badcal/packet_source/calibration", "/nonexistent/64e.yaml");
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/noport/packet_source", "urban_detection/PacketSource", {}, {}));
+  ASSERT_TRUE(manager.load("/silent/packet_source", "urban_detection/PacketSource", {}, {}));
+  manager.load("/badcal/packet_source", "urban_detection/PacketSource", {}, {});
+  ros::NodeHandle nh("/noport");
+  Collector<VelodyneScan> scans;
+  ros::Subscriber sub =
+      nh.subscribe("velodyne_packets", 1, &Collector<VelodyneScan>::callback, &scans);
+  EXPECT_TRUE(waitFor(
+      [&] { return diagnostics.sawError("noport/packet_source", "no HDL-64E packet"); }, 10.0));
+  EXPECT_TRUE(rosout.contains(rosgraph_msgs::Log::ERROR, "no HDL-64E packet for UDP port"));
+  EXPECT_TRUE(waitFor(
+      [&] { return diagnostics.sawWarning("silent/packet_source", "no sensor data"); }, 10.0));
+  EXPECT_TRUE(waitFor(
+      [&] { return diagnostics.sawError("silent/packet_source", "no sensor data"); }, 15.0));
+  EXPECT_TRUE(waitFor(
+      [&] { return diagnostics.sawError("badcal/packet_source", "/nonexistent/64e.yaml"); }, 5.0));
+  // (diagnostic_updater announces every task once with OK "Node starting up"; the stage's
+  // status of a refused source used to follow once a second with OK "waiting for input".)
+  EXPECT_FALSE(diagnostics.saw("badcal/packet_source", diagnostic_msgs::DiagnosticStatus::OK,
+                               "waiting for input"));
+  sub.shutdown();
+  manager.clear();
+  std::remove(empty.c_str());
 }
 
 TEST(PacketSource, BadParametersFailInitClearly) {

@@ -5,10 +5,10 @@
 
 #include <gtest/gtest.h>
 #include <nodelet/loader.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 #include <urban_detection/DetectedObjectArray.h>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include <chrono>
 #include <functional>

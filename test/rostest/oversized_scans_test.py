@@ -36,6 +36,8 @@ PKG = 'urban_detection'
 HUGE_PACKETS = 100000
 HUGE_SCANS = 3
 RSS_SLACK_MB = 20.0
+# [s] the longest /objects gap allowed while the oversized scans arrive, on a loaded machine.
+GAP_BOUND_S = 8.0
 
 
 def tool(name):
@@ -192,10 +194,15 @@ class OversizedScans(unittest.TestCase):
         gaps = [b - a for a, b in zip(received, received[1:])]
         rospy.loginfo('%d oversized scans refused; /objects %.2f s after the refusal was seen, '
                       'longest gap in /objects %.2f s', self.rejected, delay, max(gaps))
-        self.assertLess(delay, 1.0)
+        # Time bounds for a loaded 2-core machine (`scripts/run test` beside other work): the
+        # bounds tell a chain that goes on from one that stalled on the refused scans, not how
+        # fast an idle machine is. A refusal that blocked the chain would hold /objects back for
+        # the whole transfer of the remaining scans (tens of seconds); an idle machine shows
+        # well under a second for both, a busy one up to ~3 s of gap.
+        self.assertLess(delay, GAP_BOUND_S)
         # While 240-360 MB arrive and are refused the chain may drop revolutions (the subscriber
         # queue is short), but it never stops for long.
-        self.assertLess(max(gaps), 3.0)
+        self.assertLess(max(gaps), GAP_BOUND_S)
         # ~10 Hz went on (fewer while the remaining oversized scans arrive)
         self.assertGreater(len(self.objects_after(refused)), 30)
         after_mb = []
@@ -206,10 +213,11 @@ class OversizedScans(unittest.TestCase):
                       steady_mb, min(after_mb))
         self.assertLess(min(after_mb) - steady_mb, RSS_SLACK_MB)
 
-        # A loader dies (SIGKILL: no unload call, the bond breaks): the manager unloads the
-        # nodelet, roslaunch respawns the loader and it loads the nodelet again. A respawned
-        # loader whose load fails (the old nodelet still there) exits at once and is respawned
-        # again; one that is still alive 3 s later has loaded the nodelet.
+        # A loader dies (SIGKILL: no unload call, the bond breaks only seconds later): the
+        # launch file respawns it after 1 s and the respawned loader (load_nodelet.py) unloads
+        # the dead one's nodelet and loads it again at the first try: the first new loader
+        # process is the one that holds the nodelet (one that failed would exit at once and a
+        # second pid would appear).
         loader = node_pid('/grid_segmentation')
         self.assertIsNotNone(loader)
         listing = rospy.ServiceProxy('/urban_detection_manager/list', NodeletList)
@@ -217,19 +225,22 @@ class OversizedScans(unittest.TestCase):
         os.kill(loader, signal.SIGKILL)
         killed = time.time()
         reloaded_at = None
-        candidate, since = None, None
-        while time.time() < killed + 90.0 and reloaded_at is None:
-            time.sleep(0.2)
+        respawned = []  # every loader pid seen after the kill, in order
+        since = None
+        while time.time() < killed + 60.0 and reloaded_at is None:
+            time.sleep(0.1)
             pid = node_pid('/grid_segmentation')
             if pid is None or pid == loader or not os.path.exists('/proc/%d' % pid):
-                candidate = None
-            elif pid != candidate:
-                candidate, since = pid, time.time()
+                continue
+            if not respawned or respawned[-1] != pid:
+                respawned.append(pid)
+                since = time.time()
             elif time.time() - since > 3.0 and '/grid_segmentation' in listing().nodelets:
                 reloaded_at = rospy.Time.now()
-        rospy.loginfo('loader killed: a respawned loader holds the nodelet after %s s',
-                      reloaded_at and round(reloaded_at.to_sec() - killed, 1))
+        rospy.loginfo('loader killed: respawned loaders %s; the nodelet loaded again after %s s',
+                      respawned, reloaded_at and round(reloaded_at.to_sec() - killed, 1))
         self.assertIsNotNone(reloaded_at, 'the nodelet was not loaded again')
+        self.assertEqual(len(respawned), 1, 'a respawned loader failed before one loaded')
         self.assertTrue(self.wait(lambda: len(self.objects_after(reloaded_at)) >= 10, 10.0),
                         'no /objects after the loader was respawned')
 

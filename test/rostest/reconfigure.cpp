@@ -15,11 +15,11 @@
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <gtest/gtest.h>
 #include <nodelet/loader.h>
-#include <pcl_ros/point_cloud.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 #include <urban_detection/DetectedObjectArray.h>
 #include <visualization_msgs/MarkerArray.h>
+#include "urban_detection/ros/cloud_serialization.h"
 
 #include <sys/wait.h>
 

@@ -61,7 +61,7 @@ class DetectorNodelet : public nodelet::Nodelet {
 
  private:
   void onInit() final;
-  void foregroundCb(const boost::shared_ptr<const LabeledCloud>& foreground);  // zero copy
+  void foregroundCb(const ros::MessageEvent<const LabeledCloud>& event);  // zero copy
 
   std::mutex detector_mutex_;  // detector_ between revolutions and reconfigure
   std::unique_ptr<core::ObjectDetector> detector_;

@@ -59,6 +59,8 @@ class PacketSourceWorker {
   void udpLoop();
   void pcapLoop();
   void addPacket(const core::RawPacket& packet, const ros::Time& stamp);
+  void emitScan(const VelodyneScan::Ptr& scan);  // a whole revolution: counted, published
+  void finishPass();                             // end of a pass: its last revolution if whole
 
   PacketSourceParams params_;
   ros_conv::StageDiagnostics* diagnostics_;

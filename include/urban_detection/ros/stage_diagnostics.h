@@ -18,32 +18,43 @@
 namespace urban_detection {
 namespace ros_conv {
 
+/// [s] the first stage of a live chain without sensor data this long: WARN, then ERROR.
+constexpr double kNoSensorDataWarnS = 1.0;
+constexpr double kNoSensorDataErrorS = 5.0;
+
 /// Counts revolutions lost between two stages from the gaps in the header.seq numbers that the
 /// sources (PacketSource, SimulatedSensor) give their revolutions and every stage passes on.
 /// seq 0 (a driver that does not number its messages) is ignored; a smaller seq than the
-/// previous one is a restarted source (a looped replay, a new drive), not a gap.
+/// previous one is a restarted source (a looped replay, a new drive), not a gap. Each publisher
+/// (`source`: its caller id) has a numbering of its own: two drivers on one topic interleave
+/// two sequences whose differences are no lost revolutions.
 class SeqGapCounter {
  public:
-  /// Returns the number of revolutions missing before `seq`.
-  std::uint32_t add(std::uint32_t seq) {
+  /// Returns the number of revolutions missing before `seq` of `source`.
+  std::uint32_t add(std::uint32_t seq, const std::string& source = std::string()) {
+    std::uint32_t& last = last_[source];
     std::uint32_t gap = 0;
-    if (seq != 0 && last_ != 0 && seq > last_ + 1) gap = seq - last_ - 1;
-    if (seq != 0) last_ = seq;
+    if (seq != 0 && last != 0 && seq > last + 1) gap = seq - last - 1;
+    if (seq != 0) last = seq;
     return gap;
   }
-  /// Forgets the last seq: what passes while a lazy stage is unsubscribed is not lost.
-  void reset() { last_ = 0; }
+  /// Forgets the last seqs: what passes while a lazy stage is unsubscribed is not lost.
+  void reset() { last_.clear(); }
 
  private:
-  std::uint32_t last_ = 0;
+  std::map<std::string, std::uint32_t> last_;
 };
 
 /// Publishes, once per second, a status named `task` for the nodelet `name`:
+///   ERROR "<text>" while setError() holds a text; ERROR "refusing input: ..." / "<text>" in a
+///         second when refuse() / error() was called (a stage that logs an ERROR is never OK
+///         on /diagnostics);
 ///   WARN  "skipped N revolutions": input revolutions were lost before this stage (its input
 ///         queue keeps only the newest; an upstream stage or the network dropped them);
 ///   WARN  "falling behind": the processing time exceeds `load_warn_fraction` of the wall time;
 ///   WARN  "<counter>: +N": a counter registered as a warning grew in the last second;
 ///   WARN  "output below the sensor rate": with setExpectedRate(), output < 0.8 x expected;
+///   WARN / ERROR "no sensor data for N s": with setInputTimeouts();
 ///   OK    "processing" / "idle (no subscriber)" / "waiting for input" otherwise.
 /// Values: input and output rates [Hz], mean and max processing time per revolution [ms], busy
 /// fraction, totals of inputs, outputs, skipped revolutions and of every counter.
@@ -57,8 +68,8 @@ class StageDiagnostics {
                    double load_warn_fraction = 0.9);
 
   /// One input message arrived (a packet for a source, a revolution for a stage). `seq` is its
-  /// header.seq: gaps count as skipped revolutions (0 = not numbered).
-  void input(std::uint32_t seq = 0);
+  /// header.seq: gaps count as skipped revolutions (0 = not numbered), per publisher `source`.
+  void input(std::uint32_t seq = 0, const std::string& source = std::string());
   /// One revolution processed in `processing_s` seconds of wall time.
   void frame(double processing_s);
   /// One revolution published.
@@ -70,6 +81,18 @@ class StageDiagnostics {
   void latency(const ros::Time& stamp, const ros::Time& now);
   /// One input rejected (malformed); same as count("rejected inputs", 1, true).
   void rejected();
+  /// One input refused as malformed, `what` saying why (its kind first, up to a ':'): counted
+  /// as "rejected_inputs"; the status is ERROR "refusing input: <what>" for the window it
+  /// happened in. Returns whether the caller should log it now: the first of its kind since
+  /// the last one logged, or 5 s after that one (one throttled ERROR per kind).
+  bool refuse(const std::string& what);
+  /// The same for any fault the stage logs as ERROR: adds `n` to the counter `key` and turns
+  /// the status ERROR with `text` for the window; returns whether to log it now (per `key`
+  /// and kind of `text`, up to its first ':').
+  bool error(const std::string& key, const std::string& text, std::uint64_t n = 1);
+  /// A lasting fault the stage logged as ERROR (the status stays ERROR with `text` until
+  /// cleared with ""): a replay that stopped, a capture with no packet for the port.
+  void setError(const std::string& text);
   /// Adds `n` to the named counter; a `warn` counter that grows turns the status to WARN.
   void count(const std::string& key, std::uint64_t n = 1, bool warn = true);
   /// Sets a counter that the caller keeps itself (a total, e.g. the kernel's drops).
@@ -78,6 +101,9 @@ class StageDiagnostics {
   void setActive(bool active);
   /// Revolutions per second the sensor delivers (rpm / 60); 0 = not checked.
   void setExpectedRate(double hz);
+  /// For the stage that takes the sensor's data: while active and no input came for `warn_s`
+  /// seconds the status is WARN "no sensor data for N s", after `error_s` ERROR (0: off).
+  void setInputTimeouts(double warn_s, double error_s);
   /// Shown in the status; for a source the sensor address or file.
   void setHardwareId(const std::string& id) { updater_->setHardwareID(id); }
   /// Status computed now, closing the current window (for tests and the timer).
@@ -97,12 +123,20 @@ class StageDiagnostics {
   std::mutex mutex_;
   bool active_ = true;
   double expected_hz_ = 0.0;
+  double no_input_warn_s_ = 0.0, no_input_error_s_ = 0.0;
+  ros::WallTime last_input_;  // or when the stage became active
   ros::WallTime window_start_;
   SeqGapCounter gaps_;
   Counter inputs_, frames_, outputs_, skipped_;
   std::map<std::string, Counter> counters_;
   double window_sum_s_ = 0.0, window_max_s_ = 0.0;
   std::vector<double> window_latency_s_;
+  std::string error_;  // setError()
+  bool report(const std::string& key, const std::string& text, const std::string& kind,
+              std::uint64_t n);
+  std::string window_error_;  // last refuse() / error() text of the window
+  std::uint64_t window_errors_ = 0;
+  std::map<std::string, ros::WallTime> logged_;  // kind of fault -> when last logged
 };
 
 /// The /diagnostics entry of a nodelet that refused to start (a bad parameter, calibration or

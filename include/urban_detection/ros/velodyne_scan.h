@@ -57,6 +57,14 @@ class ScanAssembler {
 
   /// Drops the revolution in progress and restarts cut detection (a gap in the stream).
   void reset();
+  /// A file's stream (re)starts: a first revolution that begins at the cut angle is whole
+  /// (core::RevolutionBoundary::startFile, PcapRevolutionReader's rule).
+  void startFile(double tolerance_deg);
+  /// The file's stream ends: returns the open revolution when it is whole by
+  /// PcapRevolutionReader's end rule, else null (dropped, counted as partial).
+  VelodyneScan::Ptr finishFile();
+  /// Adds `s` seconds to the stamps of the open revolution (a replay resumed after a pause).
+  void shiftOpen(double s);
 
   /// Partial revolutions dropped (stream start, reset()).
   std::size_t partialDropped() const { return boundary_.partialDropped(); }
@@ -81,6 +89,7 @@ class ScanAssembler {
   std::size_t nominal_packets_ = 0;     // the expected count (rate check; 0 = unknown)
   std::size_t last_packets_ = 0;
   std::uint32_t revolutions_ = 0;  // returned so far (header.seq)
+  VelodyneScan::Ptr close();       // the open revolution, numbered and stamped
 };
 
 /// Counters of decodeScan().
@@ -89,6 +98,12 @@ struct ScanDecodeStats {
   std::size_t tf_failures = 0;  // packets dropped because their transform was unavailable
   core::PacketStatus last_bad_status = core::PacketStatus::kOk;  // why the last bad packet failed
 };
+
+/// "" unless a revolution with decodable packets gave (almost) no point: then the cause,
+/// for a WARN: every return beyond the decoder's range (at least 99 % of them out of
+/// [min_range_m, max_range_m]: a blinded or covered sensor, or the range misconfigured), or no
+/// return at all (raw distance 0 in every firing).
+std::string emptyRevolutionCause(const core::DecodeStats& stats, const core::DecoderParams& params);
 
 /// Transform to apply to the points of a packet stamped `packet_stamp`; returns false when it
 /// is not available (the packet is then dropped and counted in tf_failures).
@@ -128,6 +143,10 @@ class StreamingScanDecoder {
   boost::shared_ptr<CloudXYZIRT> add(const core::RawPacket& packet, const ros::Time& stamp);
   /// Drops the revolution in progress and restarts cut detection (a gap in the stream).
   void reset();
+  /// As ScanAssembler::startFile / finishFile / shiftOpen.
+  void startFile(double tolerance_deg);
+  boost::shared_ptr<CloudXYZIRT> finishFile();
+  void shiftOpen(double s);
 
   /// Decode counters of the revolution returned last.
   const ScanDecodeStats& lastStats() const { return last_stats_; }
@@ -148,7 +167,9 @@ class StreamingScanDecoder {
   ScanDecodeStats stats_, last_stats_;
   std::size_t expected_packets_ = 700;
   std::size_t last_packets_ = 0;
+  std::size_t nominal_packets_ = 0;
   std::uint32_t revolutions_ = 0;
+  boost::shared_ptr<CloudXYZIRT> close();
 };
 
 }  // namespace ros_conv

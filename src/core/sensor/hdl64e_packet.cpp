@@ -90,6 +90,9 @@ const char* toString(PacketStatus status) {
              "HDL-32E)";
     case PacketStatus::kDualReturn:
       return "dual-return packet (not supported, set the sensor to single return)";
+    case PacketStatus::kStoppedMotor:
+      return "azimuth constant across the packet: the sensor's motor is stopped (or its "
+             "encoder is broken)";
   }
   return "unknown status";
 }
@@ -191,6 +194,9 @@ PacketStatus PacketDecoder::validate(const std::uint8_t* data, std::size_t size)
   if (!lower) return PacketStatus::kOtherModel;
   for (int b = 0; b < kBlocksPerPacket; ++b) {
     if (az[b] >= 36000) return PacketStatus::kBadAzimuth;
+  }
+  if (std::all_of(az + 1, az + kBlocksPerPacket, [&](std::uint16_t a) { return a == az[0]; })) {
+    return PacketStatus::kStoppedMotor;
   }
   for (int b = 0; b < kBlocksPerPacket; ++b) {
     for (int o = b + 1; o < kBlocksPerPacket; ++o) {
@@ -567,8 +573,26 @@ RevolutionBoundary::Action RevolutionBoundary::add(std::uint16_t first_block_azi
   } else if (packets_ == 0) {
     action = Action::kOpen;
   }
+  if (start_tolerance_ >= 0 && action == Action::kOpen) {
+    const int cut = static_cast<int>(std::lround(cutter_.cutAngleDeg() * 100.0)) % 36000;
+    const int after = (static_cast<int>(first_block_azimuth) - cut + 36000) % 36000;
+    whole_ = after <= start_tolerance_;
+  }
+  if (action != Action::kAppend) start_tolerance_ = -1;
   ++packets_;
   return action;
+}
+
+void RevolutionBoundary::startFile(double tolerance_deg) {
+  reset();
+  start_tolerance_ = static_cast<int>(std::lround(std::max(0.0, tolerance_deg) * 100.0));
+}
+
+bool RevolutionBoundary::finishFile(std::size_t expected_packets) {
+  const bool keep = packets_ > 0 && whole_ && 10 * packets_ >= 9 * expected_packets;
+  if (keep) packets_ = 0;
+  reset();
+  return keep;
 }
 
 void RevolutionBoundary::reset() {

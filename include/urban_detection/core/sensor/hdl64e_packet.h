@@ -46,6 +46,8 @@ enum class PacketStatus {
                     // azimuth (a single-return packet never fires one bank twice at one angle;
                     // a dual-return packet carries the strongest and last echo of a firing in
                     // two blocks at the same angle). Status bytes are not used for this.
+  kStoppedMotor,    // every block of the packet at one azimuth: the motor stands still (or
+                    // its encoder is broken); checked before kDualReturn, whose firings move
 };
 const char* toString(PacketStatus status);
 
@@ -89,7 +91,8 @@ class PacketDecoder {
                       CloudXYZIRT* cloud, DecodeStats* stats, std::vector<std::uint8_t>* laser,
                       std::vector<std::uint16_t>* raw_azimuth) const;
 
-  /// Checks a packet without decoding it (size, block ids, azimuths, dual return).
+  /// Checks a packet without decoding it (size, block ids, azimuths, stopped motor, dual
+  /// return).
   static PacketStatus validate(const std::uint8_t* data, std::size_t size);
 
   const Calibration& calibration() const { return calibration_; }
@@ -261,6 +264,14 @@ class RevolutionBoundary {
   PacketStatus lastStatus() const { return last_status_; }
   /// Drops the open revolution (counted as partial) and restarts cut detection.
   void reset();
+  /// A file's stream starts (a capture, or a new pass over it): its first valid packet opens a
+  /// whole revolution when its azimuth lies within `tolerance_deg` after the cut angle (a
+  /// capture that starts at the cut), PcapRevolutionReader's first-revolution rule.
+  void startFile(double tolerance_deg);
+  /// The file's stream ends: true when the open revolution is whole by PcapRevolutionReader's
+  /// end rule (begun at a cut, at least 90 % of `expected_packets`); then it is the caller's,
+  /// otherwise it is dropped and counted as partial. Cut detection restarts either way.
+  bool finishFile(std::size_t expected_packets);
 
   bool open() const { return packets_ > 0; }
   /// The open revolution was opened by an observed cut (it will be whole when it closes).
@@ -281,6 +292,7 @@ class RevolutionBoundary {
   std::size_t forced_cuts_ = 0;
   std::size_t invalid_ = 0, strays_ = 0, reordered_ = 0;
   PacketStatus last_status_ = PacketStatus::kOk;
+  int start_tolerance_ = -1;  // [1/100 deg] startFile() pending for the next opened revolution
 };
 
 /// "" when a whole revolution of `packets` packets is plausible against the `expected` count
