@@ -48,6 +48,7 @@
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/evaluation/evaluation.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/sensor/calibration.h"
 
 #include "datasets.h"
 #include "tool_common.h"
@@ -71,7 +72,8 @@ struct DetectorFrame {
 
 struct FrameData {
   std::string id, group;
-  bool augmented = false;  // made by augmentSequence: trained on, never scored
+  bool augmented = false;     // made by augmentSequence (or simulated): trained on, never scored
+  bool always_train = false;  // simulated: in the training set of every fold
   core::EvalFrame gt;
   std::vector<float> gt_range;  // per GT object, its horizontal distance [m]
   std::vector<DetectorFrame> detectors;
@@ -103,7 +105,7 @@ void trainingSet(const std::vector<FrameData>& frames, const std::set<std::strin
   x->clear();
   y->clear();
   for (const FrameData& f : frames) {
-    if (!groups.count(f.group)) continue;
+    if (!f.always_train && !groups.count(f.group)) continue;
     const DetectorFrame& d = f.detectors[0];
     for (std::size_t i = 0; i < d.objects.size(); ++i) {
       if (d.labels[i] == core::ObjectCategory::kUnknown) continue;
@@ -390,6 +392,9 @@ void usage() {
       "  --uncertain-band W  with --decision object: objects with P(object) within W below\n"
       "                  the threshold stay as uncertain other_object (default 0: none)\n"
       "  --class-balance B  row weights (rows / (classes x class rows))^B (default 0)\n"
+      "  --sim GT --pcap PCAP  also train on the first --sim-frames N (default 60) revolutions\n"
+      "                  of a simulated drive (urban_detection_simulate), in every fold's\n"
+      "                  training set, never scored\n"
       "  --augment P[,V]  training examples made from the training sequences' objects: P\n"
       "                  copies of each person and cyclist, V of each vehicle (default 16,2;\n"
       "                  0,0: off), re-sampled farther away and pasted on free ground into the\n"
@@ -407,6 +412,8 @@ int main(int argc, char** argv) {
   long max_frames = -1, min_points = 30;
   std::string decision_arg = "object";
   double uncertain_band = 0.0;
+  std::string sim_gt, sim_pcap;
+  long sim_frames = 60;
   core::AugmentParams augment;
   augment.person_copies = 16;
   augment.vehicle_copies = 2;
@@ -454,6 +461,12 @@ int main(int argc, char** argv) {
       }
       augment.person_copies = pc;
       augment.vehicle_copies = n == 2 ? vc : 0;
+    } else if (a == "--sim") {
+      sim_gt = arg.value("--sim");
+    } else if (a == "--pcap") {
+      sim_pcap = arg.value("--pcap");
+    } else if (a == "--sim-frames") {
+      sim_frames = arg.count("--sim-frames");
     } else if (a == "--uncertain-band") {
       const std::string v = arg.value("--uncertain-band");
       char* end = nullptr;
@@ -644,6 +657,51 @@ int main(int argc, char** argv) {
       }
       frames.push_back(std::move(fd));
     }
+  }
+  // Simulated revolutions: trained on in every fold, never scored.
+  if (sim_gt.empty() != sim_pcap.empty()) {
+    std::fprintf(stderr, "error: --sim GT and --pcap PCAP go together\n");
+    return 2;
+  }
+  std::size_t sim_rows = 0;
+  if (!sim_gt.empty()) {
+    try {
+      core::SimulatedGroundTruthParams sgp;
+      sgp.min_points = 1;
+      urban_detection::tools::SimulatedDriveDataset sim(sim_gt, sim_pcap, core::loadCalibration(""),
+                                                        0.0, sgp);
+      urban_detection::tools::Frame sf;
+      for (long n = 0; n < sim_frames; ++n) {
+        std::string err;
+        const auto status = sim.next(&sf, &err);
+        if (status == urban_detection::tools::Dataset::Status::kEnd) break;
+        if (status == urban_detection::tools::Dataset::Status::kSkipped) continue;
+        segmenter.segment(sf.cloud, &seg);
+        core::extractForeground(sf.cloud, seg, &foreground);
+        FrameData fd;
+        fd.id = "sim/" + sf.id;
+        fd.group = "sim";
+        fd.augmented = true;
+        fd.always_train = true;
+        fd.detectors.resize(detectors.size());
+        DetectorFrame& d = fd.detectors[0];
+        detectors[0]->detect(foreground, &d.objects);
+        core::FrameMatch m;
+        evaluator.evaluate(sf.gt, d.objects, &m);
+        extractor.computeAll(foreground, d.objects, &d.features);
+        for (std::size_t i = 0; i < d.objects.size(); ++i) {
+          const std::string content =
+              urban_detection::tools::detectionContent(sf, sim, d.objects[i]);
+          d.labels.push_back(trainingLabel(m, i, sf.gt, content, fragments));
+          sim_rows += d.labels.back() != core::ObjectCategory::kUnknown;
+        }
+        frames.push_back(std::move(fd));
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 1;
+    }
+    std::printf("simulated drive: %zu training rows\n", sim_rows);
   }
   std::vector<std::string> groups;
   for (const FrameData& fd : frames) {
