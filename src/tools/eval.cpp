@@ -732,7 +732,6 @@ int main(int argc, char** argv) {
       detectors.size(), core::DetectionEvaluator(all_objects));
   std::vector<core::RecallBreakdown> breakdown(detectors.size()),
       breakdown_before(detectors.size());
-  std::vector<core::DetectedObject> detected;
   std::vector<float> gt_range;
   std::vector<Diagnostics> diags(detectors.size());
   std::vector<core::DetectionEvaluator> unfiltered(detectors.size(),
@@ -784,10 +783,10 @@ int main(int argc, char** argv) {
     gt_range = core::gtObjectRanges(f.gt, f.cloud);
     for (std::size_t k = 0; k < detectors.size(); ++k) {
       detectors[k]->detect(foreground, &objects);
-      detected = objects;
-      before_classifier[k].evaluate(f.gt, detected, &match);
-      breakdown_before[k].addFrame(f.gt, match, detected, gt_range, eval_params.min_points);
-      before_classifier_all[k].evaluate(f.gt, detected, nullptr);
+      // The detector alone: scored before the filter and the classifier change `objects`.
+      before_classifier[k].evaluate(f.gt, objects, &match);
+      breakdown_before[k].addFrame(f.gt, match, objects, gt_range, eval_params.min_points);
+      before_classifier_all[k].evaluate(f.gt, objects, nullptr);
       if (features_out) {
         unfiltered[k].evaluate(f.gt, objects, &match);
         feature_extractor.computeAll(foreground, objects, &feature_rows);

@@ -204,8 +204,13 @@ std::vector<PointXYZIRT> resampleObject(const ObjectSample& object, const RingMo
   return out;
 }
 
-bool freeGroundAt(const CloudXYZIRT& cloud, const std::vector<bool>& free_ground, float x, float y,
-                  float radius_m, std::size_t min_ground_points, float* ground_z) {
+namespace {
+
+// Median height of the free-ground points within `radius_m` of (x, y); with `require_free`,
+// false as soon as a point within it is not free ground.
+bool medianGroundZ(const CloudXYZIRT& cloud, const std::vector<bool>& free_ground, float x, float y,
+                   float radius_m, std::size_t min_ground_points, bool require_free,
+                   float* ground_z) {
   std::vector<float> z;
   const float r2 = radius_m * radius_m;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
@@ -213,13 +218,24 @@ bool freeGroundAt(const CloudXYZIRT& cloud, const std::vector<bool>& free_ground
     if (!finitePoint(p)) continue;
     const float dx = p.x - x, dy = p.y - y;
     if (dx * dx + dy * dy >= r2) continue;
-    if (i >= free_ground.size() || !free_ground[i]) return false;
+    const bool free = i < free_ground.size() && free_ground[i];
+    if (!free) {
+      if (require_free) return false;
+      continue;
+    }
     z.push_back(p.z);
   }
   if (z.size() < std::max<std::size_t>(1, min_ground_points)) return false;
   std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
   *ground_z = z[z.size() / 2];
   return true;
+}
+
+}  // namespace
+
+bool freeGroundAt(const CloudXYZIRT& cloud, const std::vector<bool>& free_ground, float x, float y,
+                  float radius_m, std::size_t min_ground_points, float* ground_z) {
+  return medianGroundZ(cloud, free_ground, x, y, radius_m, min_ground_points, true, ground_z);
 }
 
 std::size_t pasteObject(const std::vector<PointXYZIRT>& object, std::uint32_t label,
@@ -274,18 +290,7 @@ std::size_t pasteObject(const std::vector<PointXYZIRT>& object, std::uint32_t la
 
 bool groundHeightNear(const CloudXYZIRT& cloud, const std::vector<bool>& free_ground, float x,
                       float y, float radius_m, std::size_t min_ground_points, float* ground_z) {
-  std::vector<float> z;
-  const float r2 = radius_m * radius_m;
-  for (std::size_t i = 0; i < cloud.size() && i < free_ground.size(); ++i) {
-    const auto& p = cloud[i];
-    if (!free_ground[i] || !finitePoint(p)) continue;
-    const float dx = p.x - x, dy = p.y - y;
-    if (dx * dx + dy * dy < r2) z.push_back(p.z);
-  }
-  if (z.size() < std::max<std::size_t>(1, min_ground_points)) return false;
-  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
-  *ground_z = z[z.size() / 2];
-  return true;
+  return medianGroundZ(cloud, free_ground, x, y, radius_m, min_ground_points, false, ground_z);
 }
 
 bool isSemanticKittiGround(std::uint16_t c) {
