@@ -125,7 +125,16 @@ void StageDiagnostics::setExpectedRate(double hz) {
 void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   std::lock_guard<std::mutex> lock(mutex_);
   const ros::WallTime now = ros::WallTime::now();
-  const double window_s = std::max((now - window_start_).toSec(), 1e-3);
+  const double open_s = (now - window_start_).toSec();
+  // A timer call that follows a late one closely (roscpp catches up on a busy queue) would
+  // compute rates over a few milliseconds ("skipped 138 revolutions in 0.0 s"): the previous
+  // status stands and this window's counts go to the next one. A pending error is never held.
+  if (have_status_ && open_s < kMinWindowS && window_errors_ == 0 && error_.empty()) {
+    stat.summary(last_status_.level, last_status_.message);
+    stat.values = last_status_.values;
+    return;
+  }
+  const double window_s = std::max(open_s, 1e-3);
   const double input_hz = static_cast<double>(inputs_.window) / window_s;
   const double output_hz = static_cast<double>(outputs_.window) / window_s;
   const double mean_s =
@@ -199,6 +208,8 @@ void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
     stat.add(kv.first, kv.second.total);
     kv.second.window = 0;
   }
+  last_status_ = stat;
+  have_status_ = true;
   window_start_ = now;
   inputs_.window = frames_.window = outputs_.window = skipped_.window = 0;
   window_sum_s_ = window_max_s_ = 0.0;

@@ -95,6 +95,15 @@ class DiagnosticsWatcher {
     }
     return false;
   }
+  /// Every status whose name contains `name`, in the order published.
+  std::vector<diagnostic_msgs::DiagnosticStatus> statuses(const std::string& name) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<diagnostic_msgs::DiagnosticStatus> out;
+    for (const auto& s : statuses_) {
+      if (s.name.find(name) != std::string::npos) out.push_back(s);
+    }
+    return out;
+  }
 
  private:
   void cb(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {

@@ -106,7 +106,8 @@ class StageDiagnostics {
   void setInputTimeouts(double warn_s, double error_s);
   /// Shown in the status; for a source the sensor address or file.
   void setHardwareId(const std::string& id) { updater_->setHardwareID(id); }
-  /// Status computed now, closing the current window (for tests and the timer).
+  /// Status computed now, closing the current window (for tests and the timer); a window
+  /// younger than half a second keeps the previous status unless an error is pending.
   void update() { updater_->force_update(); }
 
  private:
@@ -126,6 +127,9 @@ class StageDiagnostics {
   double no_input_warn_s_ = 0.0, no_input_error_s_ = 0.0;
   ros::WallTime last_input_;  // or when the stage became active
   ros::WallTime window_start_;
+  static constexpr double kMinWindowS = 0.5;  // shorter windows keep the previous status
+  diagnostic_msgs::DiagnosticStatus last_status_;
+  bool have_status_ = false;
   SeqGapCounter gaps_;
   Counter inputs_, frames_, outputs_, skipped_;
   std::map<std::string, Counter> counters_;
