@@ -88,9 +88,11 @@ void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::
     markers->markers.push_back(m);
 
     const double speed = std::hypot(t.velocity.x, t.velocity.y);
+    // Relative velocities (no odometry) say nothing about what moves over ground: no arrows.
+    const bool moving = !tracks.velocities_relative && speed > moving_speed_mps;
     m.ns = "track_velocities";
     m.type = visualization_msgs::Marker::ARROW;
-    if (speed > moving_speed_mps) {
+    if (moving) {
       m.pose = geometry_msgs::Pose();
       m.pose.orientation.w = 1.0;
       geometry_msgs::Point a = t.pose.position, b = t.pose.position;
@@ -124,7 +126,13 @@ void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::
     m.scale.z = params.text_size_m;
     m.color.r = m.color.g = m.color.b = m.color.a = 1.0f;
     char buf[96];
-    std::snprintf(buf, sizeof buf, "%u %s %.1f m/s", t.id, t.class_label.c_str(), speed);
+    if (tracks.velocities_relative) {
+      std::snprintf(buf, sizeof buf, "%u %s (%.1f m/s rel.)", t.id, t.class_label.c_str(), speed);
+    } else if (moving) {
+      std::snprintf(buf, sizeof buf, "%u %s %.1f m/s", t.id, t.class_label.c_str(), speed);
+    } else {
+      std::snprintf(buf, sizeof buf, "%u %s", t.id, t.class_label.c_str());
+    }
     m.text = buf;
     markers->markers.push_back(m);
     m.text.clear();
