@@ -72,7 +72,10 @@ void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::
     const bool tentative = t.state == TrackedObject::TENTATIVE;
     if (tentative && !params.show_tentative) continue;
     const int id = static_cast<int>(t.id);
-    std_msgs::ColorRGBA colour = colourForId(t.id, params.box_alpha);
+    // The class colour of the legend when the track has a class, else the id's.
+    const bool classified = !t.class_label.empty() && t.class_label != "unknown";
+    std_msgs::ColorRGBA colour = classified ? colourForClass(t.class_label, params.box_alpha)
+                                            : colourForId(t.id, params.box_alpha);
     if (tentative) colour.r = colour.g = colour.b = 0.6f;
     if (t.state == TrackedObject::LOST) colour.a *= 0.5f;
     m.ns = "tracks";
