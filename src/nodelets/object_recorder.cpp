@@ -39,8 +39,9 @@ class ObjectRecorderNodelet : public nodelet::Nodelet {
       loadParam(pnh, "output_dir", &output_dir_);
       loadParam(pnh, "first_index", &first_index, 0, 99999999, "");
       loadParam(pnh, "queue_size", &queue_size_, 1, 100, "messages");
-      if (output_dir_.empty()) throw ParamError("parameter '" + pnh.resolveName("output_dir") +
-                                                "' must name a folder to write into");
+      if (output_dir_.empty())
+        throw ParamError("parameter '" + pnh.resolveName("output_dir") +
+                         "' must name a folder to write into");
       std::error_code ec;
       std::filesystem::create_directories(output_dir_ + "/kitti", ec);
       if (ec) {
@@ -122,7 +123,7 @@ class ObjectRecorderNodelet : public nodelet::Nodelet {
   int queue_size_ = 10;
   std::uint64_t next_ = 0;  // number of the next revolution written
   std::ofstream csv_;
-  std::mutex mutex_;  // sizes_
+  std::mutex mutex_;                                         // sizes_
   std::deque<std::pair<std::uint64_t, std::size_t>> sizes_;  // cloud stamp [us] -> points
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;

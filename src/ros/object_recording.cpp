@@ -42,7 +42,8 @@ std::string kittiLabelLine(const DetectedObject& o) {
   ry = std::atan2(std::sin(ry), std::cos(ry));
   char buf[256];
   // Location: the bottom-face centre, in the camera axes (y down).
-  std::snprintf(buf, sizeof buf, "%s 0.00 0 -10.00 0.00 0.00 0.00 0.00 %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.4f",
+  std::snprintf(buf, sizeof buf,
+                "%s 0.00 0 -10.00 0.00 0.00 0.00 0.00 %.2f %.2f %.2f %.2f %.2f %.2f %.2f %.4f",
                 kittiType(o.class_label), d.z, d.y, d.x, -c.y, -(c.z - 0.5 * d.z), c.x, ry,
                 static_cast<double>(o.class_confidence));
   return buf;

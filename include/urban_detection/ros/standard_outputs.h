@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <string>
 
-#include "urban_detection/Detection3DArray.h"
 #include "urban_detection/DetectedObjectArray.h"
+#include "urban_detection/Detection3DArray.h"
 
 namespace urban_detection {
 namespace ros_conv {
