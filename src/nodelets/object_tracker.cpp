@@ -85,9 +85,10 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
     *pose = Eigen::Isometry3d::Identity();
     if (!tf_buffer_ || fixed_frame_ == header.frame_id) return header.frame_id;
     try {
-      // Waits for a transform that is late, not for a frame nobody publishes.
-      const bool known =
-          tf_buffer_->_frameExists(fixed_frame_) && tf_buffer_->_frameExists(header.frame_id);
+      // Waits for a transform that is late, not for a frame nobody publishes; the very first
+      // revolution also waits, as tf may not have heard of any frame yet.
+      const bool known = frame_.empty() || (tf_buffer_->_frameExists(fixed_frame_) &&
+                                            tf_buffer_->_frameExists(header.frame_id));
       *pose = tf2::transformToEigen(tf_buffer_->lookupTransform(
           fixed_frame_, header.frame_id, header.stamp, ros::Duration(known ? wait_s : 0.0)));
       return fixed_frame_;
@@ -121,8 +122,8 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
     const bool restarting = timeWentBack(msg->header.stamp);
     Eigen::Isometry3d pose;
     std::string tf_error;
-    const std::string frame =
-        fixedFrame(msg->header, restarting ? kRestartTfWaitS : 0.05, &pose, &tf_error);
+    const std::string frame = fixedFrame(
+        msg->header, restarting || frame_.empty() ? kRestartTfWaitS : 0.05, &pose, &tf_error);
     if (!tf_error.empty()) {
       if (restarting && frame_ == fixed_frame_) {
         // Just after a restart tf may not have the new stream's transforms yet: skip this

@@ -6,6 +6,8 @@ read here.
   * KITTI raw drive_0048 (sweeps without poses): the bag has no /tf (no odom invented), every
     track array is in the sensor frame with velocities_relative set, and the tracker says so
     once on /rosout;
+  * the same bag looping (loop:=true): every track array stays in odom, the tracker restarts
+    once per loop with one INFO and nothing else;
   * SemanticKITTI sequence 00 (poses.txt, the vehicle drives about 7 m/s past parked cars):
     the tracks are in odom, not relative, and every confirmed track on a parked car (the
     nearest labelled parked car instance, `car` not `moving-car`, placed in odom with the
@@ -27,6 +29,7 @@ import rosbag
 import roslib.packages
 import rospy
 import rostest
+from rosgraph_msgs.msg import Log
 from urban_detection.msg import TrackedObjectArray
 
 PKG = 'urban_detection'
@@ -65,6 +68,7 @@ class KittiTracksTest(unittest.TestCase):
     def setUp(self):
         self.tmp = tempfile.TemporaryDirectory(prefix='ud_kitti_tracks_')
         self.tracks = []
+        self.logs = []
         self.lock = threading.Lock()
         self.launch = None
         KittiTracksTest.current = self
@@ -75,10 +79,17 @@ class KittiTracksTest(unittest.TestCase):
         cls.current = None
         cls.subs = [rospy.Subscriber('/objects/tracked', TrackedObjectArray,
                                      lambda m: cls.current and cls.current.on_tracks(m),
-                                     queue_size=50)]
+                                     queue_size=50),
+                    rospy.Subscriber('/rosout', Log,
+                                     lambda m: cls.current and cls.current.on_log(m),
+                                     queue_size=500)]
 
     def tearDown(self):
         KittiTracksTest.current = None
+        self.stop()
+        self.tmp.cleanup()
+
+    def stop(self):
         if self.launch is not None and self.launch.poll() is None:
             self.launch.send_signal(signal.SIGINT)
             try:
@@ -86,17 +97,26 @@ class KittiTracksTest(unittest.TestCase):
             except subprocess.TimeoutExpired:
                 self.launch.kill()
                 self.launch.wait()
-        self.tmp.cleanup()
+
+    def on_log(self, msg):
+        with self.lock:
+            self.logs.append(msg.msg)
+
+    def logged(self, text):
+        """How many /rosout messages so far contain `text`."""
+        time.sleep(1.0)  # /rosout is asynchronous
+        with self.lock:
+            return sum(1 for m in self.logs if text in m)
 
     def on_tracks(self, msg):
         with self.lock:
             self.tracks.append(msg)
 
-    def play(self, bag, sweeps):
+    def play(self, bag, sweeps, *args):
         log = open(os.path.join(self.tmp.name, 'roslaunch.log'), 'w')
         self.launch_log = log.name
         self.launch = subprocess.Popen(['roslaunch', PKG, 'bag.launch', 'bag:=' + bag,
-                                        'rate:=0.5', 'delay:=3'],
+                                        'rate:=0.5', 'delay:=3'] + list(args),
                                        stdout=log, stderr=subprocess.STDOUT)
         deadline = time.time() + 90.0
         last_n, last_t = 0, time.time()
@@ -133,10 +153,30 @@ class KittiTracksTest(unittest.TestCase):
         self.assertGreaterEqual(len(tracks), 15, 'roslaunch:\n' + self.launch_tail())
         self.assertEqual({t.header.frame_id for t in tracks}, {'velodyne'})
         self.assertTrue(all(t.velocities_relative for t in tracks))
-        # Said once: on the manager's screen output (roslaunch's log here).
-        with open(self.launch_log) as f:
-            said = [line for line in f if 'tracking in the sensor frame' in line]
-        self.assertEqual(len(said), 1, said)
+        self.assertEqual(self.logged('tracking in the sensor frame'), 1)
+
+    def test_looping_bag_restarts_once_per_loop(self):
+        seq = os.path.join(shared_data(), 'semantic_kitti', 'sequences', '00')
+        if not os.path.isdir(os.path.join(seq, 'velodyne')):
+            self.skipTest('shared data not found: %s' % seq)
+        bag = self.bag_of(os.path.join(seq, 'velodyne'), 'seq00_loop.bag')
+        tracks = self.play(bag, 28, 'loop:=true')  # about three passes of 10 scans
+        self.assertGreaterEqual(len(tracks), 22, 'roslaunch:\n' + self.launch_tail())
+        # Every revolution in odom (no flip to the sensor frame while tf restarts), and one
+        # INFO per loop, no other restart.
+        self.assertEqual({t.header.frame_id for t in tracks}, {'odom'},
+                         [(i, t.header.stamp.to_sec(), t.header.frame_id)
+                          for i, t in enumerate(tracks) if t.header.frame_id != 'odom'])
+        loops = sum(1 for a, b in zip(tracks, tracks[1:]) if b.header.stamp < a.header.stamp)
+        self.assertGreaterEqual(loops, 1)
+        # The bag plays on while this is checked: one more loop may have begun.
+        self.assertIn(self.logged('stamp went back'), (loops, loops + 1))
+        self.assertEqual(self.logged('tracks restarted'), 0)
+        self.assertEqual(self.logged('tracking in the sensor frame'), 0)
+        # The ids of a new loop are new: a track never spans two loops.
+        first_ids = {o.id for t in tracks[:5] for o in t.objects}
+        last_ids = {o.id for t in tracks[-3:] for o in t.objects}
+        self.assertFalse(first_ids & last_ids)
 
     def test_with_poses_parked_cars_still(self):
         seq = os.path.join(shared_data(), 'semantic_kitti', 'sequences', '00')
