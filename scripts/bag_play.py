@@ -6,10 +6,9 @@ input auto: the packets topic when the bag has it (its clouds, if also recorded,
 played: the pipeline decodes its own), else the points topic. The chosen topic is remapped to
 /velodyne_packets (decoded by PacketToCloud) or /points_in (sensor_msgs/PointCloud2, converted
 by CloudInput into the pipeline's cloud type on /velodyne_points); /tf, /tf_static and
-/ground_truth are played when present. With --manager (bag.launch's input:=auto), the one
-adapter the bag needs is loaded into that nodelet manager here, once the bag is known, with the
-parameters bag.launch put in its namespace: a bag of clouds never starts a PacketToCloud that
-would wait for packets. A missing bag, an unreadable bag or a bag without the requested input
+/ground_truth are played when present. With --input auto it sets ~input_chosen (packets or
+points) for bag.launch's two adapter loaders: only the one the bag needs loads its nodelet, so
+a bag of clouds never starts a PacketToCloud that would wait for packets. A missing bag, an unreadable bag or a bag without the requested input
 is one clear error.
 """
 import argparse
@@ -45,26 +44,21 @@ def choose(topics, mode, packets_topic, points_topic):
     raise ValueError('input must be auto, packets or points, not %r' % mode)
 
 
-ADAPTERS = {'/velodyne_packets': ('packet_to_cloud', 'urban_detection/PacketToCloud'),
-            '/points_in': ('cloud_input', 'urban_detection/CloudInput')}
+INPUT_KIND = {'/velodyne_packets': 'packets', '/points_in': 'points'}
 
 
-def load_adapter(manager, target, fail):
-    """Loads the nodelet that turns `target` into velodyne_points into `manager` (no bond: it
-    lives as long as the manager)."""
-    from nodelet.srv import NodeletLoad  # only needed here
-    name, nodelet_type = ADAPTERS[target]
-    service = '%s/load_nodelet' % absolute(manager)
+def announce_input(target, fail):
+    """Sets ~input_chosen (packets | points): bag.launch's two adapter loaders wait for it; the
+    one the bag needs loads its nodelet, the other removes its parameters and idles."""
+    import rosgraph  # only needed here
+    import rosgraph.names
+    name = rosgraph.names.ns_join(rosgraph.names.get_ros_namespace(argv=sys.argv),
+                                  rosgraph.names.load_mappings(sys.argv).get('__name', 'rosbag_play'))
     try:
-        rospy.wait_for_service(service, timeout=30.0)
-        ok = rospy.ServiceProxy(service, NodeletLoad)(
-            name=absolute(name), type=nodelet_type, remap_source_args=[], remap_target_args=[],
-            my_argv=[], bond_id='').success
-    except (rospy.ROSException, rospy.ServiceException) as e:
-        fail('cannot load %s into %s: %s' % (nodelet_type, manager, e))
-    if not ok:
-        fail('the manager %s refused to load %s (see its log)' % (manager, nodelet_type))
-    sys.stdout.write('[bag_play] loaded %s as %s into %s\n' % (nodelet_type, absolute(name), manager))
+        rosgraph.Master(name).setParam(name + '/input_chosen', INPUT_KIND[target])
+    except Exception as e:  # the master's socket errors come in several types
+        fail('cannot set rosbag_play/input_chosen on the master: %s' % e)
+    sys.stdout.write('[bag_play] input %s\n' % INPUT_KIND[target])
 
 
 def main(argv):
@@ -77,8 +71,6 @@ def main(argv):
     parser.add_argument('--start', type=float, default=0.0)
     parser.add_argument('--delay', type=float, default=2.0)
     parser.add_argument('--loop', default='false')
-    parser.add_argument('--manager', default='',
-                        help='load the adapter the bag needs into this nodelet manager')
     args, _ = parser.parse_known_args(rospy.myargv(argv)[1:])
     ros_args = [a for a in argv[1:] if ':=' in a]  # __name, __log from roslaunch
 
@@ -106,8 +98,8 @@ def main(argv):
     except ValueError as e:
         fail('%s: %s; its topics: %s' % (args.bag, e, ', '.join(
             '%s (%s)' % kv for kv in sorted(topics.items())) or 'none'))
-    if args.manager:
-        load_adapter(args.manager, target, fail)
+    if args.input == 'auto':
+        announce_input(target, fail)
     played = [stored[t] for t in [source] + ['/tf', '/tf_static', '/ground_truth'] if t in topics]
     command = ['rosbag', 'play', '--clock', '--rate', str(args.rate), '--start', str(args.start),
                '--delay', str(args.delay)]

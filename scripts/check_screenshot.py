@@ -3,7 +3,10 @@
 segmented cloud drawn (bright rainbow label colours), and object markers drawn: pixels of the
 colours ObjectMarkers gives objects (hue from the golden-ratio sequence of the id, saturation
 0.85, value 0.95, see src/ros/object_markers.cpp), blended at the box alpha over the rviz
-background, for several distinct ids. Exit status 0 when all hold; prints the measurements.
+background, for several distinct ids; the class legend (ns "legend" of ObjectMarkers: each
+LiDAR class name drawn in its class colour) and vehicle boxes in the vehicle colour; each
+legend colour readable on the background (WCAG contrast ratio >= 4.5). Exit status 0 when all
+hold; prints the measurements.
   check_screenshot.py IMAGE.png [--alpha 0.45] [--background 30,30,34] [--min-ids 3]
 """
 import argparse
@@ -29,6 +32,18 @@ def marker_colour(object_id, alpha, background):
     return alpha * 255.0 * np.array([r, g, b]) + (1.0 - alpha) * np.asarray(background, float)
 
 
+# ObjectMarkers' class colours of the LiDAR classifier's classes (src/ros/object_markers.cpp).
+CLASS_COLOURS = {'vehicle': (40, 150, 255), 'pedestrian': (255, 70, 110),
+                 'cyclist': (255, 210, 0), 'other_object': (0, 230, 200)}
+
+
+def luminance(rgb):
+    """WCAG relative luminance of an sRGB colour (0..255)."""
+    lin = [c / 12.92 if c <= 0.03928 else ((c + 0.055) / 1.055) ** 2.4
+           for c in (v / 255.0 for v in rgb)]
+    return 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
+
+
 def main():
     p = argparse.ArgumentParser()
     p.add_argument('image')
@@ -37,7 +52,11 @@ def main():
     p.add_argument('--max-id', type=int, default=80)
     p.add_argument('--tolerance', type=float, default=14.0, help='RGB distance to a marker colour')
     p.add_argument('--min-pixels-per-id', type=int, default=40)
-    p.add_argument('--min-ids', type=int, default=3)
+    p.add_argument('--min-ids', type=int, default=0,
+                   help='boxes in id colours (unclassified objects: --classifier off)')
+    p.add_argument('--min-legend-pixels', type=int, default=20,
+                   help='pixels of each legend colour (the class names are drawn in it)')
+    p.add_argument('--no-legend', action='store_true', help='skip the legend and class checks')
     args = p.parse_args()
     background = [float(v) for v in args.background.split(',')]
 
@@ -70,6 +89,25 @@ def main():
     if len(matched) < args.min_ids:
         failures.append('object markers not visible (%d ids, need %d)'
                         % (len(matched), args.min_ids))
+
+    if not args.no_legend:
+        bg_lum = luminance(background)
+        for name, rgb in CLASS_COLOURS.items():
+            contrast = (luminance(rgb) + 0.05) / (bg_lum + 0.05)
+            n = int(np.count_nonzero(np.linalg.norm(pix - np.array(rgb, float), axis=1) < 30.0))
+            print('legend %-12s colour %s: %d pixels, contrast %.1f on the background'
+                  % (name, rgb, n, contrast))
+            if n < args.min_legend_pixels:
+                failures.append('legend entry %s not visible' % name)
+            if contrast < 4.5:
+                failures.append('class colour of %s unreadable on the background (%.1f)'
+                                % (name, contrast))
+        box = args.alpha * np.array(CLASS_COLOURS['vehicle'], float) + \
+            (1.0 - args.alpha) * np.asarray(background, float)
+        n = int(np.count_nonzero(np.linalg.norm(pix - box, axis=1) < args.tolerance))
+        print('vehicle box pixels: %d' % n)
+        if n < args.min_pixels_per_id:
+            failures.append('no vehicle box in the vehicle colour')
 
     for f in failures:
         print('FAIL: ' + f)

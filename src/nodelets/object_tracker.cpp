@@ -1,7 +1,9 @@
 // urban_detection/ObjectTracker (issue 28): objects -> objects/tracked (TrackedObjectArray:
 // stable ids, velocities, tentative/confirmed/lost) and objects/tracked/markers. Tracks live
 // in ~fixed_frame (default odom) when tf gives fixed_frame <- the objects' frame at their stamp,
-// else in the objects' own frame (throttled warning; a change of frame restarts the tracks).
+// else in the objects' own frame with velocities marked relative (velocities_relative; one
+// warning on entering it; a change of frame restarts the tracks). Stamps going back (a looping
+// bag, a restarted simulation) reset the tracks and the tf buffer once, with one INFO.
 // Lazy. Parameters: ~tracker/*, ~markers/*, ~fixed_frame, ~queue_size
 // (config/object_tracker.yaml); tunable in ~tracker (cfg/ObjectTracker.cfg).
 #include <memory>
@@ -77,32 +79,69 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
   }
 
   // odom_T_sensor at the objects' stamp, or identity in the sensor frame when tf cannot say.
-  std::string fixedFrame(const std_msgs::Header& header, Eigen::Isometry3d* pose) {
+  // `wait_s`: how long to wait for a late transform of frames tf knows.
+  std::string fixedFrame(const std_msgs::Header& header, double wait_s, Eigen::Isometry3d* pose,
+                         std::string* error) {
     *pose = Eigen::Isometry3d::Identity();
     if (!tf_buffer_ || fixed_frame_ == header.frame_id) return header.frame_id;
     try {
-      // Waits up to 50 ms for a transform that is late, not for a frame nobody publishes.
-      const bool known =
-          tf_buffer_->_frameExists(fixed_frame_) && tf_buffer_->_frameExists(header.frame_id);
+      // Waits for a transform that is late, not for a frame nobody publishes; the very first
+      // revolution also waits, as tf may not have heard of any frame yet.
+      const bool known = frame_.empty() || (tf_buffer_->_frameExists(fixed_frame_) &&
+                                            tf_buffer_->_frameExists(header.frame_id));
       *pose = tf2::transformToEigen(tf_buffer_->lookupTransform(
-          fixed_frame_, header.frame_id, header.stamp, ros::Duration(known ? 0.05 : 0.0)));
+          fixed_frame_, header.frame_id, header.stamp, ros::Duration(known ? wait_s : 0.0)));
       return fixed_frame_;
     } catch (const tf2::TransformException& e) {
       diagnostics_->count("tf_failures");
-      NODELET_WARN_THROTTLE(10,
-                            "no transform %s <- %s at the objects' stamp (%s): tracking in "
-                            "the sensor frame %s, velocities include the sensor's own motion",
-                            fixed_frame_.c_str(), header.frame_id.c_str(), e.what(),
-                            header.frame_id.c_str());
+      *error = e.what();
       return header.frame_id;
     }
+  }
+
+  // A stamp before the previous one: the stream restarted (a looping bag). Resets the tracks
+  // and the tf buffer once; true while the first revolutions after it may still wait for tf.
+  bool timeWentBack(const ros::Time& stamp) {
+    if (!last_stamp_.isZero() && stamp < last_stamp_) {
+      NODELET_INFO(
+          "objects' stamp went back %.2f s (a looping bag or a restarted source): "
+          "tracks and tf buffer reset",
+          (last_stamp_ - stamp).toSec());
+      if (tf_buffer_) tf_buffer_->clear();
+      std::lock_guard<std::mutex> lock(mutex_);
+      tracker_->reset();
+      restart_stamp_ = stamp;
+    }
+    last_stamp_ = stamp;
+    return !restart_stamp_.isZero() && (stamp - restart_stamp_).toSec() < kRestartGraceS;
   }
 
   void objectsCb(const DetectedObjectArray::ConstPtr& msg) {
     const ros::WallTime start = ros::WallTime::now();
     diagnostics_->input(msg->header.seq);
+    const bool restarting = timeWentBack(msg->header.stamp);
     Eigen::Isometry3d pose;
-    const std::string frame = fixedFrame(msg->header, &pose);
+    std::string tf_error;
+    const std::string frame = fixedFrame(
+        msg->header, restarting || frame_.empty() ? kRestartTfWaitS : 0.05, &pose, &tf_error);
+    if (!tf_error.empty()) {
+      if (restarting && frame_ == fixed_frame_) {
+        // Just after a restart tf may not have the new stream's transforms yet: skip this
+        // revolution rather than flip to the sensor frame and back.
+        diagnostics_->count("skipped_waiting_for_tf");
+        return;
+      }
+      if (!sensor_frame_warned_) {
+        NODELET_WARN(
+            "no transform %s <- %s (%s): tracking in the sensor frame %s; velocities "
+            "are relative to the moving sensor (velocities_relative)",
+            fixed_frame_.c_str(), msg->header.frame_id.c_str(), tf_error.c_str(),
+            msg->header.frame_id.c_str());
+        sensor_frame_warned_ = true;
+      }
+    } else if (frame == fixed_frame_) {
+      sensor_frame_warned_ = false;  // warn again should odometry stop
+    }
     auto tracked = boost::make_shared<TrackedObjectArray>();
     auto markers = boost::make_shared<visualization_msgs::MarkerArray>();
     const bool want_markers = markers_pub_.getNumSubscribers() > 0;
@@ -130,8 +169,8 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
           NODELET_ERROR("%s", text.c_str());
         }
       }
-      if (s.restarted) {
-        NODELET_WARN_THROTTLE(5, "objects' stamp went back or jumped: tracks restarted");
+      if (s.restarted) {  // a stamp going back was handled above: this is a jump forward
+        NODELET_WARN_THROTTLE(5, "objects' stamp jumped forward: tracks restarted");
       }
       diagnostics_->setTotal("confirmed_tracks", s.confirmed, false);
       diagnostics_->setTotal("tentative_tracks", s.tentative, false);
@@ -140,6 +179,7 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
                              false);
       tracked->header = msg->header;
       tracked->header.frame_id = frame;
+      tracked->velocities_relative = fixed_frame_.empty() || frame != fixed_frame_;
       tracked->detector = msg->detector;
       tracked->objects.resize(tracker_->tracks().size());
       for (std::size_t k = 0; k < tracked->objects.size(); ++k) {
@@ -171,8 +211,13 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
   std::vector<core::DetectedObject> objects_;  // converted input, reused
   ros_conv::TrackMarkerParams marker_params_;
   std::string fixed_frame_ = "odom";
-  std::string frame_;               // the frame the current tracks live in
-  std::set<std::uint32_t> arrows_;  // tracks whose velocity arrow is shown
+  std::string frame_;                             // the frame the current tracks live in
+  bool sensor_frame_warned_ = false;              // said that tracks are in the sensor frame
+  ros::Time last_stamp_;                          // of the previous objects message
+  ros::Time restart_stamp_;                       // first stamp after the stamps went back
+  static constexpr double kRestartGraceS = 1.0;   // [s] after a restart, tf may be late
+  static constexpr double kRestartTfWaitS = 0.2;  // [s] wait for tf then
+  std::set<std::uint32_t> arrows_;                // tracks whose velocity arrow is shown
   int queue_size_ = 2;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;

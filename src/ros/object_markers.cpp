@@ -66,10 +66,10 @@ std_msgs::ColorRGBA colourForClass(const std::string& class_label, double alpha)
       {"train", {0, 80, 100}},
       {"tram", {0, 80, 100}},
       {"person", {220, 20, 60}},
-      {"pedestrian", {220, 20, 60}},
+      {"pedestrian", {255, 70, 110}},
       {"person_sitting", {220, 20, 60}},
       {"rider", {255, 0, 0}},
-      {"cyclist", {255, 0, 0}},
+      {"cyclist", {255, 210, 0}},
       {"bicycle", {119, 11, 32}},
       {"motorcycle", {0, 0, 230}},
       {"pole", {153, 153, 153}},
@@ -82,10 +82,11 @@ std_msgs::ColorRGBA colourForClass(const std::string& class_label, double alpha)
       {"fence", {190, 153, 153}},
       {"road", {128, 64, 128}},
       {"sidewalk", {244, 35, 232}},
-      // The LiDAR classifier's classes (object_classifier.h).
-      {"vehicle", {0, 0, 142}},
-      {"other_object", {250, 170, 30}},
-      {"non_object", {107, 142, 35}}};
+      // The LiDAR classifier's classes (object_classifier.h): bright, far apart in hue and
+      // well above rviz's dark grey background in luminance.
+      {"vehicle", {40, 150, 255}},
+      {"other_object", {0, 230, 200}},
+      {"non_object", {130, 210, 70}}};
   const auto it = palette.find(name);
   if (it == palette.end()) {
     // FNV-1a of the name picks a golden-ratio hue: stable across runs, unlike std::hash.
@@ -104,7 +105,7 @@ std_msgs::ColorRGBA colourForClass(const std::string& class_label, double alpha)
 void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerParams& params,
                         visualization_msgs::MarkerArray* markers) {
   markers->markers.clear();
-  markers->markers.reserve(1 + objects.objects.size() * (params.show_ids ? 2 : 1));
+  markers->markers.reserve(1 + objects.objects.size() * (params.show_ids ? 2 : 1) + 4);
   visualization_msgs::Marker clear;
   clear.header = objects.header;
   clear.action = visualization_msgs::Marker::DELETEALL;
@@ -144,6 +145,28 @@ void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerPa
       text.text += " " + o.class_label + conf;
     }
     markers->markers.push_back(text);
+  }
+  if (!params.show_legend || !params.colour_by_class) return;
+  int line = 0;
+  for (const char* name : kLegendClasses) {
+    visualization_msgs::Marker text;
+    text.header = objects.header;
+    text.ns = "legend";
+    text.id = line;
+    text.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+    text.action = visualization_msgs::Marker::ADD;
+    // Top-down view (x right, y up): lines go down the view, left-aligned (rviz centres a
+    // text on its position: shift each by half its width, about 0.4 x height per letter).
+    const std::string label = name;
+    text.pose.position.x =
+        params.legend_x_m + 0.2 * params.legend_text_size_m * static_cast<double>(label.size());
+    text.pose.position.y = params.legend_y_m - 1.4 * params.legend_text_size_m * line;
+    text.pose.orientation.w = 1.0;
+    text.scale.z = params.legend_text_size_m;
+    text.color = colourForClass(label, 1.0);
+    text.text = label;
+    markers->markers.push_back(text);
+    ++line;
   }
 }
 

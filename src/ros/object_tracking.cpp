@@ -72,7 +72,10 @@ void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::
     const bool tentative = t.state == TrackedObject::TENTATIVE;
     if (tentative && !params.show_tentative) continue;
     const int id = static_cast<int>(t.id);
-    std_msgs::ColorRGBA colour = colourForId(t.id, params.box_alpha);
+    // The class colour of the legend when the track has a class, else the id's.
+    const bool classified = !t.class_label.empty() && t.class_label != "unknown";
+    std_msgs::ColorRGBA colour = classified ? colourForClass(t.class_label, params.box_alpha)
+                                            : colourForId(t.id, params.box_alpha);
     if (tentative) colour.r = colour.g = colour.b = 0.6f;
     if (t.state == TrackedObject::LOST) colour.a *= 0.5f;
     m.ns = "tracks";
@@ -88,9 +91,11 @@ void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::
     markers->markers.push_back(m);
 
     const double speed = std::hypot(t.velocity.x, t.velocity.y);
+    // Relative velocities (no odometry) say nothing about what moves over ground: no arrows.
+    const bool moving = !tracks.velocities_relative && speed > moving_speed_mps;
     m.ns = "track_velocities";
     m.type = visualization_msgs::Marker::ARROW;
-    if (speed > moving_speed_mps) {
+    if (moving) {
       m.pose = geometry_msgs::Pose();
       m.pose.orientation.w = 1.0;
       geometry_msgs::Point a = t.pose.position, b = t.pose.position;
@@ -124,7 +129,13 @@ void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::
     m.scale.z = params.text_size_m;
     m.color.r = m.color.g = m.color.b = m.color.a = 1.0f;
     char buf[96];
-    std::snprintf(buf, sizeof buf, "%u %s %.1f m/s", t.id, t.class_label.c_str(), speed);
+    if (tracks.velocities_relative) {
+      std::snprintf(buf, sizeof buf, "%u %s (%.1f m/s rel.)", t.id, t.class_label.c_str(), speed);
+    } else if (moving) {
+      std::snprintf(buf, sizeof buf, "%u %s %.1f m/s", t.id, t.class_label.c_str(), speed);
+    } else {
+      std::snprintf(buf, sizeof buf, "%u %s", t.id, t.class_label.c_str());
+    }
     m.text = buf;
     markers->markers.push_back(m);
     m.text.clear();

@@ -248,6 +248,22 @@ cv::Scalar idColour(std::uint32_t id) {
                     60 + ((h >> 16) & 0xFF) % 196);
 }
 
+// BGR colours of the object classes, those of the rviz markers (ros/object_markers.cpp).
+cv::Scalar classColour(core::ObjectCategory c) {
+  switch (c) {
+    case core::ObjectCategory::kVehicle:
+      return cv::Scalar(255, 150, 40);
+    case core::ObjectCategory::kPedestrian:
+      return cv::Scalar(110, 70, 255);
+    case core::ObjectCategory::kCyclist:
+      return cv::Scalar(0, 210, 255);
+    case core::ObjectCategory::kOtherObject:
+      return cv::Scalar(200, 230, 0);
+    default:
+      return cv::Scalar(200, 160, 200);  // unclassified
+  }
+}
+
 void writeFramePng(const std::string& path, const Frame& f, const urban_detection::LabeledCloud& fg,
                    const std::vector<core::DetectedObject>& dets, const core::FrameMatch& m,
                    const PngView& v) {
@@ -278,14 +294,19 @@ void writeFramePng(const std::string& path, const Frame& f, const urban_detectio
     const std::int32_t g = f.gt.object_of_point[i];
     cv::Scalar cg = cv::Scalar(70, 40, 40);
     if (g >= 0) {
-      cg = idColour(f.gt.objects[g].id);
+      cg = classColour(core::categoryOfClassName(f.gt.objects[g].label));
     } else if (f.gt.role.size() == n && f.gt.role[i] == core::PointRole::kDontCare) {
       cg = cv::Scalar(110, 110, 110);
     }
     if (!is_fg[i]) cg *= 0.45;
     img.at<cv::Vec3b>(toPx(p.x, p.y, 0)) = cv::Vec3b(cg[0], cg[1], cg[2]);
     cv::Scalar cd = is_fg[i] ? cv::Scalar(90, 90, 90) : cv::Scalar(35, 35, 35);
-    if (det_of[i] >= 0) cd = idColour(7919u * static_cast<std::uint32_t>(det_of[i] + 1));
+    if (det_of[i] >= 0) {
+      const core::ObjectCategory c = dets[static_cast<std::size_t>(det_of[i])].category;
+      cd = c == core::ObjectCategory::kUnknown
+               ? idColour(7919u * static_cast<std::uint32_t>(det_of[i] + 1))
+               : classColour(c);
+    }
     img.at<cv::Vec3b>(toPx(p.x, p.y, 1)) = cv::Vec3b(cd[0], cd[1], cd[2]);
   }
   for (std::size_t d = 0; d < dets.size(); ++d) {
@@ -320,8 +341,23 @@ void writeFramePng(const std::string& path, const Frame& f, const urban_detectio
   for (int panel = 0; panel < 2; ++panel) {
     cv::circle(img, toPx(0, 0, panel), 3, cv::Scalar(255, 255, 255), -1);
   }
-  cv::putText(img, f.id, cv::Point(5, 15), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255),
+  const auto font = cv::FONT_HERSHEY_SIMPLEX;
+  cv::putText(img, f.id + "  ground truth", cv::Point(5, 15), font, 0.5, cv::Scalar(255, 255, 255),
               1);
+  cv::putText(img, "detections", cv::Point(side + 15, 15), font, 0.5, cv::Scalar(255, 255, 255), 1);
+  // Legend: the classes in their colours, then the marks.
+  int y = side - 8;
+  const std::pair<const char*, cv::Scalar> legend[] = {
+      {"red box: false detection", cv::Scalar(0, 0, 255)},
+      {"yellow box: missed object", cv::Scalar(0, 255, 255)},
+      {"other_object", classColour(core::ObjectCategory::kOtherObject)},
+      {"cyclist", classColour(core::ObjectCategory::kCyclist)},
+      {"pedestrian", classColour(core::ObjectCategory::kPedestrian)},
+      {"vehicle", classColour(core::ObjectCategory::kVehicle)}};
+  for (const auto& l : legend) {
+    cv::putText(img, l.first, cv::Point(side + 15, y), font, 0.45, l.second, 1);
+    y -= 16;
+  }
   cv::imwrite(path, img);
 }
 
@@ -756,6 +792,7 @@ int main(int argc, char** argv) {
   std::vector<core::DetectedObject> objects;
   core::FrameMatch match;
   if (details) std::printf("per-object details (missed GT objects, false detections):\n");
+  std::size_t trained_on = 0;  // scored scans of sequences the classifier was trained on
   while (frames < max_frames_n) {
     std::string err;
     const Dataset::Status status = dataset->next(&f, &err);
@@ -770,6 +807,11 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "warning: skipping frame %s: %s\n", f.id.c_str(), err.c_str());
       ++failed;
       continue;
+    }
+    if (classifier && !skitti_dir.empty()) {  // a scan of a sequence the model learned from?
+      const auto& seqs = classifier->model().trainingGroups();
+      trained_on +=
+          std::find(seqs.begin(), seqs.end(), f.id.substr(0, f.id.find('/'))) != seqs.end();
     }
     segmenter.segment(f.cloud, &seg);
     core::extractForeground(f.cloud, seg, &foreground);
@@ -837,7 +879,9 @@ int main(int argc, char** argv) {
 
   if (features_out) std::fclose(features_out);
   if (frames == 0) {
-    std::fprintf(stderr, "error: no frames found in %s\n", dataset_path.c_str());
+    std::error_code ec;
+    std::fprintf(stderr, "error: %s %s\n", dataset_path.c_str(),
+                 fs::exists(dataset_path, ec) ? "holds no frames" : "not found");
     return 1;
   }
   std::printf(
@@ -880,6 +924,15 @@ int main(int argc, char** argv) {
   if (box_quality) box_quality->print();
   std::printf("classifier: %s\n",
               classifier ? params.classifier.model_path.c_str() : "off (objects unclassified)");
+  if (trained_on > 0) {
+    std::string seqs;
+    for (const std::string& g : classifier->model().trainingGroups()) seqs += " " + g;
+    std::printf(
+        "note: %zu of the %zu scans scored are of sequences the classifier was trained on "
+        "(%s): the classifier-on figures are optimistic there; held-out figures: "
+        "urban_detection_train_classifier's leave-one-sequence-out run (scripts/run eval)\n",
+        trained_on, frames - failed, seqs.c_str() + 1);
+  }
   std::printf("foreground points by class: %s\n", countsJson(fg_composition).c_str());
   for (std::size_t k = 0; k < detectors.size(); ++k) {
     if (classifier) {

@@ -449,62 +449,10 @@ inline int runKittiTracking(const TrackingPipeline& p, const std::string& dir,
   return 0;
 }
 
-// world_T_velodyne of every scan of a SemanticKITTI sequence folder (poses.txt: the left
-// camera's pose per scan in the first scan's camera frame; calib.txt: Tr = camera <- LiDAR).
-// False with `error` set when poses.txt is missing or malformed; `nominal_tr` tells whether
-// calib.txt had no Tr (the nominal axes were used).
+// world_T_velodyne of every scan of a SemanticKITTI sequence folder (core/evaluation).
 inline bool readSemanticKittiPoses(const std::string& seq_dir, std::vector<Eigen::Isometry3d>* out,
                                    bool* nominal_tr, std::string* error) {
-  out->clear();
-  Eigen::Isometry3d tr = Eigen::Isometry3d::Identity();
-  // Nominal KITTI axes: camera x = -LiDAR y, camera y = -LiDAR z, camera z = LiDAR x.
-  tr.linear() << 0, -1, 0, 0, 0, -1, 1, 0, 0;
-  *nominal_tr = true;
-  {
-    std::ifstream in(seq_dir + "/calib.txt");
-    std::string line;
-    while (std::getline(in, line)) {
-      std::istringstream ls(line);
-      std::string key;
-      ls >> key;
-      if (key != "Tr:" && key != "Tr") continue;
-      double v[12];
-      int k = 0;
-      while (k < 12 && (ls >> v[k]) && std::isfinite(v[k])) ++k;
-      if (k != 12) {
-        *error = seq_dir + "/calib.txt: Tr needs 12 numbers";
-        return false;
-      }
-      Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-      for (int j = 0; j < 12; ++j) m(j / 4, j % 4) = v[j];
-      tr.matrix() = m;
-      *nominal_tr = false;
-    }
-  }
-  std::ifstream in(seq_dir + "/poses.txt");
-  if (!in) {
-    *error = seq_dir + "/poses.txt: cannot open";
-    return false;
-  }
-  const Eigen::Isometry3d tr_inv = tr.inverse();
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    std::istringstream ls(line);
-    Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-    for (int j = 0; j < 12; ++j) {
-      if (!(ls >> m(j / 4, j % 4)) || !std::isfinite(m(j / 4, j % 4))) {
-        *error = seq_dir + "/poses.txt:" + std::to_string(number) + ": needs 12 numbers";
-        return false;
-      }
-    }
-    Eigen::Isometry3d pose;
-    pose.matrix() = m;
-    out->push_back(tr_inv * pose * tr);
-  }
-  return true;
+  return core::readSemanticKittiPoses(seq_dir, out, nominal_tr, error);
 }
 
 // --tracking --semantic-kitti DIR. Returns the process exit code.

@@ -942,6 +942,7 @@ int main(int argc, char** argv) {
     desc << " (hierarchical grid detections, shipped configs); threshold "
          << (auto_threshold ? "from the pooled leave-one-sequence-out F" : "given");
     final_tp.description = desc.str();
+    final_tp.training_groups = groups;
     try {
       const core::ObjectClassifierModel m = trainOn(frames, all_groups, final_tp, fp);
       m.save(out_path);

@@ -248,6 +248,40 @@ TEST(SemanticKitti, GroundTruthFromLabels) {
 }
 
 // On the shared frames, checked against counts obtained separately with numpy.
+TEST(SemanticKitti, PosesInTheLidarFrame) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("ud_eval_poses_test_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  // Scan 1: the camera 2 m ahead along its z (= LiDAR x) and turned 90 deg left (about camera
+  // -y = LiDAR z).
+  std::ofstream(dir / "poses.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n"
+                                      "0 0 -1 0 0 1 0 0 1 0 0 2\n";
+  std::vector<Eigen::Isometry3d> poses;
+  bool nominal = false;
+  std::string error;
+  ASSERT_TRUE(readSemanticKittiPoses(dir.string(), &poses, &nominal, &error)) << error;
+  EXPECT_TRUE(nominal);  // no calib.txt: nominal axes
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_TRUE(poses[0].isApprox(Eigen::Isometry3d::Identity()));
+  EXPECT_TRUE(poses[1].translation().isApprox(Eigen::Vector3d(2, 0, 0))) << poses[1].translation();
+  // LiDAR x now points along the first scan's LiDAR y (a left turn).
+  EXPECT_TRUE((poses[1].linear() * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY()));
+  // A Tr line is used; a short one is an error naming the file.
+  std::ofstream(dir / "calib.txt")
+      << "P0: 1 0 0 0 0 1 0 0 0 0 1 0\nTr: 0 -1 0 0 0 0 -1 0 1 0 0 0\n";
+  ASSERT_TRUE(readSemanticKittiPoses(dir.string(), &poses, &nominal, &error)) << error;
+  EXPECT_FALSE(nominal);
+  EXPECT_TRUE(poses[1].translation().isApprox(Eigen::Vector3d(2, 0, 0)));
+  std::ofstream(dir / "calib.txt") << "Tr: 0 -1 0\n";
+  EXPECT_FALSE(readSemanticKittiPoses(dir.string(), &poses, &nominal, &error));
+  EXPECT_NE(error.find("calib.txt"), std::string::npos) << error;
+  fs::remove(dir / "calib.txt");
+  std::ofstream(dir / "poses.txt") << "1 0 0\n";
+  EXPECT_FALSE(readSemanticKittiPoses(dir.string(), &poses, &nominal, &error));
+  EXPECT_NE(error.find("poses.txt:1"), std::string::npos) << error;
+  fs::remove_all(dir);
+}
+
 TEST(SharedData, KittiAndSemanticKittiFrames) {
   const fs::path root(UD_SHARED_DATA);
   const fs::path ko = root / "kitti_object", sk = root / "semantic_kitti/sequences/00";

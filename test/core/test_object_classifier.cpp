@@ -464,4 +464,32 @@ TEST(ObjectClassifier, ShippedConfigNamesTheShippedModel) {
   EXPECT_GE(m.trees(), 10);
   EXPECT_GT(m.objectThreshold(), 0.0);
   EXPECT_LT(m.objectThreshold(), 1.0);
+  // It names the sequences it learned from (key or, for older files, its description), so the
+  // evaluation can say when it scores them.
+  EXPECT_FALSE(m.trainingGroups().empty());
+  for (const std::string& g : m.trainingGroups()) EXPECT_EQ(g.size(), 2u) << g;
+}
+
+TEST(ObjectClassifierModel, TrainingSequencesKeyAndOlderDescriptions) {
+  std::vector<core::ObjectFeatureVector> x;
+  std::vector<core::ObjectCategory> y;
+  toyData(&x, &y);
+  core::ClassifierTrainingParams p;
+  p.trees = 4;
+  p.description = "toy";
+  p.training_groups = {"00", "07"};
+  const std::string path = ud_test::tempPath("model_groups.yml");
+  core::ObjectClassifierModel::train(x, y, p, core::ObjectFeatureParams()).save(path);
+  EXPECT_EQ(core::ObjectClassifierModel::load(path).trainingGroups(),
+            (std::vector<std::string>{"00", "07"}));
+  // A file written before the key: the sequences its description names, else none.
+  p.training_groups.clear();
+  p.description = "random forest; trained on 20 SemanticKITTI scans of sequences 03 05 (shipped)";
+  core::ObjectClassifierModel::train(x, y, p, core::ObjectFeatureParams()).save(path);
+  EXPECT_EQ(core::ObjectClassifierModel::load(path).trainingGroups(),
+            (std::vector<std::string>{"03", "05"}));
+  p.description = "toy";
+  core::ObjectClassifierModel::train(x, y, p, core::ObjectFeatureParams()).save(path);
+  EXPECT_TRUE(core::ObjectClassifierModel::load(path).trainingGroups().empty());
+  std::remove(path.c_str());
 }

@@ -92,6 +92,7 @@ TEST(ObjectMarkers, DeleteAllFirstThenABoxAndATextPerObject) {
   objs.header.frame_id = "velodyne";
   ros_conv::toMsg({makeObject(3, 0.2f), makeObject(9, 1.0f)}, "kdtree", objs.header, &objs);
   ros_conv::ObjectMarkerParams p;
+  p.show_legend = false;
   visualization_msgs::MarkerArray m;
   ros_conv::buildObjectMarkers(objs, p, &m);
   ASSERT_EQ(m.markers.size(), 1u + 2u * 2u);
@@ -121,6 +122,43 @@ TEST(ObjectMarkers, DeleteAllFirstThenABoxAndATextPerObject) {
   ros_conv::buildObjectMarkers(objs, p, &m);
   ASSERT_EQ(m.markers.size(), 1u);
   EXPECT_EQ(m.markers[0].action, visualization_msgs::Marker::DELETEALL);
+}
+
+// WCAG relative luminance of an sRGB colour (0..1 channels).
+double luminance(double r, double g, double b) {
+  auto lin = [](double c) { return c <= 0.03928 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); };
+  return 0.2126 * lin(r) + 0.7152 * lin(g) + 0.0722 * lin(b);
+}
+
+TEST(ObjectMarkers, LegendInReadableClassColours) {
+  DetectedObjectArray objs;
+  objs.header.frame_id = "velodyne";
+  ros_conv::ObjectMarkerParams p;
+  visualization_msgs::MarkerArray m;
+  ros_conv::buildObjectMarkers(objs, p, &m);
+  ASSERT_EQ(m.markers.size(), 1u + 4u);
+  // rviz's background in the shipped config (30, 30, 34): every legend colour has a contrast
+  // ratio of at least 4.5 (WCAG's for normal text) against it, and the classes differ.
+  const double bg = luminance(30 / 255.0, 30 / 255.0, 34 / 255.0);
+  std::set<std::string> names;
+  for (std::size_t i = 1; i < m.markers.size(); ++i) {
+    const auto& mk = m.markers[i];
+    EXPECT_EQ(mk.ns, "legend");
+    EXPECT_EQ(mk.type, visualization_msgs::Marker::TEXT_VIEW_FACING);
+    EXPECT_EQ(mk.header.frame_id, "velodyne");
+    names.insert(mk.text);
+    const auto c = ros_conv::colourForClass(mk.text, 1.0);
+    EXPECT_EQ(mk.color, c);
+    const double contrast = (luminance(c.r, c.g, c.b) + 0.05) / (bg + 0.05);
+    EXPECT_GE(contrast, 4.5) << mk.text;
+    if (i > 1) {
+      EXPECT_LT(mk.pose.position.y, m.markers[i - 1].pose.position.y);  // one per line
+    }
+  }
+  EXPECT_EQ(names, (std::set<std::string>{"vehicle", "pedestrian", "cyclist", "other_object"}));
+  p.show_legend = false;
+  ros_conv::buildObjectMarkers(objs, p, &m);
+  EXPECT_EQ(m.markers.size(), 1u);
 }
 
 TEST(ObjectMarkers, ColourIsStablePerIdAndDistinctForNeighbours) {

@@ -1,9 +1,12 @@
 // urban_detection/VelodynePacket and VelodyneScan: wire compatibility with velodyne_msgs and
-// serialisation round trip (no master needed).
+// serialisation round trip; Detection3DArray: wire compatibility with vision_msgs and the
+// conversion of detected objects into it (no master needed).
 #include <gtest/gtest.h>
 #include <ros/message_traits.h>
 #include <ros/serialization.h>
 #include <urban_detection/VelodyneScan.h>
+
+#include "urban_detection/ros/standard_outputs.h"
 
 #include <cstring>
 #include <vector>
@@ -20,6 +23,39 @@ TEST(Messages, Md5SumsEqualVelodyneMsgs) {
                "50804fc9533a0e579e6322c04ae70566");
   EXPECT_STREQ(ros::message_traits::DataType<VelodyneScan>::value(),
                "urban_detection/VelodyneScan");
+}
+
+// vision_msgs' published MD5 of Detection3DArray (ROS 1): its subscribers connect.
+TEST(Messages, Detection3DArrayMd5EqualsVisionMsgs) {
+  EXPECT_STREQ(ros::message_traits::MD5Sum<Detection3DArray>::value(),
+               "05c51d9aea1fb4cfdc8effb94f197b6f");
+}
+
+TEST(Messages, ObjectsAsDetection3D) {
+  DetectedObjectArray in;
+  in.header.frame_id = "velodyne";
+  in.header.stamp = ros::Time(5, 6);
+  DetectedObject o;
+  o.obb_pose.position.x = 7.0;
+  o.obb_pose.orientation.w = 1.0;
+  o.obb_dimensions.x = 4.0;
+  o.class_label = "cyclist";
+  o.class_confidence = 0.75f;
+  in.objects = {o, o};
+  in.objects[1].class_label = "no such class";
+  Detection3DArray out;
+  ros_conv::toDetection3DArray(in, &out);
+  EXPECT_EQ(out.header.frame_id, "velodyne");
+  ASSERT_EQ(out.detections.size(), 2u);
+  EXPECT_EQ(out.detections[0].header.stamp, ros::Time(5, 6));
+  ASSERT_EQ(out.detections[0].results.size(), 1u);
+  EXPECT_EQ(out.detections[0].results[0].id, 3);
+  EXPECT_DOUBLE_EQ(out.detections[0].results[0].score, 0.75);
+  EXPECT_DOUBLE_EQ(out.detections[0].bbox.center.position.x, 7.0);
+  EXPECT_DOUBLE_EQ(out.detections[0].bbox.size.x, 4.0);
+  EXPECT_EQ(out.detections[1].results[0].id, 255);
+  EXPECT_EQ(ros_conv::classId("vehicle"), 1);
+  EXPECT_EQ(ros_conv::classId("non_object"), 0);
 }
 
 TEST(Messages, ScanSerialisationRoundTrip) {

@@ -2,8 +2,9 @@
 """The object classifier in demo.launch: over 30 revolutions of the simulated drive, every
 published object has a class of the classifier (vehicle, pedestrian, cyclist, other_object) and
 a confidence in (0, 1]; vehicles are found; the rejected objects are labelled non_object; each
-object's box marker has its class colour (the palette of object_markers.cpp) and its text
-names the class."""
+object's box marker has its class colour (the palette of object_markers.cpp), its text (when
+shown: not while the tracker labels the objects) names the class, and the legend lists the
+classes in their colours."""
 import threading
 import time
 import unittest
@@ -16,8 +17,8 @@ from visualization_msgs.msg import Marker, MarkerArray
 PKG = 'urban_detection'
 OBJECT_CLASSES = {'vehicle', 'pedestrian', 'cyclist', 'other_object'}
 # RGB of the classes in object_markers.cpp's palette.
-CLASS_RGB = {'vehicle': (0, 0, 142), 'pedestrian': (220, 20, 60), 'cyclist': (255, 0, 0),
-             'other_object': (250, 170, 30)}
+CLASS_RGB = {'vehicle': (40, 150, 255), 'pedestrian': (255, 70, 110), 'cyclist': (255, 210, 0),
+             'other_object': (0, 230, 200)}
 REVOLUTIONS = 30
 
 
@@ -70,7 +71,13 @@ class DemoClasses(unittest.TestCase):
         checked = 0
         for arr in markers:
             boxes = [m for m in arr.markers if m.ns == 'objects' and m.action == Marker.ADD]
-            texts = {m.id: m for m in arr.markers if m.type == Marker.TEXT_VIEW_FACING}
+            texts = {m.id: m for m in arr.markers if m.ns == 'object_ids'}
+            # The legend: each class name in its class colour.
+            legend = {m.text: m for m in arr.markers if m.ns == 'legend'}
+            self.assertEqual(set(legend), OBJECT_CLASSES)
+            for name, m in legend.items():
+                rgb = tuple(int(round(255 * c)) for c in (m.color.r, m.color.g, m.color.b))
+                self.assertEqual(rgb, CLASS_RGB[name], 'legend entry %s' % name)
             if not boxes:
                 continue
             msg = by_stamp.get(boxes[0].header.stamp)

@@ -39,6 +39,11 @@ def sections(p, node):
     return set(k[len(prefix):].split('/')[0] for k in p if k.startswith(prefix))
 
 
+# The launch files a user starts, with the arguments they need to load.
+TOP_LEVEL = (('bag.launch', ['bag:=/tmp/x.bag']), ('demo.launch', []), ('live.launch', []),
+             ('pcap.launch', ['pcap:=/tmp/x.pcap']), ('pipeline.launch', []))
+
+
 class LaunchParams(unittest.TestCase):
     def test_each_stage_gets_only_its_own_sections(self):
         p = params('live.launch', 'detector:=both')
@@ -58,7 +63,9 @@ class LaunchParams(unittest.TestCase):
         import roslaunch.xmlloader
         import rospkg
         for launch, argv in (('live.launch', ['detector:=both']), ('demo.launch', []),
-                             ('bag.launch', ['bag:=/tmp/x.bag', 'input:=points'])):
+                             ('bag.launch', ['bag:=/tmp/x.bag', 'input:=points']),
+                             ('bag.launch', ['bag:=/tmp/x.bag']),
+                             ('pcap.launch', ['pcap:=/tmp/x.pcap'])):
             path = os.path.join(rospkg.RosPack().get_path(PKG), 'launch', launch)
             config = roslaunch.config.ROSLaunchConfig()
             roslaunch.xmlloader.XmlLoader().load(path, config, argv=argv, verbose=False)
@@ -76,9 +83,27 @@ class LaunchParams(unittest.TestCase):
             self.assertTrue(managers[0].required, launch)
 
     def test_live_stamps_never_follow_a_bags_sim_time(self):
+        # Every launch that does not play a bag sets it false: a bag.launch before it leaves
+        # it true on the master.
         self.assertIs(params('live.launch')['/use_sim_time'], False)
         self.assertIs(params('pcap.launch', 'pcap:=/tmp/x.pcap')['/use_sim_time'], False)
+        self.assertIs(params('demo.launch')['/use_sim_time'], False)
+        self.assertIs(params('pipeline.launch')['/use_sim_time'], False)
         self.assertIs(params('bag.launch', 'bag:=/tmp/x.bag')['/use_sim_time'], True)
+
+    def test_top_level_launches_take_the_same_arguments(self):
+        for launch, argv in TOP_LEVEL:
+            code, out = roslaunch('--ros-args', PKG, launch)
+            self.assertEqual(code, 0, out)
+            names = set(line.split()[0].rstrip(':') for line in out.splitlines()
+                        if line.startswith('  '))
+            self.assertLessEqual({'tracking', 'tracking_frame', 'classifier', 'rviz'}, names,
+                                 launch)
+            self.assertIn('/object_tracker', nodes(launch, *argv))
+            self.assertNotIn('/object_tracker', nodes(launch, 'tracking:=false', *argv))
+            p = params(launch, 'tracking_frame:=map', *argv)
+            self.assertEqual(p['/object_tracker/fixed_frame'], 'map', launch)
+            self.assertIn('/object_export', nodes(launch, *argv))
 
     def test_live_arguments_reach_their_nodes(self):
         p = params('live.launch', 'num_worker_threads:=2', 'queue_size:=3',
@@ -115,11 +140,20 @@ class LaunchParams(unittest.TestCase):
         packets = nodes('bag.launch', 'bag:=/tmp/x.bag', 'input:=packets')
         self.assertIn('/packet_to_cloud', packets)
         self.assertNotIn('/cloud_input', packets)
-        # auto: bag_play.py loads the one adapter the bag needs once it has read the bag
-        # (exercised end to end by launch_bag_points / launch_bag_packets).
-        auto = nodes('bag.launch', 'bag:=/tmp/x.bag')
-        self.assertNotIn('/packet_to_cloud', auto)
-        self.assertNotIn('/cloud_input', auto)
+        # auto: both loaders wait for bag_play.py's choice; only the one the bag needs loads
+        # (the other removes its parameters; exercised end to end by launch_bag_points /
+        # launch_bag_packets).
+        import roslaunch.config
+        import roslaunch.xmlloader
+        import rospkg
+        path = os.path.join(rospkg.RosPack().get_path(PKG), 'launch', 'bag.launch')
+        config = roslaunch.config.ROSLaunchConfig()
+        roslaunch.xmlloader.XmlLoader().load(path, config, argv=['bag:=/tmp/x.bag'],
+                                             verbose=False)
+        waiting = {n.name: n.args.split() for n in config.nodes
+                   if n.name in ('packet_to_cloud', 'cloud_input')}
+        self.assertEqual(waiting['packet_to_cloud'][-2:], ['--when-bag-input', 'packets'])
+        self.assertEqual(waiting['cloud_input'][-2:], ['--when-bag-input', 'points'])
 
 
 if __name__ == '__main__':

@@ -4,6 +4,8 @@
 //    box, arrow and "id class speed" per confirmed track;
 //  * a track whose object disappears gets DELETE markers once it dies (death_misses);
 //  * with tf odom -> velodyne of a moving sensor, a parked object is still in odom;
+//  * without that transform the tracks stay in the sensor frame with one warning, velocities
+//    marked relative, no velocity arrows; stamps going back reset the tracks with one INFO;
 //  * NaN boxes are skipped with an error and nothing crashes; empty arrays are fine;
 //  * a reconfigure with an out-of-range gate is refused; a bad start parameter idles the
 //    nodelet with one FATAL naming it.
@@ -104,7 +106,7 @@ const TrackedObject* find(const TrackedObjectArray& a, std::uint32_t id) {
 }
 
 TEST(ObjectTracker, IdsStableAndDeleteMarkersAfterDeath) {
-  ros::param::set("/ot/tracker/fixed_frame", "");  // the objects' frame: no tf needed
+  ros::param::set("/ot/tracker/fixed_frame", "velodyne");  // the objects' frame is fixed
   ros::param::set("/ot/tracker/tracker/birth_hits", 2);
   ros::param::set("/ot/tracker/tracker/death_misses", 3);
   nodelet::Loader manager(false);
@@ -123,6 +125,7 @@ TEST(ObjectTracker, IdsStableAndDeleteMarkersAfterDeath) {
     ASSERT_TRUE(h.send(objs, t, seq++)) << "revolution " << k;
     const TrackedObjectArray a = h.lastTracks();
     EXPECT_EQ(a.header.frame_id, "velodyne");
+    EXPECT_FALSE(a.velocities_relative);
     ASSERT_EQ(a.objects.size(), 2u);
     for (const auto& o : a.objects) {
       if (o.pose.position.y > 0) {
@@ -242,6 +245,48 @@ TEST(ObjectTracker, ParkedObjectStillInOdomWhileTheSensorDrives) {
   }
   const TrackedObject& o = h.lastTracks().objects.at(0);
   EXPECT_LT(std::hypot(o.velocity.x, o.velocity.y), 0.1);
+}
+
+TEST(ObjectTracker, WithoutOdometryRelativeVelocitiesAndLoopingStampsResetOnce) {
+  RosoutWatcher rosout;
+  ros::param::set("/ot_rel/tracker/fixed_frame", "odom_nobody_publishes");
+  ros::param::set("/ot_rel/tracker/tracker/birth_hits", 2);
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/ot_rel/tracker", "urban_detection/ObjectTracker", {}, {}));
+  Harness h("/ot_rel");
+  ASSERT_TRUE(waitFor([&] { return h.pub.getNumSubscribers() == 1; }, 10.0));
+  // The sensor drives at 8 m/s past a parked car; two passes of the same 1 s (a looping bag).
+  std::uint32_t seq = 1;
+  std::set<std::uint32_t> ids_first, ids_second;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int k = 0; k < 10; ++k) {
+      ASSERT_TRUE(h.send({object(1, 20.0 - 0.8 * k, 4.0, "vehicle")}, 3000.0 + 0.1 * k, seq++));
+      const TrackedObjectArray a = h.lastTracks();
+      EXPECT_EQ(a.header.frame_id, "velodyne");
+      EXPECT_TRUE(a.velocities_relative);
+      for (const auto& o : a.objects) (pass ? ids_second : ids_first).insert(o.id);
+    }
+    const TrackedObjectArray a = h.lastTracks();
+    ASSERT_EQ(a.objects.size(), 1u);
+    EXPECT_NEAR(a.objects[0].velocity.x, -8.0, 1.0);  // the sensor's own speed, relative
+    int arrows = 0, relative_labels = 0;
+    for (const auto& mk : h.lastMarkers().markers) {
+      if (mk.action != visualization_msgs::Marker::ADD) continue;
+      arrows += mk.ns == "track_velocities";
+      relative_labels += mk.ns == "track_labels" && mk.text.find("m/s rel.") != std::string::npos;
+    }
+    EXPECT_EQ(arrows, 0) << "a relative velocity drawn as motion";
+    EXPECT_EQ(relative_labels, 1);
+  }
+  // The second pass started over: new ids, none of the first pass's.
+  ASSERT_EQ(ids_first.size(), 1u);
+  ASSERT_EQ(ids_second.size(), 1u);
+  EXPECT_NE(*ids_first.begin(), *ids_second.begin());
+  ros::WallDuration(0.5).sleep();  // rosout is asynchronous
+  EXPECT_EQ(rosout.count(rosgraph_msgs::Log::WARN, "tracking in the sensor frame"), 1);
+  EXPECT_EQ(rosout.count(rosgraph_msgs::Log::INFO, "stamp went back"), 1);
+  EXPECT_EQ(rosout.count(rosgraph_msgs::Log::WARN, "restarted"), 0);
+  EXPECT_EQ(rosout.count(rosgraph_msgs::Log::INFO, "tracks restarted"), 0);
 }
 
 TEST(ObjectTracker, BadStartParameterIdlesWithOneFatal) {

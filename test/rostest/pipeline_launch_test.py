@@ -255,6 +255,9 @@ class PipelineLaunchTest(unittest.TestCase):
         counts = [n for _, n, _ in received]
         self.assertEqual(counts, [boxes] * len(counts),
                          'objects per sweep; the scene has %d boxes' % boxes)
+        # The PacketToCloud loader removed its parameters (no packets in this bag).
+        stray = [k for k in rospy.get_param_names() if k.startswith('/packet_to_cloud/')]
+        self.assertEqual(stray, [])
         sys.stderr.write('bag_points: %d/%d sweeps, %.2f Hz, %d objects each\n'
                          % (len(received), sweeps, rate, boxes))
 

@@ -388,8 +388,8 @@ TEST(Reconfigure, MarkersApplyFromTheNextMessage) {
   pub.publish(objects);
   ASSERT_TRUE(waitFor([&] { return count() == 2; }, 5.0));
   std::lock_guard<std::mutex> lock(mutex);
-  EXPECT_EQ(sizes[0], 1u + 3u * 2u) << "DELETEALL + box and id per object";
-  EXPECT_EQ(sizes[1], 1u + 3u) << "DELETEALL + box per object";
+  EXPECT_EQ(sizes[0], 1u + 3u * 2u + 4u) << "DELETEALL + box and id per object + legend";
+  EXPECT_EQ(sizes[1], 1u + 3u + 4u) << "DELETEALL + box per object + legend";
 }
 
 TEST(Reconfigure, OutOfRangeParametersAtStartFailNamingParameterAndRange) {

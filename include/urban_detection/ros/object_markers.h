@@ -23,6 +23,10 @@ struct ObjectMarkerParams {
   double text_size_m = 0.6;      // [m] height of the id text
   double min_box_size_m = 0.05;  // [m] box dimensions are at least this (flat objects stay visible)
   bool colour_by_class = true;   // [-] classified objects take their class colour, others the id's
+  bool show_legend = true;       // [-] the LiDAR classes' names in their colours (ns "legend")
+  double legend_x_m = -26.0;     // [m] left end of the legend's first line in the objects'
+  double legend_y_m = 25.0;      // [m]   frame (the shipped rviz view's upper left corner)
+  double legend_text_size_m = 1.6;  // [m] legend text height
 };
 
 /// "" when every field is in its table range (ParamFields<ObjectMarkerParams> below).
@@ -32,16 +36,23 @@ std::string validate(const ObjectMarkerParams& params);
 /// colour and consecutive ids contrast.
 std_msgs::ColorRGBA colourForId(std::uint32_t id, double alpha);
 
-/// Colour of an object class (issue 9): a fixed Cityscapes-like colour for the common urban
-/// class names (car, truck, bus, person, rider, bicycle, motorcycle, pole, traffic sign,
-/// traffic light, vegetation, ... case-insensitive, KITTI names included), otherwise a colour
-/// derived from the name, so a class keeps its colour across frames and runs.
+/// Colour of an object class: for the LiDAR classifier's classes (vehicle, pedestrian, cyclist,
+/// other_object, non_object) bright colours that stand out on rviz's dark background
+/// (kLegendClasses); for the other common urban class names (car, truck, bus, person, rider,
+/// bicycle, motorcycle, pole, traffic sign, traffic light, vegetation, ... case-insensitive,
+/// KITTI names included) the Cityscapes colours; otherwise a colour derived from the name, so
+/// a class keeps its colour across frames and runs.
 std_msgs::ColorRGBA colourForClass(const std::string& class_label, double alpha);
+
+/// The classes the legend lists, in its order.
+constexpr const char* kLegendClasses[] = {"vehicle", "pedestrian", "cyclist", "other_object"};
 
 /// Builds the markers of `objects` (header copied): marker 0 is DELETEALL, then one CUBE per
 /// object (namespace "objects", id = object id) and, with show_ids, one TEXT_VIEW_FACING (ns
 /// "object_ids": the id, and for a classified object its class name and confidence, e.g.
-/// "3 car 0.87"). Size: 1 + N * (1 + show_ids).
+/// "3 car 0.87"); with show_legend and colour_by_class, one TEXT_VIEW_FACING per legend class
+/// (ns "legend", its name in its colour, one line below the other from legend_x_m,
+/// legend_y_m). Size: 1 + N * (1 + show_ids) + 4 * show_legend.
 void buildObjectMarkers(const DetectedObjectArray& objects, const ObjectMarkerParams& params,
                         visualization_msgs::MarkerArray* markers);
 
@@ -58,6 +69,12 @@ struct core::ParamFields<ros_conv::ObjectMarkerParams> {
     f({"min_box_size_m", "m", 0.0, 10.0, "box dimensions are at least this"}, p.min_box_size_m);
     f({"colour_by_class", "classified objects take their class colour, others the id's"},
       p.colour_by_class);
+    f({"show_legend", "the LiDAR classes' names in their colours (ns legend)"}, p.show_legend);
+    f({"legend_x_m", "m", -1000.0, 1000.0, "legend position x in the objects' frame"},
+      p.legend_x_m);
+    f({"legend_y_m", "m", -1000.0, 1000.0, "legend position y in the objects' frame"},
+      p.legend_y_m);
+    f({"legend_text_size_m", "m", 0.01, 20.0, "legend text height"}, p.legend_text_size_m);
   }
 };
 

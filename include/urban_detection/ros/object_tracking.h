@@ -36,11 +36,13 @@ void toMsg(const core::Track& track, TrackedObject* msg);
 
 /// Builds the tracked markers: for every confirmed or lost track (and tentative ones with
 /// show_tentative) a box (ns "tracks"), a velocity arrow (ns "track_velocities", only when
-/// moving faster than `moving_speed_mps`) and a text "id class speed" (ns "track_labels",
-/// speed in m/s), all with marker id = track id and the track's colour (colourForId: stable per
-/// id). Then DELETE markers in all three namespaces for each id in `deleted` (tracks that
-/// died), and for the arrow of a track in `arrows` (the ids that had one in the previous call;
-/// updated here) that no longer moves.
+/// moving faster than `moving_speed_mps` over ground) and a text (ns "track_labels"): "id class
+/// speed m/s" when moving, "id class" when not, "id class (speed m/s rel.)" and no arrow when
+/// the array's velocities_relative is set (no odometry: a parked car is not drawn moving),
+/// all with marker id = track id and the track's class colour (colourForClass, as the objects'
+/// boxes and the legend; colourForId for an unclassified track). Then DELETE markers in
+/// all three namespaces for each id in `deleted` (tracks that died), and for the arrow of a track
+/// in `arrows` (the ids that had one in the previous call; updated here) that no longer moves.
 void buildTrackMarkers(const TrackedObjectArray& tracks, const std::vector<std::uint32_t>& deleted,
                        const TrackMarkerParams& params, double moving_speed_mps,
                        std::set<std::uint32_t>* arrows, visualization_msgs::MarkerArray* markers);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <sstream>
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
@@ -172,6 +173,7 @@ ObjectClassifierModel ObjectClassifierModel::train(const std::vector<ObjectFeatu
   m.decision_.uncertain_threshold = params.uncertain_threshold;
   m.feature_params_ = feature_params;
   m.description_ = params.description;
+  m.training_groups_ = params.training_groups;
   const int used = m.usedFeatures();
   const cv::Mat samples = sampleMatrix(rows, used);
   const cv::Mat responses(static_cast<int>(labels.size()), 1, CV_32S, labels.data());
@@ -216,6 +218,12 @@ void ObjectClassifierModel::save(const std::string& path) const {
     }
     fs << "format" << kFormat << "version" << kVersion;
     fs << "description" << description_;
+    if (!training_groups_.empty()) {
+      fs << "training_sequences"
+         << "[";
+      for (const std::string& g : training_groups_) fs << g;
+      fs << "]";
+    }
     fs << "object_threshold" << decision_.object_threshold;
     fs << "class_thresholds"
        << "[" << decision_.class_thresholds[0] << decision_.class_thresholds[1]
@@ -267,6 +275,22 @@ ObjectClassifierModel ObjectClassifierModel::load(const std::string& path) {
                        std::to_string(kVersion));
     }
     fs["description"] >> m.description_;
+    // Optional: models written before the key name their sequences in the description.
+    m.training_groups_.clear();
+    const cv::FileNode groups = fs["training_sequences"];
+    if (groups.isSeq()) {
+      for (const auto& g : groups) m.training_groups_.push_back(static_cast<std::string>(g));
+    } else {
+      const std::string marker = "scans of sequences ";
+      const std::size_t at = m.description_.find(marker);
+      if (at != std::string::npos) {
+        std::istringstream words(m.description_.substr(at + marker.size()));
+        std::string w;
+        while (words >> w && w.find_first_not_of("0123456789") == std::string::npos) {
+          m.training_groups_.push_back(w);
+        }
+      }
+    }
     double threshold = -1.0;
     fs["object_threshold"] >> threshold;
     if (!(threshold >= 0.0 && threshold <= 1.0)) refuse(path, "object_threshold not in [0, 1]");

@@ -293,6 +293,59 @@ SemanticKittiCategory semanticKittiCategory(std::uint16_t c) {
   }
 }
 
+bool readSemanticKittiPoses(const std::string& seq_dir, std::vector<Eigen::Isometry3d>* out,
+                            bool* nominal_tr, std::string* error) {
+  out->clear();
+  Eigen::Isometry3d tr = Eigen::Isometry3d::Identity();
+  tr.linear() << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+  *nominal_tr = true;
+  {
+    std::ifstream in(seq_dir + "/calib.txt");
+    std::string line;
+    while (std::getline(in, line)) {
+      std::istringstream ls(line);
+      std::string key;
+      ls >> key;
+      if (key != "Tr:" && key != "Tr") continue;
+      double v[12];
+      int k = 0;
+      while (k < 12 && (ls >> v[k]) && std::isfinite(v[k])) ++k;
+      if (k != 12) {
+        setError(error, seq_dir + "/calib.txt: Tr needs 12 numbers");
+        return false;
+      }
+      Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+      for (int j = 0; j < 12; ++j) m(j / 4, j % 4) = v[j];
+      tr.matrix() = m;
+      *nominal_tr = false;
+    }
+  }
+  std::ifstream in(seq_dir + "/poses.txt");
+  if (!in) {
+    setError(error, seq_dir + "/poses.txt: cannot open");
+    return false;
+  }
+  const Eigen::Isometry3d tr_inv = tr.inverse();
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::istringstream ls(line);
+    Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+    for (int j = 0; j < 12; ++j) {
+      if (!(ls >> m(j / 4, j % 4)) || !std::isfinite(m(j / 4, j % 4))) {
+        setError(error, seq_dir + "/poses.txt:" + std::to_string(number) + ": needs 12 numbers");
+        return false;
+      }
+    }
+    Eigen::Isometry3d pose;
+    pose.matrix() = m;
+    out->push_back(tr_inv * pose * tr);
+  }
+  return true;
+}
+
 std::string semanticKittiClassName(std::uint16_t c) {
   switch (c) {
     case 0:

@@ -63,6 +63,9 @@ struct ClassifierTrainingParams {
   /// its class))^class_balance (0: every row alike, 1: every class alike)
   double class_balance = 0.0;
   std::string description;  // free text stored in the model (data, seed, command)
+  /// The data groups the rows come from (SemanticKITTI sequences: "00", "01", ...), stored in
+  /// the model (key training_sequences) so an evaluation can say when it scores them.
+  std::vector<std::string> training_groups;
 };
 
 /// How the vote shares become a class (stored in the model, chosen by the training tool).
@@ -116,6 +119,10 @@ class ObjectClassifierModel {
   void setDecision(const ClassDecision& d) { decision_ = d; }
   const ObjectFeatureParams& featureParams() const { return feature_params_; }
   const std::string& description() const { return description_; }
+  /// The groups (SemanticKITTI sequences) the model was trained on: its training_sequences
+  /// key, or for a model written before that key the sequences its description names
+  /// ("... scans of sequences 00 01 ... ("); empty when unknown.
+  const std::vector<std::string>& trainingGroups() const { return training_groups_; }
   int trees() const;
 
   /// Class probabilities (vote shares, indexed by ObjectCategory value) of each row, from the
@@ -144,6 +151,7 @@ class ObjectClassifierModel {
   ClassDecision decision_;
   ObjectFeatureParams feature_params_;
   std::string description_;
+  std::vector<std::string> training_groups_;
 };
 
 /// Parameters of the classification stage.

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/evaluation/evaluation.h"
@@ -118,6 +119,15 @@ bool readPngSize(const std::string& path, int* width_px, int* height_px);
 
 // ------------------------------------------------------------------------------------------
 // SemanticKITTI
+
+/// world_T_lidar of every scan of a SemanticKITTI / KITTI odometry sequence folder, indexed by
+/// scan number: poses.txt holds the left camera's pose per scan in the first scan's camera
+/// frame, calib.txt its `Tr` (camera <- LiDAR); the LiDAR pose is Tr^-1 * pose * Tr, so the
+/// world frame is the first scan's LiDAR frame (x forward, z up) [m]. Without a Tr line the
+/// nominal KITTI axes are used (camera x = -LiDAR y, y = -LiDAR z, z = LiDAR x) and
+/// `nominal_tr` is set. False with `error` set when poses.txt is missing or malformed.
+bool readSemanticKittiPoses(const std::string& seq_dir, std::vector<Eigen::Isometry3d>* poses,
+                            bool* nominal_tr, std::string* error);
 
 /// Semantic class of a SemanticKITTI label (low 16 bits).
 inline std::uint16_t semanticKittiClass(std::uint32_t label) {
