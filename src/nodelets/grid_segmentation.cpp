@@ -124,7 +124,10 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
     diagnostics_->count("non_finite_points", countNonFinite(*cloud), false);
     std::lock_guard<std::mutex> segment_lock(segment_mutex_);  // vs. reconfigure
     segmenter_->segment(*cloud, &labels_);
-    if (sectors_seen_ && !segmenter_->lastUsedStream()) {
+    if (segmenter_->lastUsedStream()) {
+      diagnostics_->count("revolutions binned as they arrived", 1, false);
+      NODELET_INFO_ONCE("GridSegmentation: binning velodyne_points/sectors as revolutions arrive");
+    } else if (sectors_seen_) {
       diagnostics_->count("revolutions binned whole (sectors missing)", 1, false);
     }
     if (labeled_pub_.getNumSubscribers() > 0) {

@@ -71,8 +71,8 @@ std::vector<CloudXYZIRT> simulatedRevolutions(int count) {
 // A street with invalid points (NaN, inf, far, absurdly high) sprinkled in.
 CloudXYZIRT syntheticStreet(unsigned seed) {
   std::vector<test::Box> boxes = {
-      {-30.f, 6.0f, 0.0f, 30.f, 7.0f, 12.0f, 1},   {-30.f, -8.0f, 0.0f, 30.f, -7.0f, 1.3f, 2},
-      {4.f, 2.5f, 0.0f, 8.5f, 4.3f, 1.5f, 3},      {-9.f, -4.f, 0.0f, -5.f, -2.2f, 1.6f, 4},
+      {-30.f, 6.0f, 0.0f, 30.f, 7.0f, 12.0f, 1}, {-30.f, -8.0f, 0.0f, 30.f, -7.0f, 1.3f, 2},
+      {4.f, 2.5f, 0.0f, 8.5f, 4.3f, 1.5f, 3},    {-9.f, -4.f, 0.0f, -5.f, -2.2f, 1.6f, 4},
       {-30.f, 4.0f, 0.0f, 30.f, 6.0f, 0.15f, 5},
   };
   std::vector<int> tags;
