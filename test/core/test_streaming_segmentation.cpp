@@ -225,6 +225,15 @@ TEST(StreamingSegmentation, MismatchedBatchesFallBackToTheWholeCloud) {
   streamed.setParams(p);
   whole.setParams(p);
   check(frames[0], false, "new parameters");
+  // A dropped partial revolution whose seq the next one gets again: its batches lie later in
+  // the sweep, so the next revolution's first batch goes back in time and starts over.
+  CloudXYZIRT timed = frames[1];
+  for (std::size_t i = 0; i < timed.size(); ++i) timed[i].time = 1e-6f * static_cast<float>(i);
+  timed.header.seq = 13;
+  streamed.addPoints(13, timed.points.data() + 2 * third, third);
+  streamed.addPoints(13, timed.points.data(), third);
+  streamed.addPoints(13, timed.points.data() + third, third);
+  check(timed, true, "partial revolution dropped");
   // And streaming works again afterwards, on the same segmenter.
   streamed.addPoints(11, frames[1].points.data(), third);
   check(frames[1], true, "after the fallbacks");
