@@ -234,6 +234,16 @@ TEST(StreamingSegmentation, MismatchedBatchesFallBackToTheWholeCloud) {
   streamed.addPoints(13, timed.points.data(), third);
   streamed.addPoints(13, timed.points.data() + third, third);
   check(timed, true, "partial revolution dropped");
+  // Receipt-time jitter: each batch starts before the previous one ended (points of a burst of
+  // packets), but after it started: one stream.
+  for (std::size_t i = 0; i < timed.size(); ++i) {
+    timed[i].time = 1e-6f * static_cast<float>(i % third) + 1e-4f * static_cast<float>(i / third);
+  }
+  timed.header.seq = 14;
+  streamed.addPoints(14, timed.points.data(), third);
+  streamed.addPoints(14, timed.points.data() + third, third);
+  ASSERT_LT(timed[third].time, timed[third - 1].time);
+  check(timed, true, "jittered times");
   // And streaming works again afterwards, on the same segmenter.
   streamed.addPoints(11, frames[1].points.data(), third);
   check(frames[1], true, "after the fallbacks");

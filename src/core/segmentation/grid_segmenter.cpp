@@ -105,9 +105,12 @@ void GridSegmenter::resetScratch() {
 
 void GridSegmenter::addPoints(std::uint32_t revolution, const PointXYZIRT* points,
                               std::size_t count) {
-  // A batch that goes back in time starts the revolution over: a partial revolution the
-  // decoder dropped (its seq is given again to the next one) or a stream that restarted.
-  const bool back_in_time = count > 0 && points[0].time < stream_last_time_;
+  // A batch starting before the previous batch started starts the revolution over: a partial
+  // revolution the decoder dropped (its seq is given again to the next one) or a stream that
+  // restarted. Batches start at packet boundaries, whose first firings keep the packets' order;
+  // within and across neighbouring packets point times may go back a little (packets stamped
+  // on receipt arrive in bursts), so the previous batch's last point is no reference.
+  const bool back_in_time = count > 0 && points[0].time < stream_batch_time_;
   if (!streaming_ || revolution != stream_revolution_ || back_in_time) {
     resetScratch();  // before the grid forgets the previous frame's cells
     grid_.begin(static_cast<float>(params_.sensor_height_m),
@@ -115,12 +118,12 @@ void GridSegmenter::addPoints(std::uint32_t revolution, const PointXYZIRT* point
     streaming_ = true;
     stream_revolution_ = revolution;
     stream_checks_.clear();
-    stream_last_time_ = -std::numeric_limits<float>::infinity();
+    stream_batch_time_ = -std::numeric_limits<float>::infinity();
   }
   if (count == 0) return;
   stream_checks_.emplace_back(grid_.appended(), points[0]);
   stream_checks_.emplace_back(grid_.appended() + count - 1, points[count - 1]);
-  stream_last_time_ = points[count - 1].time;
+  stream_batch_time_ = points[0].time;
   grid_.append(points, count);
 }
 

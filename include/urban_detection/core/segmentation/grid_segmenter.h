@@ -235,8 +235,8 @@ class GridSegmenter {
   /// (same count bound, the first point of every batch and the last one bit for bit) and
   /// bins the whole cloud afresh when they are not (a lost batch); its labels are those of
   /// segment() without streaming in every case. A batch whose first point's `time` is below
-  /// the previous batch's last (point times grow within a revolution) also starts over: the
-  /// decoder gives a dropped partial revolution's seq again to the next one.
+  /// the previous batch's first point's (batches begin at packets, in order) also starts over:
+  /// the decoder gives a dropped partial revolution's seq again to the next one.
   void addPoints(std::uint32_t revolution, const PointXYZIRT* points, std::size_t count);
   /// Whether the last segment() used the points added by addPoints() (false: it binned the
   /// whole cloud, none were added or they did not match).
@@ -284,7 +284,7 @@ class GridSegmenter {
   bool streaming_ = false;
   std::uint32_t stream_revolution_ = 0;
   std::vector<std::pair<std::size_t, PointXYZIRT>> stream_checks_;
-  float stream_last_time_ = 0.0f;  // [s] time of the last point added
+  float stream_batch_time_ = 0.0f;  // [s] time of the last batch's first point
   bool last_used_stream_ = false;
   HoughWallRefiner hough_;
   SegmentationStats stats_;
