@@ -4,7 +4,10 @@
 // the publisher's C++ type, so inside one manager the cloud of PacketSource / PacketToCloud
 // arrives as a pointer, never serialised; a PointCloud2 from another process is deserialised
 // with its sizes checked (cloud_serialization.h) and refused with an ERROR when malformed.
-// Runs its callback on a thread of its own (StageThread), never behind another stage.
+// Runs its callback on a thread of its own (StageThread), never behind another stage. With
+// ~stream_sectors (default true) it also bins PacketSource's velodyne_points/sectors into the
+// grid while a revolution arrives, so at the revolution's cloud only its last sector is left
+// to bin (the labels are those of the whole cloud: GridSegmenter::addPoints).
 #include "urban_detection/core/common/point_types.h"
 
 #include <memory>
@@ -44,6 +47,7 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
     std::string error;
     try {
       loadParam(pnh, "queue_size", &queue_size_, 1, 100, "messages");
+      loadParam(pnh, "stream_sectors", &stream_sectors_);
     } catch (const ParamError& e) {
       error = e.what();
     }
@@ -78,13 +82,31 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
     // the newest revolutions win when we are slow.
     lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
       diagnostics_->setActive(wanted);
-      if (!wanted) return sub_.shutdown();
+      if (!wanted) {
+        sector_sub_.shutdown();
+        return sub_.shutdown();
+      }
       sub_ =
           thread_->handle(getNodeHandle())
               .subscribe("velodyne_points", queue_size_, &GridSegmentationNodelet::cloudCb, this);
+      // Same thread, so a revolution's sectors are binned before its cloud arrives.
+      if (stream_sectors_) {
+        sector_sub_ =
+            thread_->handle(getNodeHandle())
+                .subscribe("velodyne_points/sectors", 64, &GridSegmentationNodelet::sectorCb, this);
+      }
     });
     labeled_pub_ = lazy_->advertise<LabeledCloud>(nh, "segmentation/labeled_points", 2);
     foreground_pub_ = lazy_->advertise<LabeledCloud>(nh, "segmentation/foreground", 2);
+  }
+
+  // The open revolution's points so far (PacketSource's sectors): binned into the grid now, so
+  // that only the last sector is left when the revolution's cloud arrives.
+  void sectorCb(const boost::shared_ptr<const CloudXYZIRT>& sector) {
+    if (!cloudRefusal(*sector).empty()) return;  // the whole cloud is checked (and binned) anyway
+    std::lock_guard<std::mutex> segment_lock(segment_mutex_);
+    segmenter_->addPoints(sector->header.seq, sector->points.data(), sector->size());
+    sectors_seen_ = true;
   }
 
   void cloudCb(const ros::MessageEvent<const CloudXYZIRT>& event) {  // zero copy
@@ -102,6 +124,12 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
     diagnostics_->count("non_finite_points", countNonFinite(*cloud), false);
     std::lock_guard<std::mutex> segment_lock(segment_mutex_);  // vs. reconfigure
     segmenter_->segment(*cloud, &labels_);
+    if (segmenter_->lastUsedStream()) {
+      diagnostics_->count("revolutions binned as they arrived", 1, false);
+      NODELET_INFO_ONCE("GridSegmentation: binning velodyne_points/sectors as revolutions arrive");
+    } else if (sectors_seen_) {
+      diagnostics_->count("revolutions binned whole (sectors missing)", 1, false);
+    }
     if (labeled_pub_.getNumSubscribers() > 0) {
       auto labeled = boost::make_shared<LabeledCloud>();
       core::buildLabeledCloud(*cloud, labels_, labeled.get());
@@ -120,6 +148,8 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
   std::unique_ptr<core::GridSegmenter> segmenter_;
   std::mutex segment_mutex_;  // segmenter_ between frames and reconfigure
   int queue_size_ = 2;
+  bool stream_sectors_ = true;  // bin velodyne_points/sectors as they arrive
+  bool sectors_seen_ = false;   // a sector arrived (PacketSource publishes them)
   std::unique_ptr<Reconfigure> reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
@@ -127,7 +157,7 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
   std::unique_ptr<ros_conv::StageThread> thread_;          // runs cloudCb
   std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher labeled_pub_, foreground_pub_;
-  ros::Subscriber sub_;
+  ros::Subscriber sub_, sector_sub_;
 };
 
 }  // namespace ros_conv

@@ -3,7 +3,9 @@
 // (the partial revolutions at the start and the end of a stream are dropped). With ~decode,
 // also `velodyne_points` (CloudXYZIRT), decoded packet by packet as they arrive and published
 // one packet after the revolution's last (the live chain's low-latency path; PacketToCloud
-// then is not needed). Both outputs are lazy. The reading thread is PacketSourceWorker
+// then is not needed), and every ~sector_packets packets the open revolution's new points on
+// `velodyne_points/sectors` (GridSegmentation bins them while the revolution arrives). The
+// outputs are lazy. The reading thread is PacketSourceWorker
 // (ros/packet_source_worker.h); this file wires it to ROS.
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -41,6 +43,9 @@ class PacketSourceNodelet : public nodelet::Nodelet {
     pub_ = getNodeHandle().advertise<VelodyneScan>("velodyne_packets", params.queue_size);
     if (params.decode) {
       cloud_pub_ = getNodeHandle().advertise<CloudXYZIRT>("velodyne_points", params.queue_size);
+      if (params.sector_packets > 0) {
+        sector_pub_ = getNodeHandle().advertise<CloudXYZIRT>("velodyne_points/sectors", 64);
+      }
     }
     try {
       worker_ = std::make_unique<PacketSourceWorker>(
@@ -57,6 +62,11 @@ class PacketSourceNodelet : public nodelet::Nodelet {
                                                "PacketSource inactive: " + std::string(e.what()));
       return;
     }
+    worker_->setSectorOutput(
+        [this](const boost::shared_ptr<CloudXYZIRT>& sector) {
+          sector_pub_.publish(boost::shared_ptr<const CloudXYZIRT>(sector));
+        },
+        [this] { return sector_pub_ && sector_pub_.getNumSubscribers() > 0; });
     diagnostics_->setHardwareId(worker_->describe());
     const std::string decoding = params.decode ? "; streaming decoding, calibration " +
                                                      worker_->decoder()->calibration().source
@@ -72,7 +82,7 @@ class PacketSourceNodelet : public nodelet::Nodelet {
 
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
-  ros::Publisher pub_, cloud_pub_;
+  ros::Publisher pub_, cloud_pub_, sector_pub_;
   std::unique_ptr<PacketSourceWorker> worker_;
 };
 

@@ -30,6 +30,7 @@ PacketSourceParams loadPacketSourceParams(const ros::NodeHandle& nh) {
   loadParam(nh, "timestamp_first_packet", &p.timestamp_first_packet);
   loadParam(nh, "decode", &p.decode);
   if (p.decode) loadDecoderParams(nh, &p.calibration, &p.decoder);
+  loadParam(nh, "sector_packets", &p.sector_packets, 0, 10000, "packets (0 = off)");
   return p;
 }
 

@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <chrono>
 
+#include <pcl_conversions/pcl_conversions.h>
+#include <boost/make_shared.hpp>
+
 namespace urban_detection {
 namespace ros_conv {
 
@@ -266,6 +269,7 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
         }
         publish_cloud_(cloud);  // fresh, never touched again: zero copy inside the manager
       }
+      if (publish_sector_) publishSector(stamp);
     } else if (streaming_) {  // nobody listens: the open revolution would be partial
       streamer_->reset();
       streaming_ = false;
@@ -306,6 +310,41 @@ void PacketSourceWorker::addPacket(const core::RawPacket& packet, const ros::Tim
   }
   revolution_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (scan) emitScan(scan);
+}
+
+void PacketSourceWorker::setSectorOutput(PublishCloudFn publish_sector,
+                                         ListenedFn sectors_listened) {
+  if (!streamer_ || params_.sector_packets <= 0) return;
+  publish_sector_ = std::move(publish_sector);
+  sectors_listened_ = std::move(sectors_listened);
+}
+
+void PacketSourceWorker::publishSector(const ros::Time& stamp) {
+  const CloudXYZIRT* open = streamer_->openCloud();
+  if (!open) return;
+  if (streamer_->openedCount() != sector_revolution_) {  // a new revolution: sectors from 0
+    sector_revolution_ = streamer_->openedCount();
+    sector_begin_ = 0;
+    sector_packets_ = 0;
+  }
+  if (++sector_packets_ < static_cast<std::size_t>(params_.sector_packets)) return;
+  sector_packets_ = 0;
+  const std::size_t end = open->points.size();
+  if (end <= sector_begin_ || !sectors_listened_()) {
+    sector_begin_ = end;  // nobody listens: the next sector starts here (the receiver checks)
+    return;
+  }
+  auto sector = boost::make_shared<CloudXYZIRT>();
+  sector->header.frame_id = open->header.frame_id;
+  sector->header.seq = streamer_->openSeq();
+  sector->header.stamp = pcl_conversions::toPCL(stamp);
+  sector->points.assign(open->points.begin() + static_cast<std::ptrdiff_t>(sector_begin_),
+                        open->points.end());
+  sector->width = static_cast<std::uint32_t>(sector->points.size());
+  sector->height = 1;
+  sector->is_dense = open->is_dense;
+  sector_begin_ = end;
+  publish_sector_(sector);  // fresh, never touched again
 }
 
 void PacketSourceWorker::emitScan(const VelodyneScan::Ptr& scan) {

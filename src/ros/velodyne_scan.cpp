@@ -196,6 +196,7 @@ void StreamingScanDecoder::open(const ros::Time& stamp) {
   current_->points.reserve((expected_packets_ + expected_packets_ / 8) * kReturnsPerPacket);
   first_stamp_ = stamp;
   stats_ = ScanDecodeStats();
+  ++opened_;
 }
 
 boost::shared_ptr<CloudXYZIRT> StreamingScanDecoder::add(const core::RawPacket& packet,

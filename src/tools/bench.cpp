@@ -267,7 +267,7 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  std::unique_ptr<core::GridSegmenter> segmenter, segmenter_no_hough;
+  std::unique_ptr<core::GridSegmenter> segmenter, segmenter_no_hough, segmenter_streamed;
   std::unique_ptr<core::HierarchicalGridDetector> hier;
   std::unique_ptr<core::KdTreeDetector> kdtree, kdtree_pcl_default;
   std::unique_ptr<core::ObjectFilter> object_filter;
@@ -276,6 +276,7 @@ int main(int argc, char** argv) {
     object_filter.reset(new core::ObjectFilter(params.object_filter));
     if (params.classifier.enabled) classifier.reset(new core::ObjectClassifier(params.classifier));
     segmenter.reset(new core::GridSegmenter(params.segmentation));
+    segmenter_streamed.reset(new core::GridSegmenter(params.segmentation));
     core::GridSegmenterParams no_hough = params.segmentation;
     no_hough.hough.enabled = false;
     segmenter_no_hough.reset(new core::GridSegmenter(no_hough));
@@ -296,7 +297,8 @@ int main(int argc, char** argv) {
   std::vector<double> pipeline, pipeline_cpu;
   double points_sum = 0, fg_sum = 0, hier_obj_sum = 0, kd_obj_sum = 0, rejected_sum = 0;
   CloudXYZIRT cloud;
-  std::vector<core::SegmentClass> labels, labels_no_hough;
+  std::vector<core::SegmentClass> labels, labels_no_hough, labels_streamed;
+  std::uint32_t streamed_seq = 0;
   urban_detection::LabeledCloud foreground;
   std::vector<core::DetectedObject> objects;
   std::vector<core::SegmentClass> cells;
@@ -392,6 +394,19 @@ int main(int argc, char** argv) {
           kd_default_t.stop("kdtree_detection_pcl_default", &stage, &cpu_stage);
         }
       }
+      // Live, PacketSource's sectors are binned while the revolution arrives
+      // (GridSegmenter::addPoints): the binning of all but the last 1/16 of the points, and
+      // the segmentation left at the cut (same labels).
+      {
+        const std::size_t swept = cloud.size() - cloud.size() / 16;
+        StageTimer bin_t;
+        segmenter_streamed->addPoints(++streamed_seq, cloud.points.data(), swept);
+        bin_t.stop("sweep_binning", &stage, &cpu_stage);
+        cloud.header.seq = streamed_seq;
+        StageTimer cut_t;
+        segmenter_streamed->segment(cloud, &labels_streamed);
+        cut_t.stop("segmentation_at_cut", &stage, &cpu_stage);
+      }
       segmenter_no_hough->segment(cloud, &labels_no_hough);
       cells = segmenter_no_hough->cellClasses();
       const auto& g = segmenter_no_hough->grid();
@@ -436,6 +451,7 @@ int main(int argc, char** argv) {
           : std::nan("");
 
   const char* order[] = {"packet_decode",           "segmentation",
+                         "sweep_binning",           "segmentation_at_cut",
                          "hough_refinement",        "foreground_extraction",
                          "hierarchical_detection",  "object_filter",
                          "classification",          "markers",
@@ -455,7 +471,11 @@ int main(int argc, char** argv) {
     std::printf("  %-28s %10.3f %10.3f %14.3f%s\n", name, median(it->second),
                 percentile(it->second, 0.95), median(cpu_stage[name]),
                 std::string(name) == "hough_refinement" ? "  (inside segmentation)"
-                : std::string(name) == "markers"        ? "  (rviz output, lazy, not in pipeline)"
+                : std::string(name) == "sweep_binning"
+                    ? "  (live: 15/16 of the points binned while the revolution arrives)"
+                : std::string(name) == "segmentation_at_cut"
+                    ? "  (live: segmentation left at the revolution's end)"
+                : std::string(name) == "markers" ? "  (rviz output, lazy, not in pipeline)"
                 : std::string(name) == "tracker_100_objects" ||
                         std::string(name) == "box_fitting_100_objects"
                     ? "  (synthetic street, 100 objects, not in pipeline)"

@@ -3,9 +3,15 @@
 // packet of a revolution, which stamps it, to the subscriber). Writes p50/p95/p99/max, the
 // message count and rate per topic as JSON after a warm-up and a measuring window. Used by
 // `scripts/run latency`; works on any ROS graph whose stamps are on this machine's clock.
+// For object topics also the latency of each object from its own last point: the sensor sweeps
+// clockwise (azimuth atan2(-y, x)) from --cut-deg over --revolution-s ending at header.stamp,
+// so the object's last point was swept at the azimuth of its axis-aligned box corner swept
+// last (an upper bound on its points', so the figure is a lower bound by at most the box's
+// angular extent); recorded under "<topic> per object".
 // Also keeps the last /diagnostics status of every stage reporting a processing time, and writes
 // its timing, rate and skip figures under "stages" (where a latency figure comes from).
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -37,6 +43,9 @@ void usage() {
       "  --warmup S        seconds ignored after the first message of every topic (default 5)\n"
       "  --duration S      measuring window [s] (default 60)\n"
       "  --out FILE        JSON output (default: stdout)\n"
+      "  --revolution-s S  [s] sweep time of a revolution, for the per-object figures\n"
+      "                    (default 0.1: 600 rpm)\n"
+      "  --cut-deg D       [deg] azimuth where revolutions are cut (default 0)\n"
       "Exit status 1 when a topic delivered nothing in the window.\n");
 }
 
@@ -75,11 +84,38 @@ class Probe {
       for (const diagnostic_msgs::KeyValue& kv : status.values) {
         is_stage = is_stage || kv.key == "mean processing time [ms]";
         if (kv.key.find("[ms]") != std::string::npos || kv.key.find("[Hz]") != std::string::npos ||
-            kv.key == "skipped_revolutions") {
+            kv.key == "skipped_revolutions" || kv.key.rfind("revolutions binned", 0) == 0) {
           kept.emplace_back(kv.key, kv.value);
         }
       }
       if (is_stage) stages_[status.name] = kept;
+    }
+  }
+
+  // Each object's latency from its last point (see the file comment).
+  void recordObjects(const std::string& topic, const ud::DetectedObjectArray& m,
+                     double revolution_s, double cut_deg) {
+    const ros::Time now = ros::Time::now();
+    const ros::WallTime wall = ros::WallTime::now();
+    if (m.header.stamp.isZero() || m.objects.empty()) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (start_.isZero() || (wall - start_).toSec() < warmup_s_) return;
+    TopicRecord& r = records_[topic];
+    if (r.latency_ms.empty()) r.first = wall;
+    r.last = wall;
+    const double header_ms =
+        1e-6 * (static_cast<double>(now.toNSec()) - static_cast<double>(m.header.stamp.toNSec()));
+    for (const auto& o : m.objects) {
+      const double cx = o.aabb_pose.position.x, cy = o.aabb_pose.position.y;
+      const double hx = 0.5 * o.aabb_dimensions.x, hy = 0.5 * o.aabb_dimensions.y;
+      double last = 0.0;  // fraction of the sweep at the box corner swept last
+      for (int k = 0; k < 4; ++k) {
+        const double x = cx + (k & 1 ? hx : -hx), y = cy + (k & 2 ? hy : -hy);
+        double deg = std::atan2(-y, x) * 180.0 / M_PI - cut_deg;
+        deg = std::fmod(std::fmod(deg, 360.0) + 360.0, 360.0);
+        last = std::max(last, deg / 360.0);
+      }
+      r.latency_ms.push_back(header_ms + 1e3 * revolution_s * (1.0 - last));
     }
   }
 
@@ -105,7 +141,7 @@ class Probe {
       std::fprintf(out, "%s\"%s\": {\"messages\": %zu, \"zero_stamps\": %zu", t ? ", " : "",
                    topics[t].c_str(), l.size(), r.zero_stamps);
       if (l.empty()) {
-        all = false;
+        all = all && topics[t].find(" per object") != std::string::npos;
       } else {
         std::fprintf(out,
                      ", \"rate_hz\": %.3f, \"p50_ms\": %.3f, \"p95_ms\": %.3f, \"p99_ms\": %.3f, "
@@ -146,7 +182,7 @@ class Probe {
 int main(int argc, char** argv) {
   ros::init(argc, argv, "latency_probe", ros::init_options::AnonymousName);
   std::vector<std::string> objects, markers;
-  double warmup_s = 5.0, duration_s = 60.0;
+  double warmup_s = 5.0, duration_s = 60.0, revolution_s = 0.1, cut_deg = 0.0;
   std::string out_path;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -158,6 +194,10 @@ int main(int argc, char** argv) {
       warmup_s = ud::tools::optionNumber(argc, argv, &i, "--warmup");
     else if (a == "--duration")
       duration_s = ud::tools::optionNumber(argc, argv, &i, "--duration");
+    else if (a == "--revolution-s")
+      revolution_s = ud::tools::optionNumber(argc, argv, &i, "--revolution-s");
+    else if (a == "--cut-deg")
+      cut_deg = ud::tools::optionNumber(argc, argv, &i, "--cut-deg");
     else if (a == "--out")
       out_path = ud::tools::optionValue(argc, argv, &i, "--out");
     else if (a == "-h" || a == "--help") {
@@ -183,11 +223,15 @@ int main(int argc, char** argv) {
   std::vector<std::string> topics;
   for (const std::string& t : objects) {
     const std::string name = nh.resolveName(t);
+    const std::string per_object = name + " per object";
     topics.push_back(name);
+    topics.push_back(per_object);
     subs.push_back(nh.subscribe<ud::DetectedObjectArray>(
         t, 10,
-        [&probe, name](const ud::DetectedObjectArray::ConstPtr& m) {
+        [&probe, name, per_object, revolution_s,
+         cut_deg](const ud::DetectedObjectArray::ConstPtr& m) {
           probe.record(name, m->header.stamp);
+          probe.recordObjects(per_object, *m, revolution_s, cut_deg);
         },
         ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -540,6 +541,45 @@ TEST(GridSegmenter, EmptyAndAllNaNClouds) {
   LabeledCloud fg;
   core::extractForeground(bad, labels, &fg);
   EXPECT_TRUE(fg.empty());
+}
+
+// The foreground extraction (16 labels compared at a time) against the plain loop over the
+// labels: random labels in runs and alone, short points that are not finite, cloud sizes
+// around multiples of 16.
+TEST(GridSegmenter, ForegroundEqualsThePlainLoop) {
+  std::mt19937 rng(5);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::size_t n = trial < 40 ? static_cast<std::size_t>(trial) : 1000 + rng() % 3000;
+    CloudXYZIRT cloud;
+    std::vector<SegmentClass> labels;
+    for (std::size_t i = 0; i < n; ++i) {
+      const float v = static_cast<float>(i);
+      cloud.push_back(rng() % 23 == 0 ? pt(nan, v, 0.f) : pt(v, -v, 0.5f * v));
+      cloud.back().intensity = static_cast<float>(rng() % 256);
+      const bool in_run = !labels.empty() && labels.back() == SegmentClass::kShort && rng() % 4;
+      labels.push_back(in_run || rng() % 9 == 0 ? SegmentClass::kShort
+                                                : static_cast<SegmentClass>(rng() % 4));
+    }
+    LabeledCloud fg;
+    core::extractForeground(cloud, labels, &fg);
+    std::vector<std::uint32_t> expected;  // the plain loop
+    for (std::size_t i = 0; i < n; ++i) {
+      if (labels[i] == SegmentClass::kShort && std::isfinite(cloud[i].x)) expected.push_back(i);
+    }
+    ASSERT_EQ(fg.size(), expected.size()) << "trial " << trial;
+    ASSERT_EQ(fg.width, expected.size());
+    for (std::size_t k = 0; k < expected.size(); ++k) {
+      const LabeledPoint& q = fg[k];
+      const PointXYZIRT& p = cloud[expected[k]];
+      ASSERT_EQ(q.index, expected[k]) << "trial " << trial;
+      EXPECT_EQ(q.x, p.x);
+      EXPECT_EQ(q.y, p.y);
+      EXPECT_EQ(q.z, p.z);
+      EXPECT_EQ(q.intensity, p.intensity);
+      EXPECT_EQ(q.label, static_cast<std::uint32_t>(SegmentClass::kShort));
+    }
+  }
 }
 
 TEST(GridSegmenter, ForegroundAndLabelledCloudCarryIndices) {

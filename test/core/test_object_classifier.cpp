@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -119,11 +120,11 @@ TEST(ObjectFeatures, PorousBushHasJumpsSmoothBoxHasNone) {
 TEST(ObjectFeatures, SelectRanksEqualsTheSortedValues) {
   std::mt19937 rng(11);
   std::vector<float> scratch;
-  for (int trial = 0; trial < 300; ++trial) {
-    const std::size_t n = 1 + rng() % (trial < 100 ? 20 : 3000);
+  for (int trial = 0; trial < 700; ++trial) {
+    const std::size_t n = 1 + rng() % (trial < 140 ? 20 : trial < 280 ? 100 : 3000);
     std::vector<float> values(n);
     for (float& v : values) {
-      switch (trial % 4) {
+      switch (trial % 7) {
         case 0:
           v = static_cast<float>(rng() % 256);
           break;
@@ -133,8 +134,19 @@ TEST(ObjectFeatures, SelectRanksEqualsTheSortedValues) {
         case 2:
           v = std::uniform_real_distribution<float>(-50.0f, 400.0f)(rng);
           break;
-        default:
+        case 3:
           v = static_cast<float>(rng() % 3) * 0.25f + 7.0f;
+          break;
+        case 4:  // KITTI files: reflectance in [0, 1]
+          v = std::uniform_real_distribution<float>(0.0f, 1.0f)(rng);
+          break;
+        case 5:  // a spread that overflows a float difference, and a few extremes
+          v = rng() % 7 == 0   ? std::numeric_limits<float>::lowest()
+              : rng() % 7 == 0 ? std::numeric_limits<float>::max()
+                               : std::uniform_real_distribution<float>(-1e30f, 1e30f)(rng);
+          break;
+        default:  // clustered: most values in one bucket, a far outlier
+          v = rng() % 500 == 0 ? 1e6f : 3.0f + static_cast<float>(rng() % 1000) * 1e-6f;
           break;
       }
     }
@@ -149,6 +161,14 @@ TEST(ObjectFeatures, SelectRanksEqualsTheSortedValues) {
     core::selectRanks(values, ranks.data(), 4, out, &scratch);
     for (int r = 0; r < 4; ++r) {
       ASSERT_EQ(out[r], sorted[ranks[r]]) << "trial " << trial << " rank " << ranks[r];
+    }
+    // More ranks than buckets gathered in one pass.
+    std::vector<std::size_t> many(12);
+    for (std::size_t r = 0; r < many.size(); ++r) many[r] = r * (n - 1) / (many.size() - 1);
+    float many_out[12];
+    core::selectRanks(values, many.data(), 12, many_out, &scratch);
+    for (std::size_t r = 0; r < many.size(); ++r) {
+      ASSERT_EQ(many_out[r], sorted[many[r]]) << "trial " << trial << " rank " << many[r];
     }
   }
 }

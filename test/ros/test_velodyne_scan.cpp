@@ -8,6 +8,7 @@
 
 #include <pcl_conversions/pcl_conversions.h>
 
+#include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/simulation/lidar_simulator.h"
 #include "urban_detection/core/simulation/scene_generator.h"
 #include "urban_detection/core/simulation/simulation_config.h"
@@ -227,6 +228,55 @@ TEST(StreamingScanDecoder, EqualsTheBatchDecodeBitForBitOnTheSimulatedDrive) {
 
 TEST(StreamingScanDecoder, FirstPacketStampConvention) {
   stream_test::compareOnSimulatedDrive(ScanStamp::kFirstPacket);
+}
+
+// PacketSource's sectors: the open revolution's new points every 36 packets, numbered with the
+// seq the revolution's cloud will carry (openSeq), restarted whenever a revolution opens
+// (openedCount). Binned into a GridSegmenter as they come, they are the first points of the
+// closed cloud (segment() uses them) and give the labels of the whole cloud.
+TEST(StreamingScanDecoder, OpenRevolutionSectorsArePrefixesOfTheCloud) {
+  core::SimulationConfig c =
+      core::loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
+  const core::Calibration cal = core::loadCalibration(c.calibration_file);
+  core::LidarSimulator sim(core::generateScene(c.scene, c.drive), c.scene, c.drive, cal, c.sensor);
+  const core::PacketDecoder decoder(cal, core::DecoderParams());
+  StreamingScanDecoder streamer(&decoder, 0.0, "velodyne", 700, ScanStamp::kLastPacket);
+  EXPECT_EQ(streamer.openCloud(), nullptr);
+  core::GridSegmenter streamed, whole;
+  std::vector<core::SegmentClass> ls, lw;
+  std::uint64_t opened = 0;
+  std::size_t begin = 0, packets = 0, closed = 0, sectors = 0;
+  core::SimRevolution rev;
+  for (int r = 0; r < 4; ++r) {
+    sim.simulateNext(&rev);
+    const std::size_t first = r == 0 ? rev.packets.size() / 2 : 0;  // a partial one first
+    for (std::size_t i = first; i < rev.packets.size(); ++i) {
+      const boost::shared_ptr<CloudXYZIRT> cloud =
+          streamer.add(rev.packets[i], ros::Time(rev.packet_stamps_s[i]));
+      if (cloud) {
+        streamed.segment(*cloud, &ls);
+        EXPECT_TRUE(streamed.lastUsedStream()) << "revolution " << cloud->header.seq;
+        whole.segment(*cloud, &lw);
+        ASSERT_EQ(ls, lw);
+        ++closed;
+      }
+      const CloudXYZIRT* open = streamer.openCloud();
+      ASSERT_NE(open, nullptr);
+      if (streamer.openedCount() != opened) {
+        opened = streamer.openedCount();
+        begin = 0;
+        packets = 0;
+      }
+      if (++packets < 36) continue;
+      packets = 0;
+      streamed.addPoints(streamer.openSeq(), open->points.data() + begin,
+                         open->points.size() - begin);
+      begin = open->points.size();
+      ++sectors;
+    }
+  }
+  EXPECT_EQ(closed, 2u);  // the partial first revolution is dropped
+  EXPECT_GT(sectors, 25u);
 }
 
 }  // namespace ros_conv

@@ -49,7 +49,7 @@ class LaunchParams(unittest.TestCase):
         p = params('live.launch', 'detector:=both')
         self.assertEqual(sections(p, 'hierarchical_grid_detector') - {'thread_nice'},
                          {'hierarchical_grid', 'classifier', 'object_filter', 'box_fitting'})
-        self.assertEqual(sections(p, 'kdtree_detector') - {'thread_nice'},
+        self.assertEqual(sections(p, 'kdtree_detector') - {'thread_nice', 'queue_size'},
                          {'kdtree', 'classifier', 'object_filter', 'box_fitting'})
         self.assertEqual(sections(p, 'object_markers'), {'markers'})
         self.assertEqual(sections(p, 'object_markers_kdtree'), {'markers'})

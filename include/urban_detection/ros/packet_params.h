@@ -36,6 +36,10 @@ struct PacketSourceParams {
   bool decode = false;          // advertise velodyne_points and decode while listened
   std::string calibration;      // YAML or db.xml calibration; empty = nominal HDL-64E S2
   core::DecoderParams decoder;  // params `min_range`, `max_range` [m]
+  // [packets] 0 = off; with decode, the points of the open revolution are also published on
+  // velodyne_points/sectors every this many packets (lazily): the segmentation bins them into
+  // its grid while the revolution arrives (36 packets: about 1/16 revolution at 600 rpm).
+  int sector_packets = 36;
 
   /// Revolutions per second the sensor (or the replay at `rate`) should deliver [Hz].
   double expectedRevolutionRateHz() const;

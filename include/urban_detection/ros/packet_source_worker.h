@@ -41,6 +41,11 @@ class PacketSourceWorker {
                      ListenedFn clouds_listened = ListenedFn());
   ~PacketSourceWorker();  // stops and joins the thread
 
+  /// With params.decode and params.sector_packets > 0: every sector_packets packets, the points
+  /// of the open revolution decoded since the last sector are handed to `publish_sector` (a
+  /// fresh cloud, header.seq = the seq the revolution's cloud will carry, header.stamp = the
+  /// newest packet's) while `sectors_listened`. Call before start().
+  void setSectorOutput(PublishCloudFn publish_sector, ListenedFn sectors_listened);
   /// Starts the reading thread. Live: the socket is read all the time, subscribers or not (an
   /// unread socket fills with stale packets a late subscriber would get first). Replay: pauses
   /// while nobody listens, so no recorded revolution is lost.
@@ -73,6 +78,12 @@ class PacketSourceWorker {
   std::unique_ptr<core::PacketDecoder> decoder_;
   std::unique_ptr<StreamingScanDecoder> streamer_;  // reading thread only
   bool streaming_ = false;  // streamer_ fed since its last reset (clouds listened)
+  void publishSector(const ros::Time& stamp);
+  PublishCloudFn publish_sector_;
+  ListenedFn sectors_listened_;
+  std::uint64_t sector_revolution_ = 0;  // streamer_->openedCount() of the sectors' revolution
+  std::size_t sector_begin_ = 0;         // first point of the next sector in the open cloud
+  std::size_t sector_packets_ = 0;       // packets since the last sector
   std::unique_ptr<core::UdpReceiver> receiver_;
   std::unique_ptr<core::PcapReader> pcap_;
   ScanAssembler assembler_;  // reading thread only

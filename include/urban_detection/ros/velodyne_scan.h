@@ -148,6 +148,13 @@ class StreamingScanDecoder {
   boost::shared_ptr<CloudXYZIRT> finishFile();
   void shiftOpen(double s);
 
+  /// The cloud of the open revolution (its points so far; null before the first packet), the
+  /// header.seq it will carry, and a count of the revolutions opened (changes whenever a new
+  /// cloud starts, also after a dropped partial one): the sectors of PacketSource.
+  const CloudXYZIRT* openCloud() const { return current_.get(); }
+  std::uint32_t openSeq() const { return revolutions_ + 1; }
+  std::uint64_t openedCount() const { return opened_; }
+
   /// Decode counters of the revolution returned last.
   const ScanDecodeStats& lastStats() const { return last_stats_; }
   /// Packets of the revolution returned last.
@@ -169,6 +176,7 @@ class StreamingScanDecoder {
   std::size_t last_packets_ = 0;
   std::size_t nominal_packets_ = 0;
   std::uint32_t revolutions_ = 0;
+  std::uint64_t opened_ = 0;
   boost::shared_ptr<CloudXYZIRT> close();
 };
 

@@ -49,35 +49,108 @@ const char* const kFeatureNames[kNumObjectFeatures] = {"points",
                                                        "intensity_q90",
                                                        "intensity_max"};
 
-// Intensity buckets of the quantile selection, monotone in the value: below 0, one per unit of
-// [0, 256) (an HDL-64E reports integer intensities, so a bucket usually holds one value), 256
-// and above.
-constexpr int kIntensityBuckets = 258;
-inline int intensityBucket(float v) {
-  return v < 0.0f ? 0 : v >= 256.0f ? kIntensityBuckets - 1 : 1 + static_cast<int>(v);
-}
+// Buckets of the rank selection: linear in the value between the smallest and the largest
+// (so monotone: every value of a bucket lies below every value of a later one), computed in
+// double so that neither a tiny nor a huge spread can overflow. Objects with fewer values
+// than kDirectSelect select directly.
+constexpr int kRankBuckets = 256;
+constexpr std::size_t kDirectSelect = 64;
 
 }  // namespace
 
 void selectRanks(const std::vector<float>& values, const std::size_t* ranks, int count, float* out,
                  std::vector<float>* scratch) {
-  std::uint32_t start[kIntensityBuckets + 1] = {};
-  for (const float v : values) ++start[intensityBucket(v) + 1];
-  for (int b = 1; b <= kIntensityBuckets; ++b) start[b] += start[b - 1];
+  const std::size_t n = values.size();
+  if (count <= 0 || n == 0) return;
+  if (n < kDirectSelect) {
+    // Few values: one copy, then each rank selected among the values above the previous one
+    // (nth_element leaves every value past the k-th not below it).
+    scratch->assign(values.begin(), values.end());
+    std::size_t from = 0;
+    for (int r = 0; r < count; ++r) {
+      const std::size_t k = ranks[r];
+      if (r > 0 && k == ranks[r - 1]) {
+        out[r] = out[r - 1];
+        continue;
+      }
+      const auto kth = scratch->begin() + static_cast<std::ptrdiff_t>(k);
+      std::nth_element(scratch->begin() + static_cast<std::ptrdiff_t>(from), kth, scratch->end());
+      out[r] = *kth;
+      from = k + 1;
+    }
+    return;
+  }
+  float lo = values[0], hi = values[0];
+  for (const float v : values) {
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  if (!(hi > lo)) {  // all equal
+    for (int r = 0; r < count; ++r) out[r] = lo;
+    return;
+  }
+  const double base = lo;
+  const double scale = kRankBuckets / (static_cast<double>(hi) - base);
+  auto bucketOf = [base, scale](float v) {
+    return std::min(kRankBuckets - 1, static_cast<int>((static_cast<double>(v) - base) * scale));
+  };
+  std::uint32_t start[kRankBuckets + 1] = {};
+  for (const float v : values) ++start[bucketOf(v) + 1];
+  for (int b = 1; b <= kRankBuckets; ++b) start[b] += start[b - 1];
+  // The buckets holding the ranks (ascending, at most `count` distinct ones), and one pass
+  // gathering their values into consecutive segments of scratch.
+  constexpr int kMaxTargets = 8;
+  int target[kMaxTargets];
+  std::size_t offset[kMaxTargets + 1];
+  int targets = 0;
   int b = 0;
+  for (int r = 0; r < count; ++r) {
+    while (start[b + 1] <= ranks[r]) ++b;
+    if (targets > 0 && target[targets - 1] == b) continue;
+    if (targets == kMaxTargets) break;  // more ranks than this: the rest below, bucket by bucket
+    target[targets++] = b;
+  }
+  offset[0] = 0;
+  for (int t = 0; t < targets; ++t)
+    offset[t + 1] = offset[t] + (start[target[t] + 1] - start[target[t]]);
+  scratch->resize(offset[targets]);
+  std::size_t fill[kMaxTargets];
+  for (int t = 0; t < targets; ++t) fill[t] = offset[t];
+  float* dst = scratch->data();
+  for (const float v : values) {
+    const int vb = bucketOf(v);
+    for (int t = 0; t < targets; ++t) {
+      if (vb == target[t]) {
+        dst[fill[t]++] = v;
+        break;
+      }
+    }
+  }
+  int t = 0;
+  std::vector<float> extra;  // only for more than kMaxTargets distinct buckets
   for (int r = 0; r < count; ++r) {
     const std::size_t k = ranks[r];
     if (r > 0 && k == ranks[r - 1]) {
       out[r] = out[r - 1];
       continue;
     }
-    while (start[b + 1] <= k) ++b;  // the bucket holding rank k (ranks ascending)
-    scratch->clear();
-    for (const float v : values) {
-      if (intensityBucket(v) == b) scratch->push_back(v);
+    while (t < targets && start[target[t] + 1] <= k) ++t;
+    if (t < targets && start[target[t]] <= k) {
+      const auto first = scratch->begin() + static_cast<std::ptrdiff_t>(offset[t]);
+      const auto last = scratch->begin() + static_cast<std::ptrdiff_t>(offset[t + 1]);
+      const auto kth = first + static_cast<std::ptrdiff_t>(k - start[target[t]]);
+      std::nth_element(first, kth, last);
+      out[r] = *kth;
+      continue;
     }
-    const auto kth = scratch->begin() + static_cast<std::ptrdiff_t>(k - start[b]);
-    std::nth_element(scratch->begin(), kth, scratch->end());
+    int kb = 0;
+    while (start[kb + 1] <= k) ++kb;
+    extra.clear();
+    for (const float v : values) {
+      if (bucketOf(v) == kb) extra.push_back(v);
+    }
+    const auto kth = extra.begin() + static_cast<std::ptrdiff_t>(k - start[kb]);
+    std::nth_element(extra.begin(), kth, extra.end());
     out[r] = *kth;
   }
 }

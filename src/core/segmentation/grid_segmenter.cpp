@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #if defined(__SSE2__)
@@ -86,10 +87,11 @@ void GridSegmenter::setParams(const GridSegmenterParams& params) {
       params.cell_size_m != params_.cell_size_m || params.max_range_m != params_.max_range_m;
   params_ = params;
   hough_.setParams(params.hough);
+  streaming_ = false;  // points binned with the old heights: the next cloud is binned afresh
   if (geometry_changed) *this = GridSegmenter(params);
 }
 
-void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels) {
+void GridSegmenter::resetScratch() {
   // Reset only what the previous frame touched (the grid has 100k+ cells, a frame ~10k).
   for (const std::int32_t c : grid_.occupiedCells()) {
     cell_class_[c] = SegmentClass::kUnknown;
@@ -99,10 +101,61 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   }
   for (std::size_t i = 0; i < touched_count_; ++i) ground_state_[touched_[i]] = kNoGround;
   touched_count_ = 0;
-  stats_ = SegmentationStats();
+}
 
-  grid_.build(cloud, static_cast<float>(params_.sensor_height_m),
-              static_cast<float>(params_.max_abs_height_m));
+void GridSegmenter::addPoints(std::uint32_t revolution, const PointXYZIRT* points,
+                              std::size_t count) {
+  // A batch starting before the previous batch started starts the revolution over: a partial
+  // revolution the decoder dropped (its seq is given again to the next one) or a stream that
+  // restarted. Batches start at packet boundaries, whose first firings keep the packets' order;
+  // within and across neighbouring packets point times may go back a little (packets stamped
+  // on receipt arrive in bursts), so the previous batch's last point is no reference.
+  const bool back_in_time = count > 0 && points[0].time < stream_batch_time_;
+  if (!streaming_ || revolution != stream_revolution_ || back_in_time) {
+    resetScratch();  // before the grid forgets the previous frame's cells
+    grid_.begin(static_cast<float>(params_.sensor_height_m),
+                static_cast<float>(params_.max_abs_height_m), grid_.appended());
+    streaming_ = true;
+    stream_revolution_ = revolution;
+    stream_checks_.clear();
+    stream_batch_time_ = -std::numeric_limits<float>::infinity();
+  }
+  if (count == 0) return;
+  stream_checks_.emplace_back(grid_.appended(), points[0]);
+  stream_checks_.emplace_back(grid_.appended() + count - 1, points[count - 1]);
+  stream_batch_time_ = points[0].time;
+  grid_.append(points, count);
+}
+
+bool GridSegmenter::streamMatches(const CloudXYZIRT& cloud) const {
+  if (!streaming_ || cloud.header.seq != stream_revolution_ || grid_.appended() > cloud.size()) {
+    return false;
+  }
+  auto same = [](const PointXYZIRT& a, const PointXYZIRT& b) {
+    return std::memcmp(&a.x, &b.x, 3 * sizeof(float)) == 0 &&
+           std::memcmp(&a.intensity, &b.intensity, sizeof(float)) == 0 && a.ring == b.ring &&
+           std::memcmp(&a.time, &b.time, sizeof(float)) == 0;
+  };
+  for (const auto& check : stream_checks_) {
+    if (!same(cloud.points[check.first], check.second)) return false;
+  }
+  return true;
+}
+
+void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels) {
+  last_used_stream_ = streamMatches(cloud);
+  if (last_used_stream_) {
+    // The scratch was reset when the stream began; only the points not added yet are left.
+    const std::size_t done = grid_.appended();
+    grid_.append(cloud.points.data() + done, cloud.size() - done);
+    grid_.finish();
+  } else {
+    resetScratch();
+    grid_.build(cloud, static_cast<float>(params_.sensor_height_m),
+                static_cast<float>(params_.max_abs_height_m));
+  }
+  streaming_ = false;
+  stats_ = SegmentationStats();
   stats_.cells_occupied = static_cast<std::uint32_t>(grid_.occupiedCells().size());
 
   const std::uint32_t min_pts =
@@ -824,10 +877,9 @@ void extractForeground(const CloudXYZIRT& cloud, const std::vector<SegmentClass>
   foreground->points.resize(shorts);
   LabeledPoint* out = foreground->points.data();
   std::size_t m = 0;
-  for (std::size_t i = 0; i < n && m < shorts; ++i) {
-    if (labels[i] != SegmentClass::kShort) continue;
+  auto take = [&](std::size_t i) {
     const PointXYZIRT& p = cloud[i];
-    if (!isFinitePoint(p)) continue;
+    if (!isFinitePoint(p)) return;
     LabeledPoint& q = out[m++];
     q.x = p.x;
     q.y = p.y;
@@ -836,6 +888,24 @@ void extractForeground(const CloudXYZIRT& cloud, const std::vector<SegmentClass>
     q.intensity = p.intensity;
     q.label = static_cast<std::uint32_t>(SegmentClass::kShort);
     q.index = static_cast<std::uint32_t>(i);
+  };
+  // The short points are a few percent of a sweep, in runs: 16 labels are compared at a time
+  // and only the set bits visited (same points in the same order as the plain loop, with one
+  // branch per 16 labels instead of one per label).
+  const std::uint8_t* lab = reinterpret_cast<const std::uint8_t*>(labels.data());
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  const __m128i short16 = _mm_set1_epi8(static_cast<char>(SegmentClass::kShort));
+  for (; i + 16 <= n; i += 16) {
+    const __m128i bytes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(lab + i));
+    for (unsigned bits = static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(bytes, short16)));
+         bits != 0; bits &= bits - 1) {
+      take(i + static_cast<std::size_t>(__builtin_ctz(bits)));
+    }
+  }
+#endif
+  for (; i < n; ++i) {
+    if (lab[i] == static_cast<std::uint8_t>(SegmentClass::kShort)) take(i);
   }
   foreground->points.resize(m);  // non-finite short points (not from segment()) dropped
   foreground->width = static_cast<std::uint32_t>(m);

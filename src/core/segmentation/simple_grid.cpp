@@ -134,10 +134,40 @@ std::int32_t SimpleGrid::cellAt(float x_m, float y_m) const {
 }
 
 void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs_height_m) {
+  begin(z_offset_m, max_abs_height_m, cloud.size());
+  append(cloud.points.data(), cloud.size());
+  finish();
+}
+
+void SimpleGrid::begin(float z_offset_m, float max_abs_height_m, std::size_t expected_points) {
   for (std::size_t s = 0; s < num_occupied_; ++s) slot_[occupied_[s]] = -1;
-  const std::size_t n = cloud.size();
-  point_slot_.resize(n);
-  point_z_.resize(n);
+  num_occupied_ = 0;
+  point_slot_.clear();
+  point_z_.clear();
+  point_slot_.reserve(expected_points);
+  point_z_.reserve(expected_points);
+  z_offset_m_ = z_offset_m;
+  max_abs_height_m_ = max_abs_height_m;
+  run_ = Run();
+}
+
+void SimpleGrid::finish() {
+  if (run_.cell != kNoCell) {
+    GridCell& cell = occupied_cells_[static_cast<std::size_t>(run_.slot)];
+    cell.count += run_.count;
+    cell.z_min = std::min(cell.z_min, run_.min);
+    cell.z_max = std::max(cell.z_max, run_.max);
+    cell.z_sum += run_.sum;
+  }
+  run_ = Run();
+}
+
+void SimpleGrid::append(const PointXYZIRT* points, std::size_t count) {
+  const std::size_t base = point_slot_.size();
+  const std::size_t n = count;
+  const float z_offset_m = z_offset_m_, max_abs_height_m = max_abs_height_m_;
+  point_slot_.resize(base + n);
+  point_z_.resize(base + n);
   // Two passes per chunk of points, so the chunk's cell indices stay in L1 between them:
   //  1. cell index and height of every point, without branches (SSE2, four points at a time,
   //     or AVX2, eight, when the CPU has it: the points are 32-byte records, read as 16-byte
@@ -159,15 +189,18 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
   chunk_cell_.resize(kChunk);
   std::int32_t* cc = chunk_cell_.data();
   std::int32_t* slot_of = slot_.data();
-  std::int32_t* ps = point_slot_.data();
-  float* pz = point_z_.data();
-  const PointXYZIRT* pts = cloud.points.data();
+  // Indices below are local to the appended points; a run open at the end of the previous
+  // append (or left open at this one's end) continues, so any split of a cloud into appends
+  // gives build()'s floats.
+  std::int32_t* ps = point_slot_.data() + base;
+  float* pz = point_z_.data() + base;
+  const PointXYZIRT* pts = points;
   std::int32_t* occ = occupied_.data();
   GridCell* occ_stats = occupied_cells_.data();
-  std::int32_t num_occ = 0;
-  std::int32_t run_cell = kNoCell, run_slot = -1;
-  std::uint32_t run_count = 0;
-  float run_min = 0.0f, run_max = 0.0f, run_sum = 0.0f;
+  std::int32_t num_occ = static_cast<std::int32_t>(num_occupied_);
+  std::int32_t run_cell = run_.cell, run_slot = run_.slot;
+  std::uint32_t run_count = run_.count;
+  float run_min = run_.min, run_max = run_.max, run_sum = run_.sum;
   auto flush = [&]() {
     if (run_cell == kNoCell) return;
     GridCell& cell = occ_stats[run_slot];
@@ -366,8 +399,8 @@ void SimpleGrid::build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs
     for (; pf < pf_end; pf += 64) _mm_prefetch(pf, _MM_HINT_T0);
 #endif
   }
-  flush();
   num_occupied_ = static_cast<std::size_t>(num_occ);
+  run_ = Run{run_cell, run_slot, run_count, run_min, run_max, run_sum};
 }
 
 }  // namespace core

@@ -50,9 +50,10 @@ struct ObjectFeatureParams {
 std::string validate(const ObjectFeatureParams& p);
 
 /// out[r] = the value of rank ranks[r] (0-based, ranks ascending and < values.size()) of the
-/// finite `values`, exactly the element a full sort puts there. Counts the values into unit
-/// buckets first and selects only inside the bucket holding a rank: near-linear for
-/// intensities, whatever their distribution. `scratch` is reused between calls.
+/// finite `values`, exactly the element a full sort puts there. Counts the values into 256
+/// buckets spanning [min, max] first and selects only inside the buckets holding a rank, which
+/// one pass gathers: near-linear for intensities, integer (HDL-64E packets) or in [0, 1]
+/// (KITTI files). `scratch` is reused between calls.
 void selectRanks(const std::vector<float>& values, const std::size_t* ranks, int count, float* out,
                  std::vector<float>* scratch);
 

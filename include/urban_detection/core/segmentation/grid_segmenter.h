@@ -52,6 +52,7 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "urban_detection/core/common/param_fields.h"
@@ -227,6 +228,20 @@ class GridSegmenter {
   /// out-of-range and absurd points get kUnknown. Accepts clouds whose ring/time are zero.
   void segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels);
 
+  /// Streaming: bins the next `count` points of the revolution whose cloud will carry
+  /// header.seq == `revolution` into the grid while the revolution arrives (the first call
+  /// with a new `revolution` starts it over), so that segment() of that cloud only bins the
+  /// points not added yet. segment() checks that the points added are the cloud's first ones
+  /// (same count bound, the first point of every batch and the last one bit for bit) and
+  /// bins the whole cloud afresh when they are not (a lost batch); its labels are those of
+  /// segment() without streaming in every case. A batch whose first point's `time` is below
+  /// the previous batch's first point's (batches begin at packets, in order) also starts over:
+  /// the decoder gives a dropped partial revolution's seq again to the next one.
+  void addPoints(std::uint32_t revolution, const PointXYZIRT* points, std::size_t count);
+  /// Whether the last segment() used the points added by addPoints() (false: it binned the
+  /// whole cloud, none were added or they did not match).
+  bool lastUsedStream() const { return last_used_stream_; }
+
   const SegmentationStats& stats() const { return stats_; }
   /// The grid of the last frame, and its per-cell classes (row-major, after Hough).
   const SimpleGrid& grid() const { return grid_; }
@@ -250,6 +265,10 @@ class GridSegmenter {
     std::int32_t row;
     std::int32_t hops;
   };
+  // Clears the per-cell scratch the previous frame set (idempotent).
+  void resetScratch();
+  // Whether the points added by addPoints() are the first points of `cloud`.
+  bool streamMatches(const CloudXYZIRT& cloud) const;
   void growGround();
   void fillTerrain();
   void classifyCells();
@@ -260,6 +279,13 @@ class GridSegmenter {
 
   GridSegmenterParams params_;
   SimpleGrid grid_;
+  // Streaming (addPoints): the revolution being binned, and per batch its first point's
+  // position and the point itself (checked against the cloud in segment()).
+  bool streaming_ = false;
+  std::uint32_t stream_revolution_ = 0;
+  std::vector<std::pair<std::size_t, PointXYZIRT>> stream_checks_;
+  float stream_batch_time_ = 0.0f;  // [s] time of the last batch's first point
+  bool last_used_stream_ = false;
   HoughWallRefiner hough_;
   SegmentationStats stats_;
   // Scratch, sized to the grid, reset only on the cells touched by the previous frame.

@@ -6,6 +6,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <new>
+#include <utility>
 #include <vector>
 
 #include "urban_detection/core/common/point_types.h"
@@ -39,6 +42,28 @@ class ConstArrayView {
   std::size_t size_;
 };
 
+/// An allocator whose resize() leaves new elements of trivial types uninitialised: the grid's
+/// per-point tables grow with every appended batch of points and are written whole right
+/// after, so zero-filling them first would be a wasted pass over a megabyte per revolution.
+template <typename T>
+struct DefaultInitAllocator : std::allocator<T> {
+  template <typename U>
+  struct rebind {
+    using other = DefaultInitAllocator<U>;
+  };
+  DefaultInitAllocator() = default;
+  template <typename U>
+  DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
+  template <typename U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
 /// Height statistics of one cell. Heights are referenced to the ground below the sensor
 /// (z + sensor height), as in the paper.
 struct GridCell {
@@ -68,10 +93,25 @@ class SimpleGrid {
 
   explicit SimpleGrid(const SimpleGridParams& params = SimpleGridParams());
 
+  /// Per-point tables (one entry per point of the cloud, in order).
+  template <typename T>
+  using PointTable = std::vector<T, DefaultInitAllocator<T>>;
+
   /// Assigns every point of `cloud` to its cell. `z_offset_m` [m] is added to each z (the
   /// sensor height, so heights become heights above the ground below the sensor).
   /// Points with |z + z_offset_m| > max_abs_height_m are treated as invalid.
   void build(const CloudXYZIRT& cloud, float z_offset_m, float max_abs_height_m = 100.0f);
+
+  /// The same in pieces, as a revolution arrives: begin() empties the grid, each append()
+  /// bins the next `count` points of the cloud (its points begin() + appended() on), and
+  /// finish() completes the statistics. begin(); append(...)...; finish() over any split of a
+  /// cloud gives exactly build() of the whole cloud (same slots, same floats): a run of
+  /// points in one cell may span two appends. `expected_points` only reserves memory.
+  void begin(float z_offset_m, float max_abs_height_m = 100.0f, std::size_t expected_points = 0);
+  void append(const PointXYZIRT* points, std::size_t count);
+  void finish();
+  /// Points binned since begin().
+  std::size_t appended() const { return point_slot_.size(); }
 
   const SimpleGridParams& params() const { return params_; }
   int rows() const { return side_; }  ///< cells along y
@@ -85,10 +125,10 @@ class SimpleGrid {
   }
   /// Per point of the last cloud: 1 + the slot (position in occupiedCells()) of its cell, or 0
   /// for a point without a cell.
-  const std::vector<std::int32_t>& pointSlots() const { return point_slot_; }
+  const PointTable<std::int32_t>& pointSlots() const { return point_slot_; }
   /// Height of point i above the ground below the sensor [m] (valid when pointCell != kNoCell).
   float pointHeight(std::size_t i) const { return point_z_[i]; }
-  const std::vector<float>& pointHeights() const { return point_z_; }
+  const PointTable<float>& pointHeights() const { return point_z_; }
 
   /// Statistics of a cell (all-default for an empty cell).
   const GridCell& cell(std::int32_t index) const {
@@ -149,8 +189,17 @@ class SimpleGrid {
   std::vector<std::int32_t> occupied_;    // per slot: cell index
   std::vector<GridCell> occupied_cells_;  // per slot: statistics
   std::size_t num_occupied_ = 0;
-  std::vector<std::int32_t> point_slot_;  // per point: 1 + slot, 0 = no cell
-  std::vector<float> point_z_;
+  PointTable<std::int32_t> point_slot_;  // per point: 1 + slot, 0 = no cell
+  PointTable<float> point_z_;
+  // Between begin() and finish(): the height offset and bound, and the run of points in one
+  // cell still open at the end of the last append() (its sums not yet in the cell's).
+  float z_offset_m_ = 0.0f, max_abs_height_m_ = 100.0f;
+  struct Run {
+    std::int32_t cell = kNoCell, slot = -1;
+    std::uint32_t count = 0;
+    float min = 0.0f, max = 0.0f, sum = 0.0f;
+  };
+  Run run_;
   std::vector<std::int32_t> chunk_cell_;  // scratch: cell indices of one chunk of points
   bool allow_avx2_ = true;
 };
