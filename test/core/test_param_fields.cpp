@@ -27,8 +27,8 @@ class FieldTable : public ::testing::Test {};
 using Structs =
     ::testing::Types<GridSegmenterParams, HoughWallRefinerParams, HierarchicalGridDetectorParams,
                      DistanceWeightParams, FarObjectMergerParams, KdTreeDetectorParams,
-                     ObjectFilterParams, ObjectClassifierParams, TrackerParams, CameraFusionParams,
-                     ImageLabelTransferParams>;
+                     ObjectClassifierParams, TrackerParams, CameraFusionParams,
+                     ImageLabelTransferParams, PipelineParams>;
 TYPED_TEST_SUITE(FieldTable, Structs);
 
 // Unique names, a description each, finite ordered ranges around the in-class default.
