@@ -95,8 +95,8 @@ TEST(Pipeline, ShippedClassifierGivesTheSameAsTheStages) {
   if (!std::filesystem::exists(model)) GTEST_SKIP() << "no shipped model at " << model;
   PipelineParams p;
   std::string error;
-  ASSERT_TRUE(loadPipelineConfigsYaml(
-      {std::string(UD_SOURCE_DIR) + "/config/classification.yaml"}, &p, &error))
+  ASSERT_TRUE(loadPipelineConfigsYaml({std::string(UD_SOURCE_DIR) + "/config/classification.yaml"},
+                                      &p, &error))
       << error;
   ASSERT_TRUE(p.classifier.enabled);
   Pipeline pipeline(p);

@@ -126,8 +126,8 @@ GridSegmenter& Pipeline::segmenter() {
 const PipelineResult& Pipeline::process(const CloudXYZIRT& cloud,
                                         const DetectionsObserver& observer) {
   // PCL stamps are microseconds.
-  return process(cloud, Eigen::Isometry3d::Identity(), 1e-6 * static_cast<double>(cloud.header.stamp),
-                 observer);
+  return process(cloud, Eigen::Isometry3d::Identity(),
+                 1e-6 * static_cast<double>(cloud.header.stamp), observer);
 }
 
 const PipelineResult& Pipeline::process(const CloudXYZIRT& cloud,

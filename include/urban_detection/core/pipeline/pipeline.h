@@ -81,12 +81,12 @@ struct StageTiming {
 
 /// Everything one revolution gives.
 struct PipelineResult {
-  std::vector<SegmentClass> labels;       // per input point (process() only)
-  LabeledCloud foreground;                // the detector's input (process() only)
-  std::vector<DetectedObject> objects;    // kept objects, classified, with fitted boxes
-  std::vector<DetectedObject> rejected;   // the classifier's non-objects
-  ObjectClassifierStats classification;   // the classifier's counts of this revolution
-  std::vector<StageTiming> timings;       // the stages that ran, in order
+  std::vector<SegmentClass> labels;            // per input point (process() only)
+  LabeledCloud foreground;                     // the detector's input (process() only)
+  std::vector<DetectedObject> objects;         // kept objects, classified, with fitted boxes
+  std::vector<DetectedObject> rejected;        // the classifier's non-objects
+  ObjectClassifierStats classification;        // the classifier's counts of this revolution
+  std::vector<StageTiming> timings;            // the stages that ran, in order
   const std::vector<Track>* tracks = nullptr;  // the tracker's tracks (params.tracking), else null
 
   /// The time of the stage `name` (0 when it did not run), and of all stages together [ms].
