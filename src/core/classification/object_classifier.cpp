@@ -439,9 +439,8 @@ ObjectClassifier::ObjectClassifier(const ObjectClassifierParams& params)
 ObjectClassifier::ObjectClassifier(const ObjectClassifierParams& params,
                                    ObjectClassifierModel model)
     : params_(params), model_(std::move(model)), extractor_(model_.featureParams()) {
-  if (!(params_.min_object_probability <= 1.0) || !std::isfinite(params_.min_object_probability)) {
-    throw std::invalid_argument("ObjectClassifier: min_object_probability must be in [0, 1]");
-  }
+  const std::string error = checkFieldRanges(params_);  // the table's ranges
+  if (!error.empty()) throw std::invalid_argument("ObjectClassifier: " + error);
   if (params_.enabled && !model_.trained()) {
     throw std::invalid_argument("ObjectClassifier: enabled without a trained model");
   }
@@ -454,13 +453,13 @@ double ObjectClassifier::threshold() const {
 
 void ObjectClassifier::setDecision(double min_object_probability, bool reject_non_objects,
                                    bool keep_uncertain) {
-  if (!std::isfinite(min_object_probability) || min_object_probability < -1.0 ||
-      min_object_probability > 1.0) {
-    throw std::invalid_argument("ObjectClassifier: min_object_probability must be in [-1, 1]");
-  }
-  params_.min_object_probability = min_object_probability;
-  params_.reject_non_objects = reject_non_objects;
-  params_.keep_uncertain = keep_uncertain;
+  ObjectClassifierParams p = params_;
+  p.min_object_probability = min_object_probability;
+  p.reject_non_objects = reject_non_objects;
+  p.keep_uncertain = keep_uncertain;
+  const std::string error = checkFieldRanges(p);  // the table's range, one wording
+  if (!error.empty()) throw std::invalid_argument("ObjectClassifier: " + error);
+  params_ = p;
 }
 
 ObjectClassifierStats ObjectClassifier::apply(const LabeledCloud& foreground,

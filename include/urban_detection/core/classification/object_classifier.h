@@ -151,7 +151,7 @@ struct ObjectClassifierParams {
   bool enabled = false;                  // [-] false: objects pass unclassified ("unknown"); the
                                          //     shipped config/classification.yaml turns it on
   std::string model_path;                // model file (urban_detection_train_classifier)
-  double min_object_probability = -1.0;  // [0..1] keep an object when P(object) >= this;
+  double min_object_probability = -1.0;  // [-1..1] keep an object when P(object) >= this;
                                          //   negative: the threshold stored in the model
   bool reject_non_objects = true;        // [-] false: non-objects stay in the output, labelled
                                          //     "non_object"
