@@ -28,7 +28,7 @@ using Structs =
     ::testing::Types<GridSegmenterParams, HoughWallRefinerParams, HierarchicalGridDetectorParams,
                      DistanceWeightParams, FarObjectMergerParams, KdTreeDetectorParams,
                      ObjectClassifierParams, TrackerParams, CameraFusionParams,
-                     ImageLabelTransferParams, PipelineParams>;
+                     ImageLabelTransferParams, PipelineParams, ObjectFeatureParams>;
 TYPED_TEST_SUITE(FieldTable, Structs);
 
 // Unique names, a description each, finite ordered ranges around the in-class default.
