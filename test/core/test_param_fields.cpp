@@ -28,7 +28,8 @@ using Structs =
     ::testing::Types<GridSegmenterParams, HoughWallRefinerParams, HierarchicalGridDetectorParams,
                      DistanceWeightParams, FarObjectMergerParams, KdTreeDetectorParams,
                      ObjectClassifierParams, TrackerParams, CameraFusionParams,
-                     ImageLabelTransferParams, PipelineParams, ObjectFeatureParams>;
+                     ImageLabelTransferParams, PipelineParams, ObjectFeatureParams,
+                     ClassifierTrainingParams>;
 TYPED_TEST_SUITE(FieldTable, Structs);
 
 // Unique names, a description each, finite ordered ranges around the in-class default.
