@@ -23,17 +23,13 @@ void DetectorNodelet::onInit() {
     loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     loadParam(getPrivateNodeHandle(), "thread_nice", &thread_nice_, 0, 19,
               "(nice value of the stage's thread, 0 = the manager's)");
-    detector_ = createDetector(getPrivateNodeHandle());
-    core::ObjectFilterParams filter_params;
-    loadFields(ros::NodeHandle(getPrivateNodeHandle(), "object_filter"), &filter_params);
-    filter_ = std::make_unique<core::ObjectFilter>(filter_params);
-    core::ObjectClassifierParams classifier_params;
+    std::unique_ptr<core::ObjectDetector> detector = createDetector(getPrivateNodeHandle());
+    core::PipelineParams params;  // the chain after the segmentation (its own nodelet)
+    params.detector = detector->name();
     ros_conv::loadObjectClassifierParams(ros::NodeHandle(getPrivateNodeHandle(), "classifier"),
-                                         &classifier_params);
-    classifier_ = std::make_unique<core::ObjectClassifier>(classifier_params);
-    core::BoxFittingParams box_params;
-    loadFields(ros::NodeHandle(getPrivateNodeHandle(), "box_fitting"), &box_params);
-    box_fitter_ = std::make_unique<core::BoxFitter>(box_params);
+                                         &params.classifier);
+    loadFields(ros::NodeHandle(getPrivateNodeHandle(), "box_fitting"), &params.box_fitting);
+    pipeline_ = std::make_unique<core::Pipeline>(params, std::move(detector));
   } catch (const std::exception& e) {
     refusal_ = ros_conv::RefusalDiagnostics::report(
         getNodeHandle(), getPrivateNodeHandle(), getName(),
@@ -41,16 +37,18 @@ void DetectorNodelet::onInit() {
     return;
   }
   startReconfigure(getPrivateNodeHandle());
-  if (classifier_->params().enabled) {
+  core::ObjectClassifier& classifier = pipeline_->classifier();
+  if (classifier.params().enabled) {
     const ros::NodeHandle classifier_nh(getPrivateNodeHandle(), "classifier");
     const ObjectClassifierConfig initial =
-        ros_conv::toConfig<ObjectClassifierConfig>(classifier_->params());
+        ros_conv::toConfig<ObjectClassifierConfig>(classifier.params());
     auto apply = [this, classifier_nh](const ObjectClassifierConfig& c) -> std::string {
-      const core::ObjectClassifierParams p = ros_conv::fromConfig(c, classifier_->params());
+      core::ObjectClassifier& classifier = pipeline_->classifier();
+      const core::ObjectClassifierParams p = ros_conv::fromConfig(c, classifier.params());
       const std::string error = checkFields(classifier_nh, p);
       if (!error.empty()) return error;
       std::lock_guard<std::mutex> lock(detector_mutex_);  // between two revolutions
-      classifier_->setDecision(p.min_object_probability, p.reject_non_objects, p.keep_uncertain);
+      classifier.setDecision(p.min_object_probability, p.reject_non_objects, p.keep_uncertain);
       return "";
     };
     classifier_reconfigure_ =
@@ -71,17 +69,17 @@ void DetectorNodelet::onInit() {
   objects_pub_ = lazy_->advertise<DetectedObjectArray>(nh, "objects", 2);
   points_pub_ = lazy_->advertise<LabeledCloud>(nh, "objects/points", 2);
   rejected_pub_ = lazy_->advertise<DetectedObjectArray>(nh, "objects/rejected", 2);
-  if (classifier_->params().enabled) {
+  if (classifier.params().enabled) {
     if (!thread_->niceError().empty()) {
       NODELET_WARN("%s: thread_nice %d not applied: %s", getName().c_str(), thread_nice_,
                    thread_->niceError().c_str());
     }
     NODELET_INFO("%s: %s detector ready, classifier %s (P(object) >= %.2f)", getName().c_str(),
-                 detector_->name().c_str(), classifier_->params().model_path.c_str(),
-                 classifier_->threshold());
+                 pipeline_->detector().name().c_str(), classifier.params().model_path.c_str(),
+                 classifier.threshold());
   } else {
     NODELET_INFO("%s: %s detector ready, classifier off", getName().c_str(),
-                 detector_->name().c_str());
+                 pipeline_->detector().name().c_str());
   }
 }
 
@@ -91,7 +89,7 @@ DetectorNodelet::~DetectorNodelet() {
 
 void DetectorNodelet::replaceDetector(std::unique_ptr<core::ObjectDetector> detector) {
   std::lock_guard<std::mutex> lock(detector_mutex_);
-  detector_ = std::move(detector);
+  pipeline_->setDetector(std::move(detector));
 }
 
 void DetectorNodelet::foregroundCb(const ros::MessageEvent<const LabeledCloud>& event) {
@@ -107,14 +105,9 @@ void DetectorNodelet::foregroundCb(const ros::MessageEvent<const LabeledCloud>& 
     return;
   }
   std::lock_guard<std::mutex> lock(detector_mutex_);  // one parameter set per revolution
-  detector_->detect(*foreground, &objects_);
-  const core::ObjectFilterStats filtered = filter_->apply(*foreground, &objects_);
-  diagnostics_->count("rejected objects (porous)", filtered.porous, false);
-  diagnostics_->count("rejected objects (bright hedge)", filtered.bright_hedge, false);
-  diagnostics_->count("rejected objects (uniform material)", filtered.uniform, false);
-  const core::ObjectClassifierStats classified =
-      classifier_->apply(*foreground, &objects_, &rejected_);
-  if (classifier_->params().enabled) {
+  const core::PipelineResult& result = pipeline_->detect(*foreground);
+  const core::ObjectClassifierStats& classified = result.classification;
+  if (pipeline_->classifier().params().enabled) {
     diagnostics_->count("rejected objects (classifier: non_object)", classified.rejected, false);
     for (int c = 1; c < core::kNumObjectCategories; ++c) {
       diagnostics_->count(
@@ -122,29 +115,28 @@ void DetectorNodelet::foregroundCb(const ros::MessageEvent<const LabeledCloud>& 
           classified.by_class[c], false);
     }
   }
-  box_fitter_->fit(*foreground, &objects_);
   std_msgs::Header header;
   pcl_conversions::fromPCL(foreground->header, header);
   if (objects_pub_.getNumSubscribers() > 0) {
     auto msg = boost::make_shared<DetectedObjectArray>();
-    ros_conv::toMsg(objects_, detector_->name(), header, msg.get());
+    ros_conv::toMsg(result.objects, pipeline_->detector().name(), header, msg.get());
     objects_pub_.publish(boost::shared_ptr<const DetectedObjectArray>(msg));
     diagnostics_->latency(header.stamp, ros::Time::now());
   }
   if (rejected_pub_.getNumSubscribers() > 0) {
     auto msg = boost::make_shared<DetectedObjectArray>();
-    ros_conv::toMsg(rejected_, detector_->name(), header, msg.get());
+    ros_conv::toMsg(result.rejected, pipeline_->detector().name(), header, msg.get());
     rejected_pub_.publish(boost::shared_ptr<const DetectedObjectArray>(msg));
   }
   if (points_pub_.getNumSubscribers() > 0) {
     auto points = boost::make_shared<LabeledCloud>();
-    ros_conv::buildObjectPoints(*foreground, objects_, points.get(), &id_of_index_);
+    ros_conv::buildObjectPoints(*foreground, result.objects, points.get(), &id_of_index_);
     points_pub_.publish(boost::shared_ptr<const LabeledCloud>(points));
   }
   diagnostics_->frame((ros::WallTime::now() - start).toSec());
   diagnostics_->output();
   NODELET_DEBUG_THROTTLE(5.0, "%s: %zu foreground points -> %zu objects", getName().c_str(),
-                         foreground->size(), objects_.size());
+                         foreground->size(), result.objects.size());
 }
 
 }  // namespace ros_conv

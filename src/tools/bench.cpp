@@ -12,9 +12,9 @@
 // packets is its "packet_decode" stage.
 //
 // "pipeline" = packet_decode (pcap input only) + segmentation (Hough refinement included) +
-// foreground_extraction + hierarchical_detection + object_filter (when enabled in the
-// config's object_filter section) + classification (features and forest, when the config's
-// classifier section enables it, as config/classification.yaml does), i.e. packets -> objects on a
+// foreground_extraction + hierarchical_detection + classification (features and forest, when
+// the config's classifier section enables it, as config/classification.yaml does) + box_fitting
+// (core::Pipeline::process(), stage by stage), i.e. packets -> objects on a
 // pcap (the simulated drive of scripts/run bench) and cloud -> objects on PCD / .bin sweeps (KITTI
 // raw comes as motion-compensated clouds, not packets); the JSON says which
 // (pipeline_includes_packet_decode). The pipeline's stages run back to back per revolution
@@ -45,11 +45,11 @@
 #include <vector>
 
 #include "urban_detection/core/classification/object_classifier.h"
-#include "urban_detection/core/classification/object_filter.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/segmentation/hough_wall_refiner.h"
 #include "urban_detection/core/sensor/calibration.h"
@@ -235,7 +235,7 @@ int main(int argc, char** argv) {
     }
   }
 
-  urban_detection::tools::PipelineParams params;
+  core::PipelineParams params;
   if (!urban_detection::tools::loadConfigs(configs, &params)) return 2;
 
   std::vector<std::unique_ptr<Source>> sources;
@@ -267,21 +267,20 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  std::unique_ptr<core::GridSegmenter> segmenter, segmenter_no_hough, segmenter_streamed;
-  std::unique_ptr<core::HierarchicalGridDetector> hier;
-  std::unique_ptr<core::KdTreeDetector> kdtree, kdtree_pcl_default;
-  std::unique_ptr<core::ObjectFilter> object_filter;
-  std::unique_ptr<core::ObjectClassifier> classifier;
+  // The pipeline (hierarchical grid), and beside it: the baseline's chain after the
+  // segmentation, PCL's default search, the segmenter without Hough.
+  std::unique_ptr<core::Pipeline> pipe, kd_pipe;
+  std::unique_ptr<core::GridSegmenter> segmenter_no_hough, segmenter_streamed;
+  std::unique_ptr<core::KdTreeDetector> kdtree_pcl_default;
   try {
-    object_filter.reset(new core::ObjectFilter(params.object_filter));
-    if (params.classifier.enabled) classifier.reset(new core::ObjectClassifier(params.classifier));
-    segmenter.reset(new core::GridSegmenter(params.segmentation));
+    params.detector = "hierarchical_grid";
+    pipe.reset(new core::Pipeline(params));
+    params.detector = "kdtree";
+    kd_pipe.reset(new core::Pipeline(params));
     segmenter_streamed.reset(new core::GridSegmenter(params.segmentation));
     core::GridSegmenterParams no_hough = params.segmentation;
     no_hough.hough.enabled = false;
     segmenter_no_hough.reset(new core::GridSegmenter(no_hough));
-    hier.reset(new core::HierarchicalGridDetector(params.hierarchical));
-    kdtree.reset(new core::KdTreeDetector(params.kdtree));
     if (!params.kdtree.sorted_search) {
       core::KdTreeDetectorParams sorted = params.kdtree;
       sorted.sorted_search = true;
@@ -291,16 +290,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: invalid parameters: %s\n", e.what());
     return 2;
   }
+  const bool classifier = params.classifier.enabled;
   core::HoughWallRefiner hough(params.segmentation.hough);
 
   std::map<std::string, std::vector<double>> stage, cpu_stage;  // wall and thread-CPU ms
   std::vector<double> pipeline, pipeline_cpu;
   double points_sum = 0, fg_sum = 0, hier_obj_sum = 0, kd_obj_sum = 0, rejected_sum = 0;
   CloudXYZIRT cloud;
-  std::vector<core::SegmentClass> labels, labels_no_hough, labels_streamed;
+  std::vector<core::SegmentClass> labels_no_hough, labels_streamed;
   std::uint32_t streamed_seq = 0;
-  urban_detection::LabeledCloud foreground;
-  std::vector<core::DetectedObject> objects;
+  std::vector<core::DetectedObject> pcl_default_objects;
   std::vector<core::SegmentClass> cells;
   urban_detection::DetectedObjectArray object_msg;
   visualization_msgs::MarkerArray markers;
@@ -335,29 +334,17 @@ int main(int argc, char** argv) {
         total += decode_ms;
         total_cpu += decode_cpu_ms;
       }
-      StageTimer seg_t;
-      segmenter->segment(cloud, &labels);
-      seg_t.stop("segmentation", &stage, &cpu_stage, &total, &total_cpu);
-
-      StageTimer fg_t;
-      core::extractForeground(cloud, labels, &foreground);
-      fg_t.stop("foreground_extraction", &stage, &cpu_stage, &total, &total_cpu);
-
-      StageTimer hier_t;
-      hier->detect(foreground, &objects);
-      hier_t.stop("hierarchical_detection", &stage, &cpu_stage, &total, &total_cpu);
-      if (params.object_filter.enabled) {
-        StageTimer filter_t;
-        const core::ObjectFilterStats fs = object_filter->apply(foreground, &objects);
-        filter_t.stop("object_filter", &stage, &cpu_stage, &total, &total_cpu);
-        rejected_sum += fs.vegetation;
+      const core::PipelineResult& r = pipe->process(cloud);
+      for (const core::StageTiming& t : r.timings) {
+        const std::string name =
+            std::string(t.name) == "detection" ? "hierarchical_detection" : t.name;
+        stage[name].push_back(t.wall_ms);
+        cpu_stage[name].push_back(t.cpu_ms);
       }
-      if (classifier) {
-        StageTimer class_t;
-        const core::ObjectClassifierStats cs = classifier->apply(foreground, &objects);
-        class_t.stop("classification", &stage, &cpu_stage, &total, &total_cpu);
-        rejected_sum += cs.rejected;
-      }
+      total += r.totalWallMs();
+      total_cpu += r.totalCpuMs();
+      rejected_sum += r.classification.rejected;
+      const std::vector<core::DetectedObject>& objects = r.objects;
       hier_obj_sum += objects.size();
       pipeline.push_back(total);
       pipeline_cpu.push_back(total_cpu);
@@ -372,7 +359,7 @@ int main(int argc, char** argv) {
       marker_t.stop("markers", &stage, &cpu_stage);
 
       points_sum += cloud.size();
-      fg_sum += foreground.size();
+      fg_sum += r.foreground.size();
       ++frames;
     });
     // Beside the pipeline, on the same revolutions: the baseline on the same foregrounds
@@ -381,16 +368,17 @@ int main(int argc, char** argv) {
     // passes them).
     forEachFrame([&](double, double) {
       if (run_kdtree) {
-        segmenter->segment(cloud, &labels);
-        core::extractForeground(cloud, labels, &foreground);
-        StageTimer kd_t;
-        kdtree->detect(foreground, &objects);
-        kd_t.stop("kdtree_detection", &stage, &cpu_stage);
-        object_filter->apply(foreground, &objects);  // same output as the kd-tree nodelet
-        kd_obj_sum += objects.size();
+        const urban_detection::LabeledCloud& foreground = pipe->process(cloud).foreground;
+        const core::PipelineResult& kd = kd_pipe->detect(foreground);  // as the kd-tree nodelet
+        for (const core::StageTiming& t : kd.timings) {
+          if (std::string(t.name) != "detection") continue;
+          stage["kdtree_detection"].push_back(t.wall_ms);
+          cpu_stage["kdtree_detection"].push_back(t.cpu_ms);
+        }
+        kd_obj_sum += kd.objects.size();
         if (kdtree_pcl_default) {
           StageTimer kd_default_t;
-          kdtree_pcl_default->detect(foreground, &objects);
+          kdtree_pcl_default->detect(foreground, &pcl_default_objects);
           kd_default_t.stop("kdtree_detection_pcl_default", &stage, &cpu_stage);
         }
       }
@@ -450,13 +438,20 @@ int main(int argc, char** argv) {
           ? median(stage["kdtree_detection_pcl_default"]) / median(stage["hierarchical_detection"])
           : std::nan("");
 
-  const char* order[] = {"packet_decode",           "segmentation",
-                         "sweep_binning",           "segmentation_at_cut",
-                         "hough_refinement",        "foreground_extraction",
-                         "hierarchical_detection",  "object_filter",
-                         "classification",          "markers",
-                         "box_fitting_100_objects", "tracker_100_objects",
-                         "kdtree_detection",        "kdtree_detection_pcl_default"};
+  const char* order[] = {"packet_decode",
+                         "segmentation",
+                         "sweep_binning",
+                         "segmentation_at_cut",
+                         "hough_refinement",
+                         "foreground_extraction",
+                         "hierarchical_detection",
+                         "classification",
+                         "box_fitting",
+                         "markers",
+                         "box_fitting_100_objects",
+                         "tracker_100_objects",
+                         "kdtree_detection",
+                         "kdtree_detection_pcl_default"};
   std::printf("%s: %zu revolutions (%ld pass%s over", label.c_str(), frames, repeat,
               repeat > 1 ? "es" : "");
   for (const auto& s : sources) std::printf(" [%s]", s->describe().c_str());
@@ -487,11 +482,8 @@ int main(int argc, char** argv) {
   std::printf("  %-28s %10.3f %10.3f %14.3f  (%s-> hierarchical objects)\n", "pipeline",
               pipeline_median, percentile(pipeline, 0.95), median(pipeline_cpu),
               any_packets ? "packets " : "cloud ");
-  std::printf(
-      "  object_filter %s, classifier %s: %.1f hierarchical objects rejected per "
-      "revolution\n",
-      params.object_filter.enabled ? "on" : "off", classifier ? "on" : "off",
-      rejected_sum / frames);
+  std::printf("  classifier %s: %.1f hierarchical objects rejected per revolution\n",
+              classifier ? "on" : "off", rejected_sum / frames);
   char speedup_text[64] = "not measured (--no-kdtree)";
   if (run_kdtree) std::snprintf(speedup_text, sizeof(speedup_text), "%.1fx", speedup);
   if (std::isfinite(speedup_pcl_default)) {
@@ -517,7 +509,6 @@ int main(int argc, char** argv) {
         << ",\n  \"mean_objects_hierarchical\": " << jsonNumber(hier_obj_sum / frames)
         << ",\n  \"mean_objects_kdtree\": "
         << jsonNumber(run_kdtree ? kd_obj_sum / frames : std::nan(""))
-        << ",\n  \"object_filter\": " << (params.object_filter.enabled ? "true" : "false")
         << ",\n  \"mean_rejected_objects_hierarchical\": " << jsonNumber(rejected_sum / frames)
         << ",\n  \"pipeline_includes_packet_decode\": " << (any_packets ? "true" : "false")
         << ",\n  \"stages\": {";

@@ -23,16 +23,14 @@
 #include <string>
 #include <vector>
 
-#include "urban_detection/core/classification/object_classifier.h"
-#include "urban_detection/core/classification/object_filter.h"
+#include "urban_detection/core/classification/object_features.h"
 #include "urban_detection/core/common/object_class.h"
-#include "urban_detection/core/detection/box_fitting.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/evaluation/evaluation.h"
 #include "urban_detection/core/params/params_yaml.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/sensor/kitti_io.h"
 
 #include <Eigen/Core>
@@ -465,7 +463,7 @@ void usage() {
       "                             [--cut-angle DEG])\n"
       "         [--detector hierarchical|kdtree|both] [--config FILE]... [--json FILE]\n"
       "         [--max-frames N] [--min-points N] [--details]\n"
-      "         [--object-filter on|off] [--features CSV] [--classifier MODEL|off]\n"
+      "         [--features CSV] [--classifier MODEL|off]\n"
       "         [--detections DIR]\n"
       "  --sim GTFILE    ground-truth file of urban_detection_simulate (--gt), with the pcap it\n"
       "                  wrote (--pcap); --calibration is the one the drive was simulated with\n"
@@ -474,10 +472,8 @@ void usage() {
       "                  keys), or a combined file with `segmentation:` / `detection:` maps;\n"
       "                  later files override earlier ones. Without it the in-class defaults\n"
       "                  (mirrored by config/*.yaml) are used.\n"
-      "  --object-filter on|off  the vegetation rejection stage after the detector (default:\n"
-      "                  object_filter/enabled of the config, else off)\n"
       "  --features CSV  write the object classifier's features of every detection (before the\n"
-      "                  object filter and the classifier) with its verdict and content\n"
+      "                  classifier) with its verdict and content\n"
       "  --classifier MODEL|off  the object classifier after the detector (default: classifier/\n"
       "                  of the config, e.g. config/classification.yaml's shipped model; else "
       "off)\n"
@@ -511,7 +507,7 @@ int main(int argc, char** argv) {
   long max_frames = -1;
   long min_points = 30;
   bool details = false;
-  std::string png_dir, features_path, filter_arg, classifier_arg, detections_dir;
+  std::string png_dir, features_path, classifier_arg, detections_dir;
   PngView png_view;
   bool tracking = false;
   std::string kitti_tracking_dir, tracker_config;
@@ -548,8 +544,6 @@ int main(int argc, char** argv) {
       min_points = arg.count("--min-points");
     else if (a == "--details")
       details = true;
-    else if (a == "--object-filter")
-      filter_arg = arg.value("--object-filter");
     else if (a == "--features")
       features_path = arg.value("--features");
     else if (a == "--classifier")
@@ -601,21 +595,8 @@ int main(int argc, char** argv) {
   }
 
   // Parameters: in-class defaults, then each --config file in order.
-  urban_detection::tools::PipelineParams params;
+  core::PipelineParams params;
   if (!urban_detection::tools::loadConfigs(configs, &params)) return 2;
-  if (filter_arg == "on" || filter_arg == "off") {
-    params.object_filter.enabled = filter_arg == "on";
-  } else if (!filter_arg.empty()) {
-    std::fprintf(stderr, "error: --object-filter must be on or off\n");
-    return 2;
-  }
-  std::unique_ptr<core::ObjectFilter> object_filter;
-  try {
-    object_filter.reset(new core::ObjectFilter(params.object_filter));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: invalid object filter parameters: %s\n", e.what());
-    return 2;
-  }
   std::FILE* features_out = nullptr;
   core::ObjectFeatureParams feature_params;
   feature_params.sensor_height_m = params.segmentation.sensor_height_m;
@@ -648,61 +629,45 @@ int main(int argc, char** argv) {
     }
     params.classifier.enabled = false;
   }
-  std::unique_ptr<core::ObjectClassifier> classifier;
-  if (params.classifier.enabled) {
-    try {
-      classifier.reset(new core::ObjectClassifier(params.classifier));
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "error: %s\n", e.what());
-      return 2;
-    }
-  }
+  const bool classifier = params.classifier.enabled;
 
-  std::unique_ptr<core::BoxFitter> box_fitter;  // whole-object boxes after the classifier
-  try {
-    box_fitter.reset(new core::BoxFitter(params.box_fitting));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
-  }
-
-  std::vector<std::unique_ptr<core::ObjectDetector>> detectors;
+  // One pipeline per detector (the first one's segmentation serves all).
+  std::vector<std::unique_ptr<core::Pipeline>> pipelines;
   ExternalDetections* external = nullptr;
   try {
+    auto add = [&](std::unique_ptr<core::ObjectDetector> detector) {
+      params.detector = detector->name();
+      pipelines.emplace_back(new core::Pipeline(params, std::move(detector)));
+    };
     if (!detections_dir.empty()) {
       if (!fs::is_directory(detections_dir)) {
         std::fprintf(stderr, "error: --detections %s is not a directory\n", detections_dir.c_str());
         return 1;
       }
       external = new ExternalDetections(detections_dir);
-      detectors.emplace_back(external);
+      add(std::unique_ptr<core::ObjectDetector>(external));
     } else if (detector_arg == "hierarchical" || detector_arg == "both") {
-      detectors.emplace_back(new core::HierarchicalGridDetector(params.hierarchical));
+      add(std::make_unique<core::HierarchicalGridDetector>(params.hierarchical_grid));
     }
     if (detector_arg == "kdtree" || detector_arg == "both") {
-      detectors.emplace_back(new core::KdTreeDetector(params.kdtree));
+      add(std::make_unique<core::KdTreeDetector>(params.kdtree));
     }
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: invalid detector parameters: %s\n", e.what());
+    std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
   }
-  if (detectors.empty()) {
+  if (pipelines.empty()) {
     std::fprintf(stderr, "error: --detector must be hierarchical, kdtree or both\n");
     return 2;
   }
-  core::GridSegmenter segmenter(params.segmentation);
   if (tracking || !kitti_tracking_dir.empty()) {
     urban_detection::tools::TrackingPipeline tp;
-    tp.segmenter = &segmenter;
-    tp.detector = detectors[0].get();
-    tp.object_filter = object_filter.get();
-    tp.classifier = classifier.get();
-    tp.box_fitter = box_fitter.get();
+    tp.params = pipelines[0]->params();
     tp.min_gt_points = static_cast<std::size_t>(min_points);
     if (max_frames >= 0) tp.max_frames = static_cast<std::size_t>(max_frames);
     std::string tracker_error;
     if (!tracker_config.empty() &&
-        !core::loadTrackerParamsYaml(tracker_config, &tp.tracker, &tracker_error)) {
+        !core::loadTrackerParamsYaml(tracker_config, &tp.params.tracker, &tracker_error)) {
       std::fprintf(stderr, "error: %s\n", tracker_error.c_str());
       return 2;
     }
@@ -758,27 +723,23 @@ int main(int argc, char** argv) {
   all_objects.min_points = 1;
   // Per detector: the score under --min-points, the all-objects score (N = 1), and both of
   // the detector's own output before the classifier; where recall goes, before and after.
-  std::vector<core::DetectionEvaluator> evaluators(detectors.size(),
+  std::vector<core::DetectionEvaluator> evaluators(pipelines.size(),
                                                    core::DetectionEvaluator(eval_params));
-  std::vector<core::DetectionEvaluator> evaluators_all(detectors.size(),
+  std::vector<core::DetectionEvaluator> evaluators_all(pipelines.size(),
                                                        core::DetectionEvaluator(all_objects));
-  std::vector<core::DetectionEvaluator> before_classifier(detectors.size(),
+  std::vector<core::DetectionEvaluator> before_classifier(pipelines.size(),
                                                           core::DetectionEvaluator(eval_params));
   std::vector<core::DetectionEvaluator> before_classifier_all(
-      detectors.size(), core::DetectionEvaluator(all_objects));
-  std::vector<core::RecallBreakdown> breakdown(detectors.size()),
-      breakdown_before(detectors.size());
+      pipelines.size(), core::DetectionEvaluator(all_objects));
+  std::vector<core::RecallBreakdown> breakdown(pipelines.size()),
+      breakdown_before(pipelines.size());
   std::vector<float> gt_range;
-  std::vector<Diagnostics> diags(detectors.size());
-  std::vector<core::DetectionEvaluator> unfiltered(detectors.size(),
-                                                   core::DetectionEvaluator(eval_params));
-  std::vector<std::map<std::string, std::size_t>> rejected_by_content(detectors.size());
-  std::vector<core::DetectedObject> rejected;
-  std::vector<std::map<std::string, std::size_t>> classified_out(detectors.size());
+  std::vector<Diagnostics> diags(pipelines.size());
+  std::vector<std::map<std::string, std::size_t>> classified_out(pipelines.size());
   // Per detector: scores per sequence (SemanticKITTI) and, of the matched detections, the
   // class given against the ground truth's ("vehicle->vehicle", ...).
-  std::vector<std::map<std::string, core::DetectionScore>> by_group(detectors.size());
-  std::vector<std::map<std::string, std::size_t>> class_pairs(detectors.size());
+  std::vector<std::map<std::string, core::DetectionScore>> by_group(pipelines.size());
+  std::vector<std::map<std::string, std::size_t>> class_pairs(pipelines.size());
   std::map<std::string, std::size_t> fg_composition;  // foreground points by dataset class
   std::unique_ptr<urban_detection::tools::KittiBoxQuality> box_quality;  // first detector's
   if (!kitti_dir.empty())
@@ -787,9 +748,6 @@ int main(int argc, char** argv) {
   bool first_row = true;
   std::size_t failed = 0, frames = 0;
   Frame f;
-  std::vector<core::SegmentClass> seg;
-  urban_detection::LabeledCloud foreground;
-  std::vector<core::DetectedObject> objects;
   core::FrameMatch match;
   if (details) std::printf("per-object details (missed GT objects, false detections):\n");
   std::size_t trained_on = 0;  // scored scans of sequences the classifier was trained on
@@ -809,12 +767,34 @@ int main(int argc, char** argv) {
       continue;
     }
     if (classifier && !skitti_dir.empty()) {  // a scan of a sequence the model learned from?
-      const auto& seqs = classifier->model().trainingGroups();
+      const auto& seqs = pipelines[0]->classifier().model().trainingGroups();
       trained_on +=
           std::find(seqs.begin(), seqs.end(), f.id.substr(0, f.id.find('/'))) != seqs.end();
     }
-    segmenter.segment(f.cloud, &seg);
-    core::extractForeground(f.cloud, seg, &foreground);
+    gt_range = core::gtObjectRanges(f.gt, f.cloud);
+    // The detector alone (pipeline k): scored before the classifier changes the objects.
+    auto detectorAlone = [&](std::size_t k, const urban_detection::LabeledCloud& fg,
+                             const std::vector<core::DetectedObject>& objects) {
+      before_classifier[k].evaluate(f.gt, objects, &match);
+      breakdown_before[k].addFrame(f.gt, match, objects, gt_range, eval_params.min_points);
+      before_classifier_all[k].evaluate(f.gt, objects, nullptr);
+      if (!features_out) return;
+      feature_extractor.computeAll(fg, objects, &feature_rows);
+      for (std::size_t d = 0; d < objects.size(); ++d) {
+        std::fprintf(features_out, "%s,%s,%s,%s,%s", dataset->name().c_str(), f.id.c_str(),
+                     pipelines[k]->detector().name().c_str(), core::toString(match.verdict[d]),
+                     detectionContent(f, *dataset, objects[d]).c_str());
+        for (const float v : feature_rows[d]) std::fprintf(features_out, ",%.6g", v);
+        std::fprintf(features_out, "\n");
+      }
+    };
+    // The first pipeline runs the whole chain; the others take its foreground.
+    const core::PipelineResult& first = pipelines[0]->process(
+        f.cloud,
+        [&](const urban_detection::LabeledCloud& fg,
+            const std::vector<core::DetectedObject>& objects) { detectorAlone(0, fg, objects); });
+    const std::vector<core::SegmentClass>& seg = first.labels;
+    const urban_detection::LabeledCloud& foreground = first.foreground;
     // What the foreground is made of (dataset classes): shows walls or vegetation leaking in.
     for (const auto& p : foreground) {
       if (p.index >= f.point_class.size()) continue;
@@ -822,33 +802,17 @@ int main(int argc, char** argv) {
       ++fg_composition[g >= 0 ? "gt_object:" + f.gt.objects[g].label
                               : dataset->className(f.point_class[p.index])];
     }
-    gt_range = core::gtObjectRanges(f.gt, f.cloud);
-    for (std::size_t k = 0; k < detectors.size(); ++k) {
-      detectors[k]->detect(foreground, &objects);
-      // The detector alone: scored before the filter and the classifier change `objects`.
-      before_classifier[k].evaluate(f.gt, objects, &match);
-      breakdown_before[k].addFrame(f.gt, match, objects, gt_range, eval_params.min_points);
-      before_classifier_all[k].evaluate(f.gt, objects, nullptr);
-      if (features_out) {
-        unfiltered[k].evaluate(f.gt, objects, &match);
-        feature_extractor.computeAll(foreground, objects, &feature_rows);
-        for (std::size_t d = 0; d < objects.size(); ++d) {
-          std::fprintf(features_out, "%s,%s,%s,%s,%s", dataset->name().c_str(), f.id.c_str(),
-                       detectors[k]->name().c_str(), core::toString(match.verdict[d]),
-                       detectionContent(f, *dataset, objects[d]).c_str());
-          for (const float v : feature_rows[d]) std::fprintf(features_out, ",%.6g", v);
-          std::fprintf(features_out, "\n");
-        }
-      }
-      object_filter->apply(foreground, &objects, &rejected);
-      for (const auto& o : rejected) ++rejected_by_content[k][detectionContent(f, *dataset, o)];
-      if (classifier) {
-        classifier->apply(foreground, &objects, &rejected);
-        for (const auto& o : rejected) {
-          ++classified_out[k][detectionContent(f, *dataset, o)];
-        }
-      }
-      box_fitter->fit(foreground, &objects);
+    for (std::size_t k = 0; k < pipelines.size(); ++k) {
+      const core::PipelineResult& r =
+          k == 0 ? first
+                 : pipelines[k]->detect(foreground,
+                                        [&](const urban_detection::LabeledCloud& fg,
+                                            const std::vector<core::DetectedObject>& objects) {
+                                          detectorAlone(k, fg, objects);
+                                        });
+      const std::vector<core::DetectedObject>& objects = r.objects;
+      const std::vector<core::DetectedObject>& rejected = r.rejected;
+      for (const auto& o : rejected) ++classified_out[k][detectionContent(f, *dataset, o)];
       evaluators_all[k].evaluate(f.gt, objects, nullptr);
       evaluators[k].evaluate(f.gt, objects, &match);
       breakdown[k].addFrame(f.gt, match, objects, gt_range, eval_params.min_points);
@@ -861,9 +825,8 @@ int main(int argc, char** argv) {
         ++class_pairs[k][std::string(core::toString(truth)) + "->" +
                          core::toString(objects[d].category)];
       }
-      if (!classifier) rejected.clear();
-      diagnose(f, *dataset, seg, objects, match, rejected, detectors[k]->name(), &diags[k],
-               details ? stdout : nullptr);
+      diagnose(f, *dataset, seg, objects, match, rejected, pipelines[k]->detector().name(),
+               &diags[k], details ? stdout : nullptr);
       if (!png_dir.empty() && k == 0) {
         std::string id = f.id;
         std::replace(id.begin(), id.end(), '/', '_');
@@ -871,8 +834,8 @@ int main(int argc, char** argv) {
                       match, png_view);
       }
       rows << (first_row ? "" : ",\n") << "    {\"frame\": \"" << jsonEscape(f.id)
-           << "\", \"detector\": \"" << detectors[k]->name() << "\", " << scoreJson(match.score)
-           << "}";
+           << "\", \"detector\": \"" << pipelines[k]->detector().name() << "\", "
+           << scoreJson(match.score) << "}";
       first_row = false;
     }
   }
@@ -890,7 +853,7 @@ int main(int argc, char** argv) {
       min_points, min_points);
   std::printf("%-15s %-18s %-11s %6s %5s %5s %5s %5s %9s %7s %7s\n", "dataset", "detector",
               "classifier", "frames", "NO", "MO", "FO", "ign", "precision", "recall", "F-rate");
-  for (std::size_t k = 0; k < detectors.size(); ++k) {
+  for (std::size_t k = 0; k < pipelines.size(); ++k) {
     const std::pair<const char*, const core::DetectionEvaluator*> rows_k[] = {
         {classifier ? "on" : "off", &evaluators[k]},
         {classifier ? "on, N=1" : "off, N=1", &evaluators_all[k]},
@@ -899,26 +862,27 @@ int main(int argc, char** argv) {
     for (int r = 0; r < (classifier ? 4 : 2); ++r) {
       const core::DetectionScore& t = rows_k[r].second->total();
       std::printf("%-15s %-18s %-11s %6zu %5zu %5zu %5zu %5zu %9.3f %7.3f %7.3f\n",
-                  dataset->name().c_str(), detectors[k]->name().c_str(), rows_k[r].first,
+                  dataset->name().c_str(), pipelines[k]->detector().name().c_str(), rows_k[r].first,
                   frames - failed, t.no, t.mo, t.fo, t.ignored, t.precision(), t.recall(),
                   t.fRate());
     }
   }
-  for (std::size_t k = 0; k < detectors.size(); ++k) {
-    std::printf("\n%s, classifier %s:\n%s", detectors[k]->name().c_str(), classifier ? "on" : "off",
-                breakdown[k].table("  ").c_str());
+  for (std::size_t k = 0; k < pipelines.size(); ++k) {
+    std::printf("\n%s, classifier %s:\n%s", pipelines[k]->detector().name().c_str(),
+                classifier ? "on" : "off", breakdown[k].table("  ").c_str());
     if (classifier) {
-      std::printf("%s, classifier off (the detector alone):\n%s", detectors[k]->name().c_str(),
-                  breakdown_before[k].table("  ").c_str());
+      std::printf("%s, classifier off (the detector alone):\n%s",
+                  pipelines[k]->detector().name().c_str(), breakdown_before[k].table("  ").c_str());
     }
   }
   std::printf("\n");
-  for (std::size_t k = 0; k < detectors.size() && by_group[k].size() > 1; ++k) {
+  for (std::size_t k = 0; k < pipelines.size() && by_group[k].size() > 1; ++k) {
     for (const auto& g : by_group[k]) {
       const core::DetectionScore& t = g.second;
       std::printf("%-15s %-18s %6s %5zu %5zu %5zu %5zu %9.3f %7.3f %7.3f\n",
-                  (dataset->name() + ":" + g.first).c_str(), detectors[k]->name().c_str(), "", t.no,
-                  t.mo, t.fo, t.ignored, t.precision(), t.recall(), t.fRate());
+                  (dataset->name() + ":" + g.first).c_str(),
+                  pipelines[k]->detector().name().c_str(), "", t.no, t.mo, t.fo, t.ignored,
+                  t.precision(), t.recall(), t.fRate());
     }
   }
   if (box_quality) box_quality->print();
@@ -926,7 +890,8 @@ int main(int argc, char** argv) {
               classifier ? params.classifier.model_path.c_str() : "off (objects unclassified)");
   if (trained_on > 0) {
     std::string seqs;
-    for (const std::string& g : classifier->model().trainingGroups()) seqs += " " + g;
+    for (const std::string& g : pipelines[0]->classifier().model().trainingGroups())
+      seqs += " " + g;
     std::printf(
         "note: %zu of the %zu scans scored are of sequences the classifier was trained on "
         "(%s): the classifier-on figures are optimistic there; held-out figures: "
@@ -934,24 +899,22 @@ int main(int argc, char** argv) {
         trained_on, frames - failed, seqs.c_str() + 1);
   }
   std::printf("foreground points by class: %s\n", countsJson(fg_composition).c_str());
-  for (std::size_t k = 0; k < detectors.size(); ++k) {
+  for (std::size_t k = 0; k < pipelines.size(); ++k) {
     if (classifier) {
       std::printf(
           "%s: classifier rejected by content %s; matched objects' class "
           "(truth->given) %s\n",
-          detectors[k]->name().c_str(), countsJson(classified_out[k]).c_str(),
+          pipelines[k]->detector().name().c_str(), countsJson(classified_out[k]).c_str(),
           countsJson(class_pairs[k]).c_str());
     }
-    std::printf("%s: missed by cause %s; false by content %s\n", detectors[k]->name().c_str(),
-                countsJson(diags[k].missed_by_cause).c_str(),
-                countsJson(diags[k].false_by_class).c_str());
+    std::printf(
+        "%s: missed by cause %s; false by content %s\n", pipelines[k]->detector().name().c_str(),
+        countsJson(diags[k].missed_by_cause).c_str(), countsJson(diags[k].false_by_class).c_str());
     if (details) {
-      std::printf("%s: false parts of GT objects by kind %s\n", detectors[k]->name().c_str(),
+      std::printf("%s: false parts of GT objects by kind %s\n",
+                  pipelines[k]->detector().name().c_str(),
                   countsJson(diags[k].false_fragments).c_str());
     }
-    std::printf("%s: object filter %s, rejected by content %s\n", detectors[k]->name().c_str(),
-                params.object_filter.enabled ? "on" : "off",
-                countsJson(rejected_by_content[k]).c_str());
   }
 
   if (!json_path.empty()) {
@@ -971,14 +934,14 @@ int main(int argc, char** argv) {
       out << (c ? ", " : "") << "\"" << jsonEscape(configs[c]) << "\"";
     }
     out << "],\n  \"detectors\": [";
-    for (std::size_t k = 0; k < detectors.size(); ++k) {
-      out << (k ? ", " : "") << "\"" << detectors[k]->name() << "\"";
+    for (std::size_t k = 0; k < pipelines.size(); ++k) {
+      out << (k ? ", " : "") << "\"" << pipelines[k]->detector().name() << "\"";
     }
     out << "],\n  \"frames\": [\n" << rows.str() << "\n  ],\n";
     out << "  \"overall\": {" << scoreJson(evaluators[0].total()) << "},\n";
     out << "  \"by_detector\": {";
-    for (std::size_t k = 0; k < detectors.size(); ++k) {
-      out << (k ? ",\n" : "\n") << "    \"" << detectors[k]->name() << "\": {"
+    for (std::size_t k = 0; k < pipelines.size(); ++k) {
+      out << (k ? ",\n" : "\n") << "    \"" << pipelines[k]->detector().name() << "\": {"
           << scoreJson(evaluators[k].total()) << ", \"all_objects\": {"
           << scoreJson(evaluators_all[k].total()) << "}"
           << ", \"classifier_off\": {" << scoreJson(before_classifier[k].total()) << "}"
@@ -987,8 +950,6 @@ int main(int argc, char** argv) {
           << ", \"breakdown_classifier_off\": " << breakdown_before[k].json()
           << ", \"missed_by_cause\": " << countsJson(diags[k].missed_by_cause)
           << ", \"false_by_content\": " << countsJson(diags[k].false_by_class)
-          << ", \"object_filter\": " << (params.object_filter.enabled ? "true" : "false")
-          << ", \"rejected_by_content\": " << countsJson(rejected_by_content[k])
           << ", \"classifier_rejected_by_content\": " << countsJson(classified_out[k])
           << ", \"class_truth_to_given\": " << countsJson(class_pairs[k]) << ", \"by_sequence\": {";
       bool first_group = true;

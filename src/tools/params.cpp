@@ -51,10 +51,6 @@ int main(int argc, char** argv) {
   section<core::KdTreeDetectorParams>(
       "kd-tree detector (KdTreeDetector)",
       "`config/kdtree.yaml`, map `kdtree:`; nodelet parameters `~kdtree/<name>`; tunable.");
-  section<core::ObjectFilterParams>(
-      "Object filter (after either detector)",
-      "`config/classification.yaml`, map `object_filter:`; nodelet parameters "
-      "`~object_filter/<name>`.");
   section<core::ObjectClassifierParams>(
       "Object classifier (after either detector)",
       "`config/classification.yaml`, map `classifier:`; nodelet parameters `~classifier/<name>`; "

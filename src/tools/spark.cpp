@@ -45,9 +45,8 @@
 
 #include "tool_common.h"
 #include "urban_detection/core/classification/object_classifier.h"
-#include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/spark/camera_fusion.h"
 #include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/spark/kitti_spark_eval.h"
@@ -666,20 +665,19 @@ int runKitti(int argc, char** argv) {
       configs.push_back(path);
     }
   }
-  ud::tools::PipelineParams pp;
+  core::PipelineParams pp;
   if (!ud::tools::loadConfigs(configs, &pp)) return 2;
   if (!classifier_model.empty()) {
     pp.classifier.enabled = true;
     pp.classifier.model_path = classifier_model;
   }
-  std::unique_ptr<core::ObjectClassifier> classifier;
+  pp.detector = "hierarchical_grid";
+  std::unique_ptr<core::Pipeline> pipeline;
   try {
-    classifier = std::make_unique<core::ObjectClassifier>(pp.classifier);
+    pipeline = std::make_unique<core::Pipeline>(pp);
   } catch (const std::exception& e) {
-    fail(std::string("classifier: ") + e.what());
+    fail(std::string("pipeline: ") + e.what());
   }
-  core::GridSegmenter segmenter(pp.segmentation);
-  core::HierarchicalGridDetector detector(pp.hierarchical);
 
   const auto ids = core::listFiles(data + "/label_2", ".txt");
   if (ids.empty()) fail("no label_2/*.txt under " + data);
@@ -784,13 +782,10 @@ int runKitti(int argc, char** argv) {
     }
 
     // 2. Detections: LiDAR chain, then the fusion on the in-view ones.
-    std::vector<core::SegmentClass> seg;
-    ud::LabeledCloud foreground, object_points;
-    std::vector<core::DetectedObject> objects;
-    segmenter.segment(f.cloud, &seg);
-    core::extractForeground(f.cloud, seg, &foreground);
-    detector.detect(foreground, &objects);
-    classifier->apply(foreground, &objects);
+    const core::PipelineResult& lidar = pipeline->process(f.cloud);
+    const ud::LabeledCloud& foreground = lidar.foreground;
+    const std::vector<core::DetectedObject>& objects = lidar.objects;
+    ud::LabeledCloud object_points;
     std::unordered_map<std::uint32_t, std::uint32_t> scratch;
     ud::ros_conv::buildObjectPoints(foreground, objects, &object_points, &scratch);
     const auto t0 = Clock::now();

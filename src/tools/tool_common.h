@@ -69,31 +69,13 @@ struct OptionArgs {
   double number(const char* option) const { return optionNumber(argc, argv, i, option); }
 };
 
-/// Every parameter set of the pipeline, as the config files give them.
-struct PipelineParams {
-  core::GridSegmenterParams segmentation;
-  core::HierarchicalGridDetectorParams hierarchical;
-  core::KdTreeDetectorParams kdtree;
-  core::ObjectFilterParams object_filter;
-  core::ObjectClassifierParams classifier;
-  core::BoxFittingParams box_fitting;
-};
-
-/// Applies the pipeline config files in order over the in-class defaults of `params`. Prints
-/// the first error and returns false.
-inline bool loadConfigs(const std::vector<std::string>& paths, PipelineParams* params) {
-  for (const std::string& path : paths) {
-    std::string err;
-    if (!core::loadPipelineParamsYaml(path, &params->segmentation, &params->hierarchical,
-                                      &params->kdtree, &err) ||
-        !core::loadObjectFilterParamsYaml(path, &params->object_filter, &err) ||
-        !core::loadObjectClassifierParamsYaml(path, &params->classifier, &err) ||
-        !core::loadBoxFittingParamsYaml(path, &params->box_fitting, &err)) {
-      std::fprintf(stderr, "error: %s\n", err.c_str());
-      return false;
-    }
-  }
-  return true;
+/// Applies the pipeline config files in order over the values in `params`
+/// (core::loadPipelineConfigsYaml). Prints the first error and returns false.
+inline bool loadConfigs(const std::vector<std::string>& paths, core::PipelineParams* params) {
+  std::string err;
+  if (core::loadPipelineConfigsYaml(paths, params, &err)) return true;
+  std::fprintf(stderr, "error: %s\n", err.c_str());
+  return false;
 }
 
 /// Nearest-rank percentile (q in [0, 1]) of `v`; NaN when `v` is empty.

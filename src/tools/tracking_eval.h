@@ -1,5 +1,5 @@
-// Tracking evaluation of urban_detection_eval: the pipeline (segmentation, detector, object
-// filter, classifier, box fitting) followed by the Tracker, scored with CLEAR-MOT
+// Tracking evaluation of urban_detection_eval: the pipeline (segmentation, detector,
+// classifier, box fitting) followed by the Tracker, scored with CLEAR-MOT
 // (clear_mot.h). Not a tool itself (only src/tools/*.cpp are executables).
 //
 //   --tracking (with --sim GT --pcap PCAP): the simulated drive. The tracker gets each
@@ -52,13 +52,9 @@
 
 #include <Eigen/Geometry>
 
-#include "urban_detection/core/classification/object_classifier.h"
-#include "urban_detection/core/classification/object_filter.h"
 #include "urban_detection/core/common/object_class.h"
-#include "urban_detection/core/detection/box_fitting.h"
-#include "urban_detection/core/detection/object_detector.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/sensor/kitti_io.h"
 #include "urban_detection/core/tracking/clear_mot.h"
 #include "urban_detection/core/tracking/kitti_tracking.h"
@@ -71,41 +67,18 @@ namespace tools {
 
 namespace core = urban_detection::core;
 
-// The stages before the tracker, owned by eval's main().
+// The pipeline with its tracker (params.tracking is set by the runs below), and the scoring.
 struct TrackingPipeline {
-  core::GridSegmenter* segmenter = nullptr;
-  core::ObjectDetector* detector = nullptr;
-  core::ObjectFilter* object_filter = nullptr;
-  core::ObjectClassifier* classifier = nullptr;  // may be null (off)
-  core::BoxFitter* box_fitter = nullptr;         // may be null (points' own boxes)
-  core::TrackerParams tracker;
+  core::PipelineParams params;
   std::size_t min_gt_points = 10;
   std::size_t max_frames = static_cast<std::size_t>(-1);
 };
 
-class TrackingPipelineRunner {
- public:
-  explicit TrackingPipelineRunner(const TrackingPipeline& p) : p_(p) {}
-  // Objects of one revolution after every stage.
-  const std::vector<core::DetectedObject>& run(const CloudXYZIRT& cloud) {
-    p_.segmenter->segment(cloud, &seg_);
-    core::extractForeground(cloud, seg_, &foreground_);
-    p_.detector->detect(foreground_, &objects_);
-    p_.object_filter->apply(foreground_, &objects_, &rejected_);
-    if (p_.classifier) p_.classifier->apply(foreground_, &objects_, &rejected_);
-    if (p_.box_fitter) p_.box_fitter->fit(foreground_, &objects_);
-    return objects_;
-  }
-
- private:
-  TrackingPipeline p_;
-  std::vector<core::SegmentClass> seg_;
-  LabeledCloud foreground_;
-  std::vector<core::DetectedObject> objects_, rejected_;
-};
-
-inline double steadySeconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+// The pipeline of `p` with the tracker on.
+inline std::unique_ptr<core::Pipeline> trackingPipeline(const TrackingPipeline& p) {
+  core::PipelineParams params = p.params;
+  params.tracking = true;
+  return std::make_unique<core::Pipeline>(params);
 }
 
 inline void printMot(const char* what, const core::ClearMotResult& r) {
@@ -147,10 +120,11 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
   }
-  TrackingPipelineRunner pipeline(p);
-  core::Tracker tracker(p.tracker);
+  const std::unique_ptr<core::Pipeline> pipeline = trackingPipeline(p);
+  const core::Tracker& tracker = *pipeline->tracker();
   core::ClearMot mot, detections_mot, oracle_mot;
-  core::Tracker oracle(p.tracker);  // fed the GT boxes themselves: the tracker without the detector
+  core::Tracker oracle(
+      p.params.tracker);  // fed the GT boxes themselves: the tracker without the detector
   std::vector<core::DetectedObject> gt_boxes;
   CloudXYZIRT cloud;
   core::GroundTruthFrame gt;
@@ -201,10 +175,9 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
       continue;
     }
     ++frames;
-    const std::vector<core::DetectedObject>& objects = pipeline.run(cloud);
-    const double t0 = steadySeconds();
-    tracker.update(objects, gt.sensor_pose, gt.stamp_s);
-    update_ms.push_back(1e3 * (steadySeconds() - t0));
+    const core::PipelineResult& result = pipeline->process(cloud, gt.sensor_pose, gt.stamp_s);
+    const std::vector<core::DetectedObject>& objects = result.objects;
+    update_ms.push_back(result.wallMs("tracking"));
 
     std::vector<core::MotGroundTruth> gts;
     gt_of.clear();
@@ -298,7 +271,7 @@ inline int runSimTracking(const TrackingPipeline& p, const std::string& gt_path,
   std::printf(
       "tracking on the simulated drive (%zu revolutions, %zu skipped), detector %s, "
       "classifier %s\n",
-      frames, skipped, p.detector->name().c_str(), p.classifier ? "on" : "off");
+      frames, skipped, p.params.detector.c_str(), p.params.classifier.enabled ? "on" : "off");
   printMot("tracker (confirmed tracks)", r);
   std::printf(
       "%-28s recall %.3f  precision %.3f  (MOTA <= recall of the tracks; the detector "
@@ -346,7 +319,7 @@ inline int runKittiTracking(const TrackingPipeline& p, const std::string& dir,
     std::fprintf(stderr, "error: no label_02/<seq>.txt in %s\n", dir.c_str());
     return 1;
   }
-  TrackingPipelineRunner pipeline(p);
+  const std::unique_ptr<core::Pipeline> pipeline = trackingPipeline(p);
   core::ClearMot mot;
   const int width = 1242, height = 375;
   std::size_t frames = 0, sequences = 0;
@@ -368,7 +341,8 @@ inline int runKittiTracking(const TrackingPipeline& p, const std::string& dir,
       continue;
     }
     ++sequences;
-    core::Tracker tracker(p.tracker);
+    pipeline->restartTracker();  // a fresh tracker per sequence
+    const core::Tracker& tracker = *pipeline->tracker();
     const std::uint32_t id_base = static_cast<std::uint32_t>(sequences) * 1000000u;
     for (const std::string& bin : bins) {
       if (frames >= p.max_frames) break;
@@ -383,8 +357,7 @@ inline int runKittiTracking(const TrackingPipeline& p, const std::string& dir,
         continue;
       }
       ++frames;
-      const std::vector<core::DetectedObject>& objects = pipeline.run(cloud);
-      tracker.update(objects, Eigen::Isometry3d::Identity(), 0.1 * frame);
+      pipeline->process(cloud, Eigen::Isometry3d::Identity(), 0.1 * frame);  // tracker updated
       const std::vector<core::KittiTrackingLabel>& frame_labels = labels[frame];
       std::vector<core::MotGroundTruth> gts;
       for (const core::KittiTrackingLabel& l : frame_labels) {
@@ -406,7 +379,7 @@ inline int runKittiTracking(const TrackingPipeline& p, const std::string& dir,
       std::vector<core::MotHypothesis> hyps;
       for (const core::Track& t : tracker.tracks()) {
         if (t.state != core::TrackState::kConfirmed) continue;
-        if (p.classifier && t.category != core::ObjectCategory::kVehicle &&
+        if (p.params.classifier.enabled && t.category != core::ObjectCategory::kVehicle &&
             t.category != core::ObjectCategory::kPedestrian &&
             t.category != core::ObjectCategory::kCyclist) {
           continue;
@@ -471,7 +444,7 @@ inline int runSemanticKittiTracking(const TrackingPipeline& p, const std::string
     std::fprintf(stderr, "error: no SemanticKITTI sequence (velodyne/) in %s\n", dir.c_str());
     return 1;
   }
-  TrackingPipelineRunner pipeline(p);
+  const std::unique_ptr<core::Pipeline> pipeline = trackingPipeline(p);
   core::ClearMot pooled, detections_pooled;
   core::SemanticKittiGroundTruthParams gt_params;
   gt_params.min_points = p.min_gt_points;
@@ -493,7 +466,8 @@ inline int runSemanticKittiTracking(const TrackingPipeline& p, const std::string
       continue;
     }
     any_nominal = any_nominal || nominal;
-    core::Tracker tracker(p.tracker);
+    pipeline->restartTracker();  // a fresh tracker per sequence
+    const core::Tracker& tracker = *pipeline->tracker();
     core::ClearMot mot;
     std::map<std::uint32_t, std::uint32_t> gt_id;  // full label (class | instance) -> GT id
     id_base += 1000000u;
@@ -515,11 +489,11 @@ inline int runSemanticKittiTracking(const TrackingPipeline& p, const std::string
       }
       ++frames;
       core::buildSemanticKittiGroundTruth(labels, gt_params, &gt);
-      const std::vector<core::DetectedObject>& objects = pipeline.run(cloud);
       const Eigen::Isometry3d& pose = poses[scan];
-      const double t0 = steadySeconds();
-      tracker.update(objects, pose, 0.1 * static_cast<double>(scan));
-      update_ms.push_back(1e3 * (steadySeconds() - t0));
+      const core::PipelineResult& result =
+          pipeline->process(cloud, pose, 0.1 * static_cast<double>(scan));
+      const std::vector<core::DetectedObject>& objects = result.objects;
+      update_ms.push_back(result.wallMs("tracking"));
 
       // GT: centroids of the instances' points, in the world frame.
       std::vector<Eigen::Vector3d> sum(gt.objects.size(), Eigen::Vector3d::Zero());
@@ -588,7 +562,7 @@ inline int runSemanticKittiTracking(const TrackingPipeline& p, const std::string
       "tracking on SemanticKITTI (%zu sequences, %zu scans), world frame (poses.txt%s), "
       "detector %s, classifier %s, min GT points %zu\n",
       per_sequence.size(), frames, any_nominal ? ", nominal Tr" : ", calib Tr",
-      p.detector->name().c_str(), p.classifier ? "on" : "off", p.min_gt_points);
+      p.params.detector.c_str(), p.params.classifier.enabled ? "on" : "off", p.min_gt_points);
   for (const auto& s : per_sequence) printMot(("  sequence " + s.first).c_str(), s.second);
   printMot("tracker, pooled", r);
   std::printf("%-28s recall %.3f  precision %.3f\n", "detector alone", d.recall(), d.precision());

@@ -42,12 +42,10 @@
 
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_features.h"
-#include "urban_detection/core/detection/hierarchical_grid_detector.h"
-#include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/evaluation/augmentation.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/evaluation/evaluation.h"
-#include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/sensor/calibration.h"
 
 #include "datasets.h"
@@ -531,14 +529,24 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  urban_detection::tools::PipelineParams params;
+  core::PipelineParams params;
   if (!urban_detection::tools::loadConfigs(configs, &params)) return 2;
   core::ObjectFeatureParams fp;
   fp.sensor_height_m = params.segmentation.sensor_height_m;
-  core::GridSegmenter segmenter(params.segmentation);
-  std::vector<std::unique_ptr<core::ObjectDetector>> detectors;
-  detectors.emplace_back(new core::HierarchicalGridDetector(params.hierarchical));
-  if (kdtree) detectors.emplace_back(new core::KdTreeDetector(params.kdtree));
+  // The detectors' own objects: the pipeline without the classifier (it is what is trained
+  // here) and without box fitting. The first pipeline's foreground serves the second.
+  params.classifier.enabled = false;
+  params.box_fitting.enabled = false;
+  std::vector<std::unique_ptr<core::Pipeline>> pipelines;
+  for (const char* detector : {"hierarchical_grid", "kdtree"}) {
+    if (!kdtree && pipelines.size() == 1) break;
+    params.detector = detector;
+    pipelines.emplace_back(new core::Pipeline(params));
+  }
+  // Segmentation, foreground and the hierarchical grid's objects of `cloud`.
+  auto detectScan = [&](const urban_detection::CloudXYZIRT& cloud) -> const core::PipelineResult& {
+    return pipelines[0]->process(cloud);
+  };
   core::ObjectFeatureExtractor extractor(fp);
 
   core::SemanticKittiGroundTruthParams gtp;
@@ -566,8 +574,6 @@ int main(int argc, char** argv) {
     std::fprintf(csv, "\n");
   }
   urban_detection::tools::Frame f;
-  std::vector<core::SegmentClass> seg;
-  urban_detection::LabeledCloud foreground;
   core::DetectionEvaluator evaluator;
   std::size_t read = 0;
   for (;;) {
@@ -580,15 +586,14 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "warning: skipping a scan: %s\n", err.c_str());
       continue;
     }
-    segmenter.segment(f.cloud, &seg);
-    core::extractForeground(f.cloud, seg, &foreground);
+    const urban_detection::LabeledCloud& foreground = detectScan(f.cloud).foreground;
     FrameData fd;
     fd.id = f.id;
     fd.group = urban_detection::tools::frameGroup(f.id, dataset.name());
-    fd.detectors.resize(detectors.size());
-    for (std::size_t k = 0; k < detectors.size(); ++k) {
+    fd.detectors.resize(pipelines.size());
+    for (std::size_t k = 0; k < pipelines.size(); ++k) {
       DetectorFrame& d = fd.detectors[k];
-      detectors[k]->detect(foreground, &d.objects);
+      d.objects = (k == 0 ? pipelines[0]->result() : pipelines[k]->detect(foreground)).objects;
       core::FrameMatch m;
       evaluator.evaluate(f.gt, d.objects, &m);
       extractor.computeAll(foreground, d.objects, &d.features);
@@ -598,7 +603,7 @@ int main(int argc, char** argv) {
         d.labels.push_back(trainingLabel(m, i, f.gt, content, fragments));
         if (csv) {
           std::fprintf(csv, "%s,%s,%s,%s,%s,%s", fd.group.c_str(), f.id.c_str(),
-                       detectors[k]->name().c_str(), core::toString(d.labels.back()),
+                       pipelines[k]->detector().name().c_str(), core::toString(d.labels.back()),
                        core::toString(m.verdict[i]), content.c_str());
           for (const float v : d.features[i]) std::fprintf(csv, ",%.6g", v);
           std::fprintf(csv, "\n");
@@ -635,15 +640,15 @@ int main(int argc, char** argv) {
       af.id = kv.first + "/augmented_" + std::to_string(a);
       af.cloud = made[a].cloud;
       core::buildSemanticKittiGroundTruth(made[a].labels, gtp, &af.gt);
-      segmenter.segment(af.cloud, &seg);
-      core::extractForeground(af.cloud, seg, &foreground);
+      const core::PipelineResult& scan = detectScan(af.cloud);
+      const urban_detection::LabeledCloud& foreground = scan.foreground;
       FrameData fd;
       fd.id = af.id;
       fd.group = kv.first;
       fd.augmented = true;
-      fd.detectors.resize(detectors.size());
+      fd.detectors.resize(pipelines.size());
       DetectorFrame& d = fd.detectors[0];  // the forest learns from the hierarchical grid
-      detectors[0]->detect(foreground, &d.objects);
+      d.objects = scan.objects;
       core::FrameMatch m;
       evaluator.evaluate(af.gt, d.objects, &m);
       extractor.computeAll(foreground, d.objects, &d.features);
@@ -676,16 +681,16 @@ int main(int argc, char** argv) {
         const auto status = sim.next(&sf, &err);
         if (status == urban_detection::tools::Dataset::Status::kEnd) break;
         if (status == urban_detection::tools::Dataset::Status::kSkipped) continue;
-        segmenter.segment(sf.cloud, &seg);
-        core::extractForeground(sf.cloud, seg, &foreground);
+        const core::PipelineResult& scan = detectScan(sf.cloud);
+        const urban_detection::LabeledCloud& foreground = scan.foreground;
         FrameData fd;
         fd.id = "sim/" + sf.id;
         fd.group = "sim";
         fd.augmented = true;
         fd.always_train = true;
-        fd.detectors.resize(detectors.size());
+        fd.detectors.resize(pipelines.size());
         DetectorFrame& d = fd.detectors[0];
-        detectors[0]->detect(foreground, &d.objects);
+        d.objects = scan.objects;
         core::FrameMatch m;
         evaluator.evaluate(sf.gt, d.objects, &m);
         extractor.computeAll(foreground, d.objects, &d.features);
@@ -756,9 +761,9 @@ int main(int argc, char** argv) {
       };
     };
     // Each sequence scored with its own fold's decision.
-    std::vector<std::map<std::string, Scored>> off(detectors.size()), on(detectors.size());
-    std::vector<Scored> off_total(detectors.size()), on_total(detectors.size());
-    for (std::size_t k = 0; k < detectors.size(); ++k) {
+    std::vector<std::map<std::string, Scored>> off(pipelines.size()), on(pipelines.size());
+    std::vector<Scored> off_total(pipelines.size()), on_total(pipelines.size());
+    for (std::size_t k = 0; k < pipelines.size(); ++k) {
       off_total[k] = score(frames, all_groups, k, nullptr, held_out(k), ep, &off[k]);
       for (const std::string& g : groups) {
         const Scored sg = score(frames, {g}, k, &fold_decision[g], held_out(k), ep, &on[k]);
@@ -797,23 +802,24 @@ int main(int argc, char** argv) {
          << ",\n  \"fragments\": \"" << fragments_arg << "\",\n  \"trees\": " << tp.trees
          << ",\n  \"min_points\": " << min_points << ",\n  \"decision\": \"" << decision_arg
          << "\",\n  \"class_balance\": " << jsonNumber(tp.class_balance) << ",\n  \"loso\": {";
-    for (std::size_t k = 0; k < detectors.size(); ++k) {
-      json << (k ? ",\n" : "\n") << "    \"" << detectors[k]->name() << "\": {\"sequences\": {";
+    for (std::size_t k = 0; k < pipelines.size(); ++k) {
+      json << (k ? ",\n" : "\n") << "    \"" << pipelines[k]->detector().name()
+           << "\": {\"sequences\": {";
       bool first = true;
       for (const std::string& g : groups) {
-        std::printf("%-8s %-18s %-22s | %s | %s\n", g.c_str(), detectors[k]->name().c_str(),
-                    decisionText(fold_decision[g]).c_str(), scoreRow(off[k][g].score).c_str(),
-                    scoreRow(on[k][g].score).c_str());
+        std::printf("%-8s %-18s %-22s | %s | %s\n", g.c_str(),
+                    pipelines[k]->detector().name().c_str(), decisionText(fold_decision[g]).c_str(),
+                    scoreRow(off[k][g].score).c_str(), scoreRow(on[k][g].score).c_str());
         json << (first ? "" : ", ") << "\"" << g
              << "\": {\"decision\": " << decisionJson(fold_decision[g])
              << ", \"off\": " << scoreJson(off[k][g].score)
              << ", \"on\": " << scoreJson(on[k][g].score) << "}";
         first = false;
       }
-      std::printf("%-8s %-18s %-22s | %s | %s\n", "pooled", detectors[k]->name().c_str(), "",
-                  scoreRow(off_total[k].score).c_str(), scoreRow(on_total[k].score).c_str());
-      std::printf("%-8s %-18s %-22s | %s | %s\n", "N = 1", detectors[k]->name().c_str(), "",
-                  scoreRow(off_total[k].all).c_str(), scoreRow(on_total[k].all).c_str());
+      std::printf("%-8s %-18s %-22s | %s | %s\n", "pooled", pipelines[k]->detector().name().c_str(),
+                  "", scoreRow(off_total[k].score).c_str(), scoreRow(on_total[k].score).c_str());
+      std::printf("%-8s %-18s %-22s | %s | %s\n", "N = 1", pipelines[k]->detector().name().c_str(),
+                  "", scoreRow(off_total[k].all).c_str(), scoreRow(on_total[k].all).c_str());
       double min_f = 1.0;
       for (const std::string& g : groups) min_f = std::min(min_f, on[k][g].score.fRate());
       json << "}, \"pooled_off\": " << scoreJson(off_total[k].score)
@@ -853,11 +859,12 @@ int main(int argc, char** argv) {
       on_time.all += sg.all;
       on_time.breakdown += sg.breakdown;
     }
-    std::printf("%-8s %-18s %-22s | %-43s | %s\n", "+ time", detectors[0]->name().c_str(),
+    std::printf("%-8s %-18s %-22s | %-43s | %s\n", "+ time",
+                pipelines[0]->detector().name().c_str(),
                 temporal_ok ? "tracker, poses" : "(some poses missing)", "",
                 scoreRow(on_time.score).c_str());
-    std::printf("%-8s %-18s %-22s | %-43s | %s\n", "N = 1", detectors[0]->name().c_str(), "", "",
-                scoreRow(on_time.all).c_str());
+    std::printf("%-8s %-18s %-22s | %-43s | %s\n", "N = 1", pipelines[0]->detector().name().c_str(),
+                "", "", scoreRow(on_time.all).c_str());
     std::printf(
         "time as evidence: %zu detections rejected by their scan kept by their track's "
         "class, %zu kept ones given their track's class\n",
@@ -877,13 +884,13 @@ int main(int argc, char** argv) {
            << "\": " << scoreJson(on_time_by_group[groups[gi]].score);
     }
     json << "}},\n";
-    for (std::size_t k = 0; k < detectors.size(); ++k) {
-      std::printf("\n%s, held out, classifier off:\n%s", detectors[k]->name().c_str(),
+    for (std::size_t k = 0; k < pipelines.size(); ++k) {
+      std::printf("\n%s, held out, classifier off:\n%s", pipelines[k]->detector().name().c_str(),
                   off_total[k].breakdown.table("  ").c_str());
-      std::printf("%s, held out, classifier on:\n%s", detectors[k]->name().c_str(),
+      std::printf("%s, held out, classifier on:\n%s", pipelines[k]->detector().name().c_str(),
                   on_total[k].breakdown.table("  ").c_str());
     }
-    std::printf("%s, held out, classifier on + time:\n%s", detectors[0]->name().c_str(),
+    std::printf("%s, held out, classifier on + time:\n%s", pipelines[0]->detector().name().c_str(),
                 on_time.breakdown.table("  ").c_str());
     // Pooled confusion matrix of the held-out predictions (hierarchical grid, each fold's
     // decision).

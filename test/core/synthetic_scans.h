@@ -1,5 +1,5 @@
-// Synthetic LiDAR scans of simple shapes for the object filter tests (core gtest and rostest):
-// rays of a 64-beam-like sensor (rows of constant elevation, fixed azimuth step) from the
+// Synthetic LiDAR scans of simple shapes for the classifier tests: rays of a 64-beam-like sensor
+// (rows of constant elevation, fixed azimuth step) from the
 // origin cast against a box (car), a vertical cylinder (pedestrian, pole) and a porous sphere
 // (bush: returns at random depths along the chord).
 #pragma once

@@ -410,6 +410,10 @@ TEST(ObjectClassifier, RejectsNonObjectsAndLabelsTheRest) {
     tunable.setDecision(-1.0, true);
     EXPECT_DOUBLE_EQ(tunable.threshold(), tunable.model().objectThreshold());
     EXPECT_THROW(tunable.setDecision(1.5, true), std::invalid_argument);
+    EXPECT_THROW(tunable.setDecision(-1.5, true), std::invalid_argument);
+    // The constructor holds the table's range [-1, 1] too (it let -5 through).
+    strict.min_object_probability = -5.0;
+    EXPECT_THROW(core::ObjectClassifier{strict}, std::invalid_argument);
   }
   // Disabled: unchanged, unknown.
   params.enabled = false;

@@ -27,8 +27,9 @@ class FieldTable : public ::testing::Test {};
 using Structs =
     ::testing::Types<GridSegmenterParams, HoughWallRefinerParams, HierarchicalGridDetectorParams,
                      DistanceWeightParams, FarObjectMergerParams, KdTreeDetectorParams,
-                     ObjectFilterParams, ObjectClassifierParams, TrackerParams, CameraFusionParams,
-                     ImageLabelTransferParams>;
+                     ObjectClassifierParams, TrackerParams, CameraFusionParams,
+                     ImageLabelTransferParams, PipelineParams, ObjectFeatureParams,
+                     ClassifierTrainingParams>;
 TYPED_TEST_SUITE(FieldTable, Structs);
 
 // Unique names, a description each, finite ordered ranges around the in-class default.

@@ -123,7 +123,7 @@ TEST(ParamsYaml, EachStageFileHoldsOnlyItsOwnSections) {
   const std::map<std::string, std::set<std::string>> sections = {
       {"hierarchical_grid", {"hierarchical_grid"}},
       {"kdtree", {"kdtree"}},
-      {"classification", {"box_fitting", "classifier", "object_filter"}},
+      {"classification", {"box_fitting", "classifier"}},
       {"markers", {"markers"}},
   };
   for (const auto& kv : sections) {

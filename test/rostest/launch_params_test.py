@@ -48,9 +48,9 @@ class LaunchParams(unittest.TestCase):
     def test_each_stage_gets_only_its_own_sections(self):
         p = params('live.launch', 'detector:=both')
         self.assertEqual(sections(p, 'hierarchical_grid_detector') - {'thread_nice'},
-                         {'hierarchical_grid', 'classifier', 'object_filter', 'box_fitting'})
+                         {'hierarchical_grid', 'classifier', 'box_fitting'})
         self.assertEqual(sections(p, 'kdtree_detector') - {'thread_nice', 'queue_size'},
-                         {'kdtree', 'classifier', 'object_filter', 'box_fitting'})
+                         {'kdtree', 'classifier', 'box_fitting'})
         self.assertEqual(sections(p, 'object_markers'), {'markers'})
         self.assertEqual(sections(p, 'object_markers_kdtree'), {'markers'})
         self.assertLess(sum(1 for k in p if k.startswith('/hierarchical_grid_detector/')), 80)

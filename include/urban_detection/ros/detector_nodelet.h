@@ -7,10 +7,8 @@
 /// latency from header.stamp to `objects`. Detection runs on the stage's own thread
 /// (StageThread, niceness ~thread_nice), so a slow detector never holds up another stage. A derived
 /// nodelet builds its core::ObjectDetector from its parameters and may serve
-/// dynamic_reconfigure, swapping in a new detector between two revolutions. After the detector,
-/// core::ObjectFilter (params ~object_filter/*, `enabled: false` switches it off) removes
-/// vegetation objects: they are not published, and counted on /diagnostics
-/// ("rejected objects (porous)", "rejected objects (bright hedge)"). Then core::ObjectClassifier
+/// dynamic_reconfigure, swapping in a new detector between two revolutions. The chain after the
+/// segmentation is core::Pipeline::detect(): the detector, then core::ObjectClassifier
 /// (params ~classifier/*: enabled, model, min_object_probability, reject_non_objects) gives
 /// each object its class (class_label, class_confidence); non-objects (vegetation, terrain,
 /// structure) are left out of `objects` by default and published on `objects/rejected`
@@ -33,10 +31,8 @@
 #include <boost/shared_ptr.hpp>
 
 #include "urban_detection/ObjectClassifierConfig.h"
-#include "urban_detection/core/classification/object_classifier.h"
-#include "urban_detection/core/classification/object_filter.h"
-#include "urban_detection/core/detection/box_fitting.h"
 #include "urban_detection/core/detection/object_detector.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/stage_thread.h"
@@ -63,11 +59,9 @@ class DetectorNodelet : public nodelet::Nodelet {
   void onInit() final;
   void foregroundCb(const ros::MessageEvent<const LabeledCloud>& event);  // zero copy
 
-  std::mutex detector_mutex_;  // detector_ between revolutions and reconfigure
-  std::unique_ptr<core::ObjectDetector> detector_;
-  std::unique_ptr<core::ObjectFilter> filter_;
-  std::unique_ptr<core::ObjectClassifier> classifier_;
-  std::unique_ptr<core::BoxFitter> box_fitter_;  // whole-object boxes, after the classifier
+  std::mutex detector_mutex_;  // pipeline_ between revolutions and reconfigure
+  // detector -> classifier -> whole-object boxes; holds the objects between frames
+  std::unique_ptr<core::Pipeline> pipeline_;
   // ~classifier: threshold and rejection, while the classifier is enabled.
   std::unique_ptr<ros_conv::ValidatedReconfigure<ObjectClassifierConfig>> classifier_reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
@@ -75,8 +69,6 @@ class DetectorNodelet : public nodelet::Nodelet {
   int queue_size_ = 2;
   int thread_nice_ = 0;
   std::unique_ptr<ros_conv::StageThread> thread_;  // runs foregroundCb
-  std::vector<core::DetectedObject> objects_;      // reused between frames
-  std::vector<core::DetectedObject> rejected_;     // non-objects of the classifier
   std::unordered_map<std::uint32_t, std::uint32_t> id_of_index_;
   std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher objects_pub_, points_pub_, rejected_pub_;

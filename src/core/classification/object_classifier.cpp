@@ -49,28 +49,7 @@ bool parseObjectCategory(const std::string& name, ObjectCategory* c) {
 }
 
 std::string validate(const ClassifierTrainingParams& p) {
-  std::string error;
-  auto require = [&error](bool ok, const char* field, const char* range) {
-    if (!ok && error.empty()) error = std::string(field) + " must be " + range;
-  };
-  require(p.trees >= 1 && p.trees <= 10000, "trees", "in [1, 10000]");
-  require(p.max_depth >= 1 && p.max_depth <= 64, "max_depth", "in [1, 64]");
-  require(p.min_sample_count >= 1 && p.min_sample_count <= 100000, "min_sample_count",
-          "in [1, 100000]");
-  require(p.active_var_count >= 0 && p.active_var_count <= kNumObjectFeatures, "active_var_count",
-          "in [0, number of features]");
-  require(
-      std::isfinite(p.object_threshold) && p.object_threshold >= 0.0 && p.object_threshold <= 1.0,
-      "object_threshold", "in [0, 1]");
-  for (const double t : p.class_thresholds) {
-    require(std::isfinite(t) && t >= 0.0 && t <= 1.0, "class_thresholds", "in [0, 1]");
-  }
-  require(std::isfinite(p.uncertain_threshold) && p.uncertain_threshold >= 0.0 &&
-              p.uncertain_threshold <= 1.0,
-          "uncertain_threshold", "in [0, 1]");
-  require(std::isfinite(p.class_balance) && p.class_balance >= 0.0 && p.class_balance <= 1.0,
-          "class_balance", "in [0, 1]");
-  return error;
+  return checkFieldRanges(p);
 }
 
 ObjectCategory decideClass(const std::array<float, 5>& p, const ClassDecision& d,
@@ -463,9 +442,8 @@ ObjectClassifier::ObjectClassifier(const ObjectClassifierParams& params)
 ObjectClassifier::ObjectClassifier(const ObjectClassifierParams& params,
                                    ObjectClassifierModel model)
     : params_(params), model_(std::move(model)), extractor_(model_.featureParams()) {
-  if (!(params_.min_object_probability <= 1.0) || !std::isfinite(params_.min_object_probability)) {
-    throw std::invalid_argument("ObjectClassifier: min_object_probability must be in [0, 1]");
-  }
+  const std::string error = checkFieldRanges(params_);  // the table's ranges
+  if (!error.empty()) throw std::invalid_argument("ObjectClassifier: " + error);
   if (params_.enabled && !model_.trained()) {
     throw std::invalid_argument("ObjectClassifier: enabled without a trained model");
   }
@@ -478,13 +456,13 @@ double ObjectClassifier::threshold() const {
 
 void ObjectClassifier::setDecision(double min_object_probability, bool reject_non_objects,
                                    bool keep_uncertain) {
-  if (!std::isfinite(min_object_probability) || min_object_probability < -1.0 ||
-      min_object_probability > 1.0) {
-    throw std::invalid_argument("ObjectClassifier: min_object_probability must be in [-1, 1]");
-  }
-  params_.min_object_probability = min_object_probability;
-  params_.reject_non_objects = reject_non_objects;
-  params_.keep_uncertain = keep_uncertain;
+  ObjectClassifierParams p = params_;
+  p.min_object_probability = min_object_probability;
+  p.reject_non_objects = reject_non_objects;
+  p.keep_uncertain = keep_uncertain;
+  const std::string error = checkFieldRanges(p);  // the table's range, one wording
+  if (!error.empty()) throw std::invalid_argument("ObjectClassifier: " + error);
+  params_ = p;
 }
 
 ObjectClassifierStats ObjectClassifier::apply(const LabeledCloud& foreground,

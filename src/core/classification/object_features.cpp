@@ -156,23 +156,7 @@ void selectRanks(const std::vector<float>& values, const std::size_t* ranks, int
 }
 
 std::string validate(const ObjectFeatureParams& p) {
-  std::string error;
-  auto require = [&error](bool ok, const char* field, const char* range) {
-    if (!ok && error.empty()) error = std::string(field) + " must be " + range;
-  };
-  require(
-      std::isfinite(p.sensor_height_m) && p.sensor_height_m >= -10.0 && p.sensor_height_m <= 10.0,
-      "sensor_height_m", "in [-10, 10] m");
-  require(std::isfinite(p.row_gap_deg) && p.row_gap_deg > 0.0 && p.row_gap_deg <= 5.0,
-          "row_gap_deg", "in (0, 5] deg");
-  require(std::isfinite(p.max_azimuth_gap_deg) && p.max_azimuth_gap_deg > 0.0 &&
-              p.max_azimuth_gap_deg <= 10.0,
-          "max_azimuth_gap_deg", "in (0, 10] deg");
-  require(std::isfinite(p.jump_m) && p.jump_m > 0.0 && p.jump_m <= 10.0, "jump_m", "in (0, 10] m");
-  require(std::isfinite(p.azimuth_resolution_deg) && p.azimuth_resolution_deg > 0.0 &&
-              p.azimuth_resolution_deg <= 5.0,
-          "azimuth_resolution_deg", "in (0, 5] deg");
-  return error;
+  return checkFieldRanges(p);
 }
 
 const char* featureName(int feature) {

@@ -680,6 +680,9 @@ void HierarchicalGridDetector::emitObjects(const LabeledCloud& foreground, std::
   objects_.xy_out.resize(nobj);
   for (std::size_t k = 0; k < nobj; ++k) {
     objects_.begin[k + 1] += objects_.begin[k];
+    // A reused object must not keep the class a later stage gave it in an earlier frame.
+    (*objects)[k].category = ObjectCategory::kUnknown;
+    (*objects)[k].class_confidence = 0.0f;
     (*objects)[k].indices.resize(objects_.begin[k + 1] - objects_.begin[k]);
     objects_.index_out[k] = (*objects)[k].indices.data();
   }

@@ -111,11 +111,6 @@ bool loadDetectionSection(const std::string& path, const std::string& section, P
 
 }  // namespace
 
-bool loadObjectFilterParamsYaml(const std::string& path, ObjectFilterParams* params,
-                                std::string* error) {
-  return loadDetectionSection(path, "object_filter", params, error);
-}
-
 bool loadObjectClassifierParamsYaml(const std::string& path, ObjectClassifierParams* params,
                                     std::string* error) {
   if (!loadDetectionSection(path, "classifier", params, error)) return false;
@@ -171,10 +166,28 @@ bool loadPipelineParamsYaml(const std::string& path, GridSegmenterParams* segmen
     return !root["detection"] ||
            applyDetection(root["detection"], where + "detection/", hierarchical, kdtree, error);
   }
-  if (root["hierarchical_grid"] || root["kdtree"] || root["object_filter"] || root["classifier"]) {
+  if (root["hierarchical_grid"] || root["kdtree"] || root["classifier"]) {
     return applyDetection(root, where, hierarchical, kdtree, error);
   }
   return !segmentation || applyFields(root, where, segmentation, error);
+}
+
+bool loadPipelineConfigYaml(const std::string& path, PipelineParams* params, std::string* error) {
+  YAML::Node root;
+  if (!loadRoot(path, "", &root, error)) return false;
+  if (root.IsMap() && root["tracker"]) return loadTrackerParamsYaml(path, &params->tracker, error);
+  return loadPipelineParamsYaml(path, &params->segmentation, &params->hierarchical_grid,
+                                &params->kdtree, error) &&
+         loadObjectClassifierParamsYaml(path, &params->classifier, error) &&
+         loadBoxFittingParamsYaml(path, &params->box_fitting, error);
+}
+
+bool loadPipelineConfigsYaml(const std::vector<std::string>& paths, PipelineParams* params,
+                             std::string* error) {
+  for (const std::string& path : paths) {
+    if (!loadPipelineConfigYaml(path, params, error)) return false;
+  }
+  return true;
 }
 
 bool loadTrackerParamsYaml(const std::string& path, TrackerParams* params, std::string* error) {

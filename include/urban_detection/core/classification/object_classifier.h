@@ -68,6 +68,36 @@ struct ClassifierTrainingParams {
   std::vector<std::string> training_groups;
 };
 
+/// ClassifierTrainingParams' field table (core/common/param_fields.h).
+template <>
+struct ParamFields<ClassifierTrainingParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f({"trees", "", 1, 10000, "trees of the forest"}, p.trees);
+    f({"max_depth", "", 1, 64, "depth limit of a tree"}, p.max_depth);
+    f({"min_sample_count", "", 1, 100000, "a node with fewer samples is not split"},
+      p.min_sample_count);
+    f({"active_var_count", "", 0, kNumObjectFeatures,
+       "features tried per split (0: sqrt of their number)"},
+      p.active_var_count);
+    f({"use_intensity", "false: train without the intensity features"}, p.use_intensity);
+    f({"object_threshold", "", 0.0, 1.0, "P(object) needed to keep an object"}, p.object_threshold);
+    f({"class_threshold_vehicle", "", 0.0, 1.0, "P(vehicle) that alone keeps a vehicle"},
+      p.class_thresholds[0]);
+    f({"class_threshold_pedestrian", "", 0.0, 1.0, "P(pedestrian) that alone keeps a pedestrian"},
+      p.class_thresholds[1]);
+    f({"class_threshold_cyclist", "", 0.0, 1.0, "P(cyclist) that alone keeps a cyclist"},
+      p.class_thresholds[2]);
+    f({"uncertain_threshold", "", 0.0, 1.0,
+       "P(object) from which an object stays as an uncertain other_object (1: none)"},
+      p.uncertain_threshold);
+    f({"class_balance", "", 0.0, 1.0,
+       "class balance of the training rows (0: every row alike, 1: every class alike)"},
+      p.class_balance);
+    f({"description", "free text stored in the model"}, p.description);
+  }
+};
+
 /// How the vote shares become a class (stored in the model, chosen by the training tool).
 /// In order: an object class whose P(class) reaches its class threshold (the largest
 /// P(class) / threshold among those that do); else, when P(object) = 1 - P(non_object)
@@ -159,7 +189,7 @@ struct ObjectClassifierParams {
   bool enabled = false;                  // [-] false: objects pass unclassified ("unknown"); the
                                          //     shipped config/classification.yaml turns it on
   std::string model_path;                // model file (urban_detection_train_classifier)
-  double min_object_probability = -1.0;  // [0..1] keep an object when P(object) >= this;
+  double min_object_probability = -1.0;  // [-1..1] keep an object when P(object) >= this;
                                          //   negative: the threshold stored in the model
   bool reject_non_objects = true;        // [-] false: non-objects stay in the output, labelled
                                          //     "non_object"

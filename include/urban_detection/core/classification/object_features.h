@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "urban_detection/core/classification/foreground_index.h"
+#include "urban_detection/core/common/param_fields.h"
 #include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/detection/object_detector.h"
 
@@ -44,6 +45,25 @@ struct ObjectFeatureParams {
   double jump_m = 0.25;                  // [m] |r_b - (r_a + r_c) / 2| above this is a range jump
   double azimuth_resolution_deg = 0.17;  // [deg] the sensor's horizontal step (HDL-64E at
                                          //       10 Hz: 0.17 deg)
+};
+
+/// ObjectFeatureParams' field table (core/common/param_fields.h). The values travel in the
+/// model file (the features a model was trained on).
+template <>
+struct ParamFields<ObjectFeatureParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f({"sensor_height_m", "m", -10.0, 10.0, "sensor above the road (heights refer to z = -this)"},
+      p.sensor_height_m);
+    f({"row_gap_deg", "deg", 0.001, 5.0, "elevation gap that starts a new scan row"},
+      p.row_gap_deg);
+    f({"max_azimuth_gap_deg", "deg", 0.001, 10.0,
+       "returns farther apart in azimuth are not neighbours"},
+      p.max_azimuth_gap_deg);
+    f({"jump_m", "m", 0.001, 10.0, "|r_b - (r_a + r_c) / 2| above this is a range jump"}, p.jump_m);
+    f({"azimuth_resolution_deg", "deg", 0.001, 5.0, "the sensor's horizontal step"},
+      p.azimuth_resolution_deg);
+  }
 };
 
 /// Empty when valid, else a message naming the first out-of-range field and its range.

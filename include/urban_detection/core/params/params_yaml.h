@@ -5,12 +5,13 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "urban_detection/core/classification/object_classifier.h"
-#include "urban_detection/core/classification/object_filter.h"
 #include "urban_detection/core/detection/box_fitting.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/tracking/tracker.h"
 
@@ -36,16 +37,11 @@ bool loadKdTreeParamsYaml(const std::string& path, KdTreeDetectorParams* params,
 
 /// Loads any of the pipeline's config files, recognised by their top-level keys: a combined
 /// file (`segmentation:` and/or `detection:` maps), a detection.yaml (`hierarchical_grid:`,
-/// `kdtree:` and/or `object_filter:` maps; the latter is read by loadObjectFilterParamsYaml)
+/// `kdtree:` and/or `classifier:` maps; the latter is read by loadObjectClassifierParamsYaml)
 /// or otherwise a segmentation.yaml. Null pointers skip that part.
 bool loadPipelineParamsYaml(const std::string& path, GridSegmenterParams* segmentation,
                             HierarchicalGridDetectorParams* hierarchical,
                             KdTreeDetectorParams* kdtree, std::string* error);
-
-/// Overrides the fields of `params` from the `object_filter:` map of a detection.yaml style
-/// file (top level, or under `detection:` in a combined file). A file without it changes nothing.
-bool loadObjectFilterParamsYaml(const std::string& path, ObjectFilterParams* params,
-                                std::string* error);
 
 /// Overrides the fields of `params` from the `classifier:` map of a detection.yaml style file
 /// (top level, or under `detection:`). A relative `model` path is taken relative to the
@@ -58,6 +54,17 @@ bool loadObjectClassifierParamsYaml(const std::string& path, ObjectClassifierPar
 /// nothing.
 bool loadBoxFittingParamsYaml(const std::string& path, BoxFittingParams* params,
                               std::string* error);
+
+/// Applies one of the pipeline's config files to `params`, recognised by its top-level keys:
+/// a tracker file (`tracker:` map, config/object_tracker.yaml) sets params->tracker; any other
+/// file is read as by loadPipelineParamsYaml() plus its `classifier:` and `box_fitting:` maps
+/// (config/segmentation.yaml, hierarchical_grid.yaml, kdtree.yaml, classification.yaml).
+bool loadPipelineConfigYaml(const std::string& path, PipelineParams* params, std::string* error);
+
+/// loadPipelineConfigYaml() for each file in order over the values already in `params`; stops
+/// at the first error.
+bool loadPipelineConfigsYaml(const std::vector<std::string>& paths, PipelineParams* params,
+                             std::string* error);
 
 /// Overrides the fields of `params` from the `tracker:` map of a file (config/object_tracker.yaml),
 /// or from its root when it has no such map.
