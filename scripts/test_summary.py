@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Summarises the JUnit XML files catkin writes and exits non-zero on any failure.
 
-Prints one line per failing or skipped test case, then a closing line
+Prints one line per failing or skipped test case (a failure followed by the last lines of its
+message), then a closing line
 "tests: N passed, N failed, N skipped". A run with no result at all counts as a failure, as
 does a test binary that crashed before writing its results (catkin writes a MISSING-*.xml).
 """
@@ -25,9 +26,17 @@ def main(root):
         cases = tree.getroot().iter("testcase")
         for case in cases:
             label = f"{case.get('classname', '')}.{case.get('name', '')}"
-            if case.find("failure") is not None or case.find("error") is not None:
+            fault = case.find("failure")
+            if fault is None:
+                fault = case.find("error")
+            if fault is not None:
                 failed += 1
                 print(f"FAILED  {name}: {label}")
+                # The assertion's own words, so that a log's tail says why (CI keeps the tail).
+                text = "\n".join(x for x in (fault.get("message"), fault.text) if x).strip()
+                lines = text.splitlines()
+                for line in lines[-25:]:
+                    print(f"        {line[:300]}")
             elif case.find("skipped") is not None or case.get("status") == "notrun":
                 skipped += 1
                 msg = case.find("skipped")

@@ -100,34 +100,39 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
   }
 
   // A stamp before the previous one: the stream restarted (a looping bag). Resets the tracks
-  // and the tf buffer once; true while the first revolutions after it may still wait for tf.
-  bool timeWentBack(const ros::Time& stamp) {
-    if (!last_stamp_.isZero() && stamp < last_stamp_) {
+  // once. True for the first second of stamps of a stream (the first one or a restarted one),
+  // while tf may not have the stream's transforms yet. The tf buffer itself is not cleared
+  // here: under simulated time tf2's listener clears it when the clock goes back, and a clear
+  // after the objects arrive would drop the new stream's transforms already received.
+  bool streamStarting(const ros::Time& stamp) {
+    if (last_stamp_.isZero()) {
+      restart_stamp_ = stamp;
+    } else if (stamp < last_stamp_) {
       NODELET_INFO(
-          "objects' stamp went back %.2f s (a looping bag or a restarted source): "
-          "tracks and tf buffer reset",
+          "objects' stamp went back %.2f s (a looping bag or a restarted source): tracks reset",
           (last_stamp_ - stamp).toSec());
-      if (tf_buffer_) tf_buffer_->clear();
       std::lock_guard<std::mutex> lock(mutex_);
       tracker_->reset();
       restart_stamp_ = stamp;
     }
     last_stamp_ = stamp;
-    return !restart_stamp_.isZero() && (stamp - restart_stamp_).toSec() < kRestartGraceS;
+    return (stamp - restart_stamp_).toSec() < kRestartGraceS;
   }
 
   void objectsCb(const DetectedObjectArray::ConstPtr& msg) {
     const ros::WallTime start = ros::WallTime::now();
     diagnostics_->input(msg->header.seq);
-    const bool restarting = timeWentBack(msg->header.stamp);
+    const bool starting = streamStarting(msg->header.stamp);
     Eigen::Isometry3d pose;
     std::string tf_error;
     const std::string frame = fixedFrame(
-        msg->header, restarting || frame_.empty() ? kRestartTfWaitS : 0.05, &pose, &tf_error);
+        msg->header, starting || frame_.empty() ? kRestartTfWaitS : 0.05, &pose, &tf_error);
     if (!tf_error.empty()) {
-      if (restarting && frame_ == fixed_frame_) {
-        // Just after a restart tf may not have the new stream's transforms yet: skip this
-        // revolution rather than flip to the sensor frame and back.
+      if (starting &&
+          (frame_ == fixed_frame_ || (frame_.empty() && tf_buffer_->_frameExists(fixed_frame_)))) {
+        // A stream that starts or restarts while tf lacks its first transforms (the listener
+        // joined after the first revolution, or tf went back with the clock): skip this
+        // revolution rather than track in the sensor frame and flip back.
         diagnostics_->count("skipped_waiting_for_tf");
         return;
       }
@@ -214,8 +219,8 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
   std::string frame_;                             // the frame the current tracks live in
   bool sensor_frame_warned_ = false;              // said that tracks are in the sensor frame
   ros::Time last_stamp_;                          // of the previous objects message
-  ros::Time restart_stamp_;                       // first stamp after the stamps went back
-  static constexpr double kRestartGraceS = 1.0;   // [s] after a restart, tf may be late
+  ros::Time restart_stamp_;                       // first stamp of the (re)started stream
+  static constexpr double kRestartGraceS = 1.0;   // [s] of stamps at a (re)start: tf may lag
   static constexpr double kRestartTfWaitS = 0.2;  // [s] wait for tf then
   std::set<std::uint32_t> arrows_;                // tracks whose velocity arrow is shown
   int queue_size_ = 2;

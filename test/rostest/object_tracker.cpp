@@ -3,7 +3,9 @@
 //  * ids stay the same over revolutions, a moving object gets its velocity, the markers carry
 //    box, arrow and "id class speed" per confirmed track;
 //  * a track whose object disappears gets DELETE markers once it dies (death_misses);
-//  * with tf odom -> velodyne of a moving sensor, a parked object is still in odom;
+//  * with tf odom -> velodyne of a moving sensor, a parked object is still in odom; the first
+//    revolutions, older than any transform the listener got, are skipped, not tracked in the
+//    sensor frame;
 //  * without that transform the tracks stay in the sensor frame with one warning, velocities
 //    marked relative, no velocity arrows; stamps going back reset the tracks with one INFO;
 //  * NaN boxes are skipped with an error and nothing crashes; empty arrays are fine;
@@ -70,7 +72,8 @@ struct Harness {
     return std::min(tracks.size(), markers.size());
   }
   // Publishes one revolution and waits for both outputs of it.
-  bool send(const std::vector<DetectedObject>& objects, double stamp_s, std::uint32_t seq) {
+  bool send(const std::vector<DetectedObject>& objects, double stamp_s, std::uint32_t seq,
+            double timeout_s = 5.0) {
     auto msg = boost::make_shared<DetectedObjectArray>();
     msg->header.frame_id = "velodyne";
     msg->header.stamp = ros::Time(stamp_s);
@@ -79,7 +82,7 @@ struct Harness {
     msg->objects = objects;
     const std::size_t before = received();
     pub.publish(boost::shared_ptr<const DetectedObjectArray>(msg));
-    return waitFor([&] { return received() > before; }, 5.0);
+    return waitFor([&] { return received() > before; }, timeout_s);
   }
   TrackedObjectArray lastTracks() {
     std::lock_guard<std::mutex> lock(mutex);
@@ -245,6 +248,43 @@ TEST(ObjectTracker, ParkedObjectStillInOdomWhileTheSensorDrives) {
   }
   const TrackedObject& o = h.lastTracks().objects.at(0);
   EXPECT_LT(std::hypot(o.velocity.x, o.velocity.y), 0.1);
+}
+
+TEST(ObjectTracker, FirstRevolutionsBeforeTheirTransformAreSkippedNotTrackedInTheSensorFrame) {
+  RosoutWatcher rosout;
+  ros::param::set("/ot_late/tracker/fixed_frame", "odom");
+  nodelet::Loader manager(false);
+  ASSERT_TRUE(manager.load("/ot_late/tracker", "urban_detection/ObjectTracker", {}, {}));
+  Harness h("/ot_late");
+  ASSERT_TRUE(waitFor([&] { return h.pub.getNumSubscribers() == 1; }, 10.0));
+  tf2_ros::TransformBroadcaster tf;
+  auto send_tf = [&](double t) {
+    geometry_msgs::TransformStamped tr;
+    tr.header.stamp = ros::Time(t);
+    tr.header.frame_id = "odom";
+    tr.child_frame_id = "velodyne";
+    tr.transform.translation.x = 10.0 * (t - 4000.0);
+    tr.transform.rotation.w = 1.0;
+    tf.sendTransform(tr);
+  };
+  // The listener joined after the first two revolutions' transforms went out (a bag starting,
+  // a manager loading): tf knows odom, but nothing as early as those revolutions.
+  send_tf(4000.2);
+  ASSERT_TRUE(waitFor([&] { return h.pub.getNumSubscribers() == 1; }, 1.0));
+  ros::WallDuration(0.3).sleep();
+  std::uint32_t seq = 1;
+  for (int k = 0; k < 8; ++k) {
+    const double t = 4000.0 + 0.1 * k;
+    if (k > 2) send_tf(t);
+    ros::WallDuration(0.02).sleep();
+    const bool answered =
+        h.send({object(1, 30.0 - 1.0 * k, 4.0, "vehicle")}, t, seq++, k < 2 ? 2.0 : 5.0);
+    EXPECT_EQ(answered, k >= 2) << "revolution " << k;  // 0 and 1 wait for tf, then skip
+    if (answered) EXPECT_EQ(h.lastTracks().header.frame_id, "odom") << "revolution " << k;
+  }
+  ros::WallDuration(0.5).sleep();  // rosout is asynchronous
+  EXPECT_EQ(rosout.count(rosgraph_msgs::Log::WARN, "tracking in the sensor frame"), 0);
+  EXPECT_EQ(rosout.count(rosgraph_msgs::Log::INFO, "tracks restarted"), 0);
 }
 
 TEST(ObjectTracker, WithoutOdometryRelativeVelocitiesAndLoopingStampsResetOnce) {
