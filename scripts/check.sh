@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reliability check (issue 8), run by CI after the normal tests:
+# Reliability check, run by CI after the normal tests:
 #   1. test_core and test_ros built with AddressSanitizer + UndefinedBehaviorSanitizer
 #      (CMake option UD_SANITIZE, gcc, -O1, assertions on) in a workspace of their own
 #      ($UD_WS-asan), then run; any sanitizer report or failed test fails the check;

@@ -65,7 +65,7 @@ fi
 
 [ "${#ran[@]}" -gt 0 ] || { echo "eval: no dataset found" >&2; exit 1; }
 
-# Segmentation accuracy (issue 4): ground / walls / foreground per point, Hough on and off.
+# Segmentation accuracy: ground / walls / foreground per point, Hough on and off.
 SEG_CONFIG=()
 [ -f "$REPO/config/segmentation.yaml" ] && SEG_CONFIG=(--config "$REPO/config/segmentation.yaml")
 if [ -x "$BIN/urban_detection_seg_eval" ]; then

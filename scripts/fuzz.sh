@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# libFuzzer targets of test/fuzz (issue 8): builds them with clang (ASan + UBSan + libFuzzer)
+# libFuzzer targets of test/fuzz: builds them with clang (ASan + UBSan + libFuzzer)
 # in a build directory of their own beside the catkin workspace, then runs each target for
 # the given number of seconds (default 600), one after the other, niced.
 #   scripts/run fuzz [seconds] [target ...]     e.g. scripts/run fuzz 30 fuzz_pcap_reader

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Latency of the live chain (issue 24). Called by `scripts/run latency [seconds] [options]` after
+# Latency of the live chain. Called by `scripts/run latency [seconds] [options]` after
 # setup + build, with the workspace sourced. Replays the simulated drive's pcap as UDP datagrams
 # at the sensor's pace (urban_detection_udp_replay) into live.launch on its own ROS master and
 # UDP port, and measures with urban_detection_latency_probe, per revolution, the time from the
@@ -8,7 +8,7 @@
 # results/latency[_<detector>].json: the probe's figures, the replay's pacing and the machine.
 #   scripts/run latency                    60 s, detector:=hierarchical
 #   scripts/run latency 60 --detector both the hierarchical chain beside the kd-tree baseline
-#   scripts/run latency 60 --camera        the same with the camera stage (issue 27) in the
+#   scripts/run latency 60 --camera        the same with the camera stage in the
 #                                          manager: ENet (config/spark_enet_cityscapes.yaml) on a
 #                                          KITTI image at 10 Hz (urban_detection_camera_replay);
 #                                          also measures objects/classified

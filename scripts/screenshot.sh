@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# rviz screenshot of the simulated drive through the detection chain (issue 7). Called by
+# rviz screenshot of the simulated drive through the detection chain. Called by
 # `scripts/run screenshot` after setup + build, with the workspace sourced.
 #   starts Xvfb (software GL) and its own ROS master on free ports, runs
 #   `roslaunch urban_detection demo.launch rviz:=true`, waits, grabs the X root window with

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Soak test (issue 8). Called by `scripts/run soak [minutes] [--sim] [options]` after setup +
+# Soak test. Called by `scripts/run soak [minutes] [--sim] [options]` after setup +
 # build, with the workspace sourced. Runs the simulated drive in real time at 600 rpm
 # (10 revolutions/s) through the full pipeline in one nodelet manager on its own ROS master:
 #   default  a pcap of the simulated drive (60 s, written once by urban_detection_simulate into

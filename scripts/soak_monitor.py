@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Soak monitor (issue 8), run by scripts/soak.sh against a running demo.launch.
+"""Soak monitor, run by scripts/soak.sh against a running demo.launch.
 
 Measures, for `--minutes` after `--warmup` seconds:
   * latency of every /objects message: receive wall time - header.stamp, p50 / p95 / p99 / max.

@@ -1,4 +1,4 @@
-// urban_detection/ImageLabelTransfer (issues 9, 27): labels the detector's objects with the
+// urban_detection/ImageLabelTransfer: labels the detector's objects with the
 // classes of a 2-D semantic segmentation network (any file cv::dnn::readNet reads). The network
 // runs on its own thread on the newest image (older ones are dropped); the objects callback
 // never waits for it: each revolution's objects take the newest mask within max_mask_gap_s of

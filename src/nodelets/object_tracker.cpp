@@ -1,4 +1,4 @@
-// urban_detection/ObjectTracker (issue 28): objects -> objects/tracked (TrackedObjectArray:
+// urban_detection/ObjectTracker: objects -> objects/tracked (TrackedObjectArray:
 // stable ids, velocities, tentative/confirmed/lost) and objects/tracked/markers. Tracks live
 // in ~fixed_frame (default odom) when tf gives fixed_frame <- the objects' frame at their stamp,
 // else in the objects' own frame with velocities marked relative (velocities_relative; one

@@ -1,4 +1,4 @@
-// urban_detection_camera_replay: a camera for the camera stage (issue 27) without a camera. It
+// urban_detection_camera_replay: a camera for the camera stage without a camera. It
 // publishes one KITTI object frame's left colour image (image_2) over and over, stamped now,
 // with its CameraInfo (P = P2) and the static tf camera <- LiDAR of its calibration
 // (R0_rect * Tr_velo_to_cam), so ImageLabelTransfer runs its network on real images at a camera

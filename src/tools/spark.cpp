@@ -1,5 +1,5 @@
-// urban_detection_spark: 2-D semantic segmentation transferred to 3-D point clouds (issue 9,
-// second seed paper "SPARK").
+// urban_detection_spark: 2-D semantic segmentation transferred to 3-D point clouds (the
+// second seed paper, "SPARK").
 //
 //   urban_detection_spark run --cloud CLOUD --path PATH.json (--model NET.onnx | --masks DIR |
 //                             --render-only) --out DIR [options]
@@ -14,7 +14,7 @@
 //       Writes the coloured synthetic street (scene.pcd, x y z rgb) and a path (path.json) to try
 //       `run` with the colour network of test/spark_colour_model.py.
 //   urban_detection_spark kitti --kitti DIR (--model NET | --model-config YAML | --box-oracle)
-//       Issue 27: the network on KITTI object frames (image_2, calib, velodyne, label_2). Per
+//       The network on KITTI object frames (image_2, calib, velodyne, label_2). Per
 //       labelled object in the camera view: its camera category vs. the KITTI type (Car, Van,
 //       Truck -> vehicle; Pedestrian, Person_sitting -> pedestrian; Cyclist -> cyclist) by range;
 //       then the precision of the in-view detections (hierarchical grid + LiDAR classifier) with
@@ -573,7 +573,7 @@ int runSynthetic(int argc, char** argv) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// KITTI object frames, real network (issue 27). Two questions:
+// KITTI object frames, real network. Two questions:
 // 1. What class does the camera give the labelled objects it sees? The points of each labelled
 //    3-D box form an object; its camera category (fuseObjectClass in camera mode over the
 //    class map) is compared with the KITTI type's category, split by range.

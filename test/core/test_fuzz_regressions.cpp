@@ -1,4 +1,4 @@
-// Regression tests for bugs found by the libFuzzer targets of test/fuzz (issue 8). Each test
+// Regression tests for bugs found by the libFuzzer targets of test/fuzz. Each test
 // names the target that found the bug; the crashing input is kept in that target's seed
 // corpus (test/fuzz/corpus/<target>/crash-*) so the fuzzers replay it too.
 #include <gtest/gtest.h>

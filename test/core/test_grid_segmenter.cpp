@@ -146,7 +146,7 @@ TEST(GridSegmenter, CurbAndSidewalkStayGround) {
 }
 
 TEST(GridSegmenter, CurbInsideACellWithMostPointsOnTheRoadIsGroundWithCurbCells) {
-  // The simulated drive's false objects (issue 24, item 8): a 0.14 m curb at y = 5.3, inside
+  // The simulated drive's false objects: a 0.14 m curb at y = 5.3, inside
   // the cells 5.0..5.5 m, with three of their five rows of points on the road. A flat cell's
   // ground is its mean (0.056 m), which puts the sidewalk points 0.084 m above it, beyond the
   // 0.08 m tolerance: they form a short strip 0.2 m wide along the curb unless

@@ -519,7 +519,7 @@ TEST(RevolutionCutter, FirstPacketAndResetDoNotStartRevolution) {
   EXPECT_TRUE(wrapped.startsNewRevolution(27000));
 }
 
-// Hostile streams (issue 25): out-of-order and stray packets never cut a revolution; a real
+// Hostile streams: out-of-order and stray packets never cut a revolution; a real
 // jump of the stream is followed after one confirming packet.
 TEST(RevolutionCutter, ReorderedAndStrayPacketsDoNotCut) {
   using Step = uc::RevolutionCutter::Step;

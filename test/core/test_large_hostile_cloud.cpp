@@ -1,5 +1,5 @@
-// A deterministic 2-million-point revolution through segmentation and both detectors
-// (issue 8: "2 million points"), with non-finite, huge and out-of-grid points interleaved and
+// A deterministic 2-million-point revolution through segmentation and both detectors,
+// with non-finite, huge and out-of-grid points interleaved and
 // 3000 points in a single grid cell. Expected labels and objects come from how the scene was
 // built, not from running the code: the lattice is ground, the car box and the post are the
 // only short objects, every hostile point is unknown and in no object.

@@ -273,7 +273,7 @@ TEST(PcapIo, CorruptedCapturesNeverCrash) {
   std::remove(path.c_str());
 }
 
-// The replay timeline (issue 25 D): capture times that go back, stand still or jump are
+// The replay timeline: capture times that go back, stand still or jump are
 // replaced by the nominal packet period; sane stretches keep their recorded gaps.
 TEST(ReplayTimeline, AnomaliesAdvanceByTheNominalPeriod) {
   using A = uc::ReplayTimeline::Anomaly;

@@ -344,7 +344,7 @@ TEST(SimConfig, DemoDriveFileParsesAndTyposAreRejected) {
       std::invalid_argument);
 }
 
-// ---- vegetation (issue 23) ---------------------------------------------------------------------
+// ---- vegetation ---------------------------------------------------------------------
 
 namespace {
 

@@ -1,4 +1,4 @@
-// Issue 27: the camera stage with a real network. The fusion rule, the owned label map the
+// the camera stage with a real network. The fusion rule, the owned label map the
 // inference thread hands over, the newest-image mailbox and mask history, and ENet (Cityscapes,
 // Torch7, ../shared/data/models/enet-cityscapes) on a real KITTI frame: the near car of frame
 // 000003 must come out as a vehicle. Tests that need the shared data skip visibly without it.

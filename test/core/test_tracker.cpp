@@ -1,4 +1,4 @@
-// Tracker (issue 28): constant-velocity targets, crossing targets, birth and death, ego-motion
+// Tracker: constant-velocity targets, crossing targets, birth and death, ego-motion
 // compensation, the Hungarian solver against brute force, parameter validation and hostile
 // input. Synthetic detections only; no ROS.
 #include <algorithm>

@@ -1,4 +1,4 @@
-// Regression tests for ROS-layer bugs found by the libFuzzer targets of test/fuzz (issue 8);
+// Regression tests for ROS-layer bugs found by the libFuzzer targets of test/fuzz;
 // the crashing inputs stay in test/fuzz/corpus/<target>/crash-* so the fuzzers replay them.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Error contract (issue 8), nodelets loaded into this process:
+// Error contract, nodelets loaded into this process:
 //  * a PointCloud2 without x, y, z (CloudInput, the adapter of PointCloud2 sources): one clear
 //    ERROR naming the fields it has (not one per message), every such cloud counted
 //    (rejected_inputs), the next good cloud processed by the segmentation behind it;

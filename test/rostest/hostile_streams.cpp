@@ -1,11 +1,11 @@
-// Hostile streams (issue 25), nodelets loaded into this process: PacketSource replays a pcap of
+// Hostile streams, nodelets loaded into this process: PacketSource replays a pcap of
 // the simulated drive at the sensor's pace, decoding as packets arrive, into GridSegmentation
 // and HierarchicalGridDetector. Altered copies of the same pcap, each revolution carrying
 //  * one swapped packet pair (a network reordering, mid-revolution),
 //  * one extra packet with azimuth 0xFFFF,
 //  * one extra 1206-byte datagram of random bytes (another sender, device_ip empty),
 // must give the same revolutions (header.seq) with the same objects as the clean pcap, at 10 Hz.
-// So must a copy whose capture times go back, stand still and jump a year ahead (issue 25 D).
+// So must a copy whose capture times go back, stand still and jump a year ahead.
 // The same packets in another model's layout (VLP-16: every block 0xFFEE) give no revolution
 // and one WARN naming the model.
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
@@ -72,7 +72,7 @@ const Stream& cleanStream() {
 
 enum class Alteration { kNone, kSwappedPair, kBadAzimuth, kForeignDatagram, kVlp16, kTimes };
 
-// Issue 25 D: capture times that go back 10 s mid-revolution 3, stand still for 200 packets in
+// capture times that go back 10 s mid-revolution 3, stand still for 200 packets in
 // revolution 6 and jump a year ahead in revolution 9 (the packets themselves unchanged).
 double alteredStamp(const Stream& s, std::size_t i) {
   const auto mid = [&](std::size_t r) { return s.revolution_start[r] + 150; };

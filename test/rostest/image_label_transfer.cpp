@@ -3,7 +3,7 @@
 // config/image_label_transfer.yaml (loaded by the .test file) and the colour network of
 // test/spark_colour_model.py built here. A synthetic camera (static tf from the LiDAR frame)
 // sees a red and a green region; objects projecting there must come back as car / vegetation.
-// Then (issue 27) fusion: fused confirms, vetoes and keeps unseen objects; bad encodings and a
+// Then fusion: fused confirms, vetoes and keeps unseen objects; bad encodings and a
 // missing tf leave the LiDAR classes and the stage running.
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 

@@ -1,4 +1,4 @@
-// Load (issue 8), with the nodelets loaded into this process (nodelet::Loader):
+// Load, with the nodelets loaded into this process (nodelet::Loader):
 //  * UDP flood: PacketSource (and PacketToCloud behind it) receive a continuous spin at 5x the
 //    HDL-64E packet rate for 10 s, then at the normal rate: nothing crashes, every datagram is
 //    either received or counted as a kernel drop on /diagnostics, whole revolutions come out

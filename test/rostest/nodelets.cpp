@@ -837,7 +837,7 @@ TEST(PacketSource, BadParametersFailInitClearly) {
       5.0));
 }
 
-// A value of the wrong type is refused, never replaced by the default (issue 25): strings where
+// A value of the wrong type is refused, never replaced by the default: strings where
 // numbers belong, as YAML 1.1 reads `cell_size_m: half` and `min_points_per_cell: 5e0`.
 TEST(GridSegmentation, WrongParameterTypesFailInitClearly) {
   RosoutWatcher rosout;

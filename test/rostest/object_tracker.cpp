@@ -1,4 +1,4 @@
-// ObjectTracker nodelet (issue 28), loaded into this process, fed DetectedObjectArray
+// ObjectTracker nodelet, loaded into this process, fed DetectedObjectArray
 // revolutions:
 //  * ids stay the same over revolutions, a moving object gets its velocity, the markers carry
 //    box, arrow and "id class speed" per confirmed track;

@@ -1,4 +1,4 @@
-// The command-line contract of the measuring tools (issues 4 and 6): urban_detection_bench,
+// The command-line contract of the measuring tools: urban_detection_bench,
 // urban_detection_eval and urban_detection_seg_eval run on a short simulated drive (made here
 // with urban_detection_simulate) and write the JSON keys that scripts and CI consume, with
 // values that agree with each other.
@@ -182,7 +182,7 @@ TEST_F(ToolsTest, EvalScoresBothDetectorsConsistentlyAndHierBeatsKdTree) {
   EXPECT_GE(hier.get<double>("recall"), 0.42);
 }
 
-// urban_detection_seg_eval --sim: the segmentation figures of issue 4 against the simulator's
+// urban_detection_seg_eval --sim: the segmentation figures against the simulator's
 // exact per-point classes. The seeded 4-revolution drive passes a facade close to the sensor,
 // which is what the Hough refinement is for.
 TEST_F(ToolsTest, SegEvalScoresTheSimulatedDriveAndShowsWhatHoughAdds) {
@@ -202,7 +202,7 @@ TEST_F(ToolsTest, SegEvalScoresTheSimulatedDriveAndShowsWhatHoughAdds) {
   }
   const double p = on.get<double>("ground_precision"), r = on.get<double>("ground_recall");
   EXPECT_NEAR(2 * p * r / (p + r), on.get<double>("ground_f1"), 1e-5);
-  // Issue 4's targets, on this drive (measured 0.995 / 1.000 / 0.998 / 0.977).
+  // The segmentation targets, on this drive (measured 0.995 / 1.000 / 0.998 / 0.977).
   EXPECT_GE(on.get<double>("ground_f1"), 0.95);
   EXPECT_GE(on.get<double>("wall_not_foreground"), 0.95);
   EXPECT_GE(on.get<double>("car_foreground"), 0.95);
@@ -235,7 +235,7 @@ TEST_F(ToolsTest, SegEvalRejectsBadArgumentsAndMissingFiles) {
 
 }  // namespace
 
-// Tracking (issue 28): eval --tracking writes the CLEAR-MOT keys, with counts that add up; the
+// Tracking: eval --tracking writes the CLEAR-MOT keys, with counts that add up; the
 // tracker on the ground-truth boxes does at least as well as on the detections; the bench times
 // the tracker at 100 objects; a bad tracker config is refused with its reason.
 TEST_F(ToolsTest, EvalTrackingWritesClearMotAndBenchTimesTheTracker) {

@@ -1,5 +1,5 @@
 /// \file image_label_transfer_ros.h
-/// ROS glue of the image -> object label transfer (issue 9): sensor_msgs/Image and CameraInfo
+/// ROS glue of the image -> object label transfer: sensor_msgs/Image and CameraInfo
 /// to OpenCV / core types, parameter loading, and writing the votes into DetectedObjectArray.
 /// No ROS master needed except for loadImageLabelTransferParams().
 #pragma once

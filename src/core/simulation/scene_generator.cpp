@@ -587,7 +587,7 @@ class Generator {
     }
   }
 
-  // ---- vegetation and terrain (issue 23) ------------------------------------------------------
+  // ---- vegetation and terrain ------------------------------------------------------
   // xy footprint of every object over the whole drive (moving ones swept), for keeping
   // vegetation clear of them.
   void collectFootprints() {

@@ -10,7 +10,7 @@
 /// objects touching a wall, a narrow street whose facade is within 3 m of the sensor).
 ///
 /// Vegetation (VegetationParams) makes the scene as hard as a real street, where most false
-/// objects are hedges, bushes, grass and terrain steps (issue 23): grass verges along the curb,
+/// objects are hedges, bushes, grass and terrain steps: grass verges along the curb,
 /// front gardens wherever the facade line has no building front (gaps, setbacks, open sides)
 /// with a terrain step at the sidewalk's back edge, trimmed hedges and irregular bushes, shrubs
 /// against the facades that stand on the sidewalk, and tree

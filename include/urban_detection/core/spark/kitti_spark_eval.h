@@ -1,5 +1,5 @@
 /// \file kitti_spark_eval.h
-/// KITTI object frames for the camera stage (issue 27): one frame's cloud, labels, calibration
+/// KITTI object frames for the camera stage: one frame's cloud, labels, calibration
 /// and image as the live transfer sees them (a pinhole camera and the camera <- LiDAR
 /// transform), the objects made of the points of each labelled 3-D box, and the KITTI type ->
 /// object category rule of the evaluation. Used by `urban_detection_spark kitti` and the tests.

@@ -1,5 +1,5 @@
 /// \file latest_slot.h
-/// The hand-over between the camera stage's callbacks and its inference thread (issue 27):
+/// The hand-over between the camera stage's callbacks and its inference thread:
 /// LatestSlot keeps only the newest input (an older one not yet taken is dropped, so the
 /// network always works on the newest image and never builds a queue), and MaskHistory keeps
 /// the last few segmented images so an object cloud can take the newest mask whose stamp is

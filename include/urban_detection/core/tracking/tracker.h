@@ -1,5 +1,5 @@
 /// \file tracker.h
-/// Multi-object tracking of detected objects over revolutions (issue 28). ROS-free.
+/// Multi-object tracking of detected objects over revolutions. ROS-free.
 ///
 /// Each track is a constant-velocity Kalman filter on the box centre in a fixed frame
 /// (state x, y, vx, vy [m, m/s]); height, yaw and box size are smoothed exponentially. Every
