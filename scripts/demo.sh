@@ -6,7 +6,7 @@
 # detections right, in the class colours of rviz; yellow boxes missed objects, red boxes false
 # detections) and copies the busiest revolution to results/demo.png. Prints the per-class table
 # and where the picture is. Extra arguments go to urban_detection_eval.
-# Per-stage timings of the simulated chain: rosrun urban_detection urban_detection_demo.
+# Per-stage timings of the same chain: scripts/run bench (its `sim` row is this drive).
 set -euo pipefail
 # shellcheck source=tool_env.sh
 source "$(dirname "${BASH_SOURCE[0]}")/tool_env.sh"  # REPO BIN DATA OUT PIN CONFIGS
