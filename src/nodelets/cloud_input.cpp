@@ -21,10 +21,9 @@
 #include "urban_detection/ros/cloud_serialization.h"
 
 #include "urban_detection/core/sensor/hdl64e_packet.h"
-#include "urban_detection/ros/lazy_outputs.h"
+#include "urban_detection/ros/lazy_stage.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/pointcloud2_input.h"
-#include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
 namespace ros_conv {
@@ -32,30 +31,25 @@ namespace ros_conv {
 class CloudInputNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
     try {
       loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
       loadParam(getPrivateNodeHandle(), "max_points", &max_points_, 1, 100000000, "points");
     } catch (const ParamError& e) {
-      refusal_ = ros_conv::RefusalDiagnostics::report(
-          getNodeHandle(), getPrivateNodeHandle(), getName(),
-          "CloudInput: " + std::string(e.what()) + "; the nodelet stays idle");
-      return;
+      return stage_.refuse(nh, getPrivateNodeHandle(), getName(),
+                           "CloudInput: " + std::string(e.what()) + "; the nodelet stays idle");
     }
-    diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
-        getNodeHandle(), getPrivateNodeHandle(), getName(), "cloud input");
-    diagnostics_->setActive(false);
-    lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
-      diagnostics_->setActive(wanted);
-      if (!wanted) return sub_.shutdown();
-      sub_ = getNodeHandle().subscribe("points_in", queue_size_, &CloudInputNodelet::cloudCb, this,
-                                       ros::TransportHints().tcpNoDelay());
+    stage_.start(nh, getPrivateNodeHandle(), getName(), "cloud input", [this, nh]() mutable {
+      return nh.subscribe("points_in", queue_size_, &CloudInputNodelet::cloudCb, this,
+                          ros::TransportHints().tcpNoDelay());
     });
-    pub_ = lazy_->advertise<CloudXYZIRT>(getNodeHandle(), "velodyne_points", 2);
+    pub_ = stage_.advertise<CloudXYZIRT>(nh, "velodyne_points", 2);
   }
 
   void cloudCb(const sensor_msgs::PointCloud2ConstPtr& msg) {
     const ros::WallTime start = ros::WallTime::now();
-    diagnostics_->input(msg->header.seq);
+    StageDiagnostics& diagnostics = stage_.diagnostics();
+    diagnostics.input(msg->header.seq);
     const std::uint64_t points = static_cast<std::uint64_t>(msg->width) * msg->height;
     std::string error;
     if (points > static_cast<std::uint64_t>(max_points_)) {  // before any allocation of ours
@@ -66,7 +60,7 @@ class CloudInputNodelet : public nodelet::Nodelet {
     ros_conv::PointCloud2InputInfo info;
     if (error.empty()) ros_conv::fromPointCloud2(*msg, cloud.get(), &info, &error);
     if (!error.empty()) {  // one throttled ERROR per kind of fault; counted on /diagnostics
-      if (diagnostics_->refuse(error)) {
+      if (diagnostics.refuse(error)) {
         NODELET_ERROR("CloudInput: refusing a PointCloud2 on points_in: %s", error.c_str());
       }
       return;
@@ -76,22 +70,18 @@ class CloudInputNodelet : public nodelet::Nodelet {
           "CloudInput: input has no ring/time fields (e.g. KITTI); they are set "
           "to 0");
     }
-    diagnostics_->count("non_finite_points", info.non_finite, false);
+    diagnostics.count("non_finite_points", info.non_finite, false);
     cloud->header.seq = msg->header.seq;
     pub_.publish(boost::shared_ptr<const CloudXYZIRT>(cloud));
-    diagnostics_->frame((ros::WallTime::now() - start).toSec());
-    diagnostics_->output();
+    stage_.published(start);
   }
 
   int queue_size_ = 2;
   // Three revolutions at 300 rpm, as PacketToCloud's max_packets_per_scan.
   int max_points_ = static_cast<int>(core::RevolutionBoundary::kMaxPacketsPerRevolution *
                                      core::kBlocksPerPacket * core::kLasersPerBlock);
-  std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
-  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
-  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher pub_;
-  ros::Subscriber sub_;
+  LazyStage stage_;
 };
 
 }  // namespace ros_conv

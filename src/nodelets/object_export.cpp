@@ -10,9 +10,8 @@
 
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/Detection3DArray.h"
-#include "urban_detection/ros/lazy_outputs.h"
+#include "urban_detection/ros/lazy_stage.h"
 #include "urban_detection/ros/param_loading.h"
-#include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/standard_outputs.h"
 
 namespace urban_detection {
@@ -21,43 +20,31 @@ namespace ros_conv {
 class ObjectExportNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
     try {
       loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     } catch (const ParamError& e) {
-      refusal_ = ros_conv::RefusalDiagnostics::report(
-          getNodeHandle(), getPrivateNodeHandle(), getName(),
-          "ObjectExport: " + std::string(e.what()) + "; the nodelet stays idle");
-      return;
+      return stage_.refuse(nh, getPrivateNodeHandle(), getName(),
+                           "ObjectExport: " + std::string(e.what()) + "; the nodelet stays idle");
     }
-    diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
-        getNodeHandle(), getPrivateNodeHandle(), getName(), "export");
-    diagnostics_->setActive(false);
-    lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
-      diagnostics_->setActive(wanted);
-      if (!wanted) return sub_.shutdown();
-      sub_ =
-          getNodeHandle().subscribe("objects", queue_size_, &ObjectExportNodelet::objectsCb, this);
+    stage_.start(nh, getPrivateNodeHandle(), getName(), "export", [this, nh]() mutable {
+      return nh.subscribe("objects", queue_size_, &ObjectExportNodelet::objectsCb, this);
     });
-    pub_ = lazy_->advertise<Detection3DArray>(getNodeHandle(), "objects/detections3d", 2);
+    pub_ = stage_.advertise<Detection3DArray>(nh, "objects/detections3d", 2);
   }
 
   void objectsCb(const DetectedObjectArray::ConstPtr& objects) {
     const ros::WallTime start = ros::WallTime::now();
-    diagnostics_->input(objects->header.seq);
+    stage_.diagnostics().input(objects->header.seq);
     auto out = boost::make_shared<Detection3DArray>();
     ros_conv::toDetection3DArray(*objects, out.get());
     pub_.publish(boost::shared_ptr<const Detection3DArray>(out));
-    diagnostics_->latency(objects->header.stamp, ros::Time::now());
-    diagnostics_->frame((ros::WallTime::now() - start).toSec());
-    diagnostics_->output();
+    stage_.published(start, objects->header.stamp);
   }
 
   int queue_size_ = 2;
-  std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
-  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
-  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher pub_;
-  ros::Subscriber sub_;
+  LazyStage stage_;
 };
 
 }  // namespace ros_conv

@@ -11,10 +11,9 @@
 
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/ObjectMarkersConfig.h"
-#include "urban_detection/ros/lazy_outputs.h"
+#include "urban_detection/ros/lazy_stage.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/param_loading.h"
-#include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/tunable_fields.h"
 #include "urban_detection/ros/validated_reconfigure.h"
 
@@ -29,10 +28,8 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
       loadFields(pnh, &params_);
       loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     } catch (const ParamError& e) {
-      refusal_ = ros_conv::RefusalDiagnostics::report(
-          getNodeHandle(), getPrivateNodeHandle(), getName(),
-          "ObjectMarkers: " + std::string(e.what()) + "; the nodelet stays idle");
-      return;
+      return stage_.refuse(getNodeHandle(), getPrivateNodeHandle(), getName(),
+                           "ObjectMarkers: " + std::string(e.what()) + "; the nodelet stays idle");
     }
     const ObjectMarkersConfig initial = ros_conv::toConfig<ObjectMarkersConfig>(params_);
     auto apply = [this, pnh](const ObjectMarkersConfig& n) {
@@ -43,30 +40,23 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
       return error;
     };
     reconfigure_ = std::make_unique<Reconfigure>(pnh, initial, apply);
-    diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
-        getNodeHandle(), getPrivateNodeHandle(), getName(), "markers");
-    diagnostics_->setActive(false);
-    lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
-      diagnostics_->setActive(wanted);
-      if (!wanted) return sub_.shutdown();
-      sub_ =
-          getNodeHandle().subscribe("objects", queue_size_, &ObjectMarkersNodelet::objectsCb, this);
+    ros::NodeHandle& nh = getNodeHandle();
+    stage_.start(nh, getPrivateNodeHandle(), getName(), "markers", [this, nh]() mutable {
+      return nh.subscribe("objects", queue_size_, &ObjectMarkersNodelet::objectsCb, this);
     });
-    pub_ = lazy_->advertise<visualization_msgs::MarkerArray>(getNodeHandle(), "objects/markers", 2);
+    pub_ = stage_.advertise<visualization_msgs::MarkerArray>(nh, "objects/markers", 2);
   }
 
   void objectsCb(const DetectedObjectArray::ConstPtr& objects) {
     const ros::WallTime start = ros::WallTime::now();
-    diagnostics_->input(objects->header.seq);
+    stage_.diagnostics().input(objects->header.seq);
     auto markers = boost::make_shared<visualization_msgs::MarkerArray>();
     {
       std::lock_guard<std::mutex> lock(params_mutex_);
       ros_conv::buildObjectMarkers(*objects, params_, markers.get());
     }
     pub_.publish(boost::shared_ptr<const visualization_msgs::MarkerArray>(markers));
-    diagnostics_->latency(objects->header.stamp, ros::Time::now());
-    diagnostics_->frame((ros::WallTime::now() - start).toSec());
-    diagnostics_->output();
+    stage_.published(start, objects->header.stamp);
   }
 
   using Reconfigure = ros_conv::ValidatedReconfigure<ObjectMarkersConfig>;
@@ -74,11 +64,8 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
   std::mutex params_mutex_;  // params_ between messages and reconfigure
   int queue_size_ = 2;
   std::unique_ptr<Reconfigure> reconfigure_;
-  std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
-  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
-  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher pub_;
-  ros::Subscriber sub_;
+  LazyStage stage_;
 };
 
 }  // namespace ros_conv

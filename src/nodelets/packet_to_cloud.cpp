@@ -10,10 +10,9 @@
 #include <memory>
 #include <mutex>
 
-#include "urban_detection/ros/lazy_outputs.h"
+#include "urban_detection/ros/lazy_stage.h"
 #include "urban_detection/ros/packet_params.h"
 #include "urban_detection/ros/scan_to_cloud.h"
-#include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
 namespace ros_conv {
@@ -25,35 +24,32 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
       params_ = loadPacketToCloudParams(getPrivateNodeHandle());
       converter_ = std::make_unique<ScanToCloud>(params_, getNodeHandle());
     } catch (const std::exception& e) {  // ParamError, core::CalibrationError
-      refusal_ =
-          ros_conv::RefusalDiagnostics::report(getNodeHandle(), getPrivateNodeHandle(), getName(),
-                                               "PacketToCloud inactive: " + std::string(e.what()));
-      return;
+      return stage_.refuse(getNodeHandle(), getPrivateNodeHandle(), getName(),
+                           "PacketToCloud inactive: " + std::string(e.what()));
     }
     NODELET_INFO("PacketToCloud: calibration %s, range [%.2f, %.2f] m",
                  converter_->decoder().calibration().source.c_str(), params_.decoder.min_range_m,
                  params_.decoder.max_range_m);
-    diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(
-        getNodeHandle(), getPrivateNodeHandle(), getName(), "decoding", "scans");
-    diagnostics_->setActive(false);
-    diagnostics_->setInputTimeouts(kNoSensorDataWarnS, kNoSensorDataErrorS);
     // Input queue_size: the newest revolutions win when decoding is slow.
-    lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
-      diagnostics_->setActive(wanted);
-      if (!wanted) return sub_.shutdown();
-      sub_ = getNodeHandle().subscribe("velodyne_packets", params_.queue_size,
-                                       &PacketToCloudNodelet::scanCb, this,
-                                       ros::TransportHints().tcpNoDelay());
-    });
-    pub_ = lazy_->advertise<CloudXYZIRT>(getNodeHandle(), "velodyne_points", params_.queue_size);
+    ros::NodeHandle& nh = getNodeHandle();
+    StageDiagnostics& diagnostics = stage_.start(
+        nh, getPrivateNodeHandle(), getName(), "decoding",
+        [this, nh]() mutable {
+          return nh.subscribe("velodyne_packets", params_.queue_size, &PacketToCloudNodelet::scanCb,
+                              this, ros::TransportHints().tcpNoDelay());
+        },
+        "scans");
+    diagnostics.setInputTimeouts(kNoSensorDataWarnS, kNoSensorDataErrorS);
+    pub_ = stage_.advertise<CloudXYZIRT>(nh, "velodyne_points", params_.queue_size);
   }
 
   void scanCb(const ros::MessageEvent<const VelodyneScan>& event) {
     const ros::WallTime start = ros::WallTime::now();
     const VelodyneScan::ConstPtr& scan = event.getConstMessage();
-    diagnostics_->input(scan->header.seq, event.getPublisherName());
+    StageDiagnostics& diagnostics = stage_.diagnostics();
+    diagnostics.input(scan->header.seq, event.getPublisherName());
     if (scan->packets.empty()) {
-      diagnostics_->count("empty_scans");
+      diagnostics.count("empty_scans");
       NODELET_WARN_THROTTLE(10, "dropping an empty VelodyneScan");
       return;
     }
@@ -62,7 +58,7 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
       const std::string why =
           "too many packets: a VelodyneScan of " + std::to_string(scan->packets.size()) +
           " packets (max_packets_per_scan " + std::to_string(params_.max_packets_per_scan) + ")";
-      if (diagnostics_->refuse(why)) {
+      if (diagnostics.refuse(why)) {
         NODELET_ERROR("PacketToCloud: refusing %s; nothing of it is decoded", why.c_str());
       }
       return;
@@ -71,12 +67,12 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
     ScanDecodeStats stats;
     std::string tf_error;
     const bool ok = converter_->convert(*scan, cloud.get(), &stats, &tf_error);
-    diagnostics_->count("bad_packets", stats.decode.bad_packets);
-    diagnostics_->count("tf_failures", stats.tf_failures);
-    diagnostics_->count("points", cloud->size(), false);
+    diagnostics.count("bad_packets", stats.decode.bad_packets);
+    diagnostics.count("tf_failures", stats.tf_failures);
+    diagnostics.count("points", cloud->size(), false);
     const std::string empty = emptyRevolutionCause(stats.decode, converter_->decoder().params());
     if (!empty.empty()) {
-      diagnostics_->count("revolutions without points");
+      diagnostics.count("revolutions without points");
       NODELET_WARN_THROTTLE(10, "PacketToCloud: %s", empty.c_str());
     }
     if (stats.decode.bad_packets > 0) {
@@ -90,19 +86,15 @@ class PacketToCloudNodelet : public nodelet::Nodelet {
                             converter_->outputFrame(scan->header.frame_id).c_str(),
                             tf_error.c_str());
     }
-    diagnostics_->frame((ros::WallTime::now() - start).toSec());
-    if (!ok) return;      // no packet could be placed: nothing to publish
+    if (!ok) return diagnostics.frame((ros::WallTime::now() - start).toSec());  // nothing placed
     pub_.publish(cloud);  // fresh, never touched again: zero copy inside the manager
-    diagnostics_->output();
+    stage_.published(start);
   }
 
   PacketToCloudParams params_;
   std::unique_ptr<ScanToCloud> converter_;
-  std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
-  std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
-  std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher pub_;
-  ros::Subscriber sub_;
+  LazyStage stage_;
 };
 
 }  // namespace ros_conv
