@@ -26,11 +26,11 @@ import unittest
 
 import numpy as np
 import rosbag
-import roslib.packages
 import rospy
 import rostest
 from rosgraph_msgs.msg import Log
 from urban_detection.msg import TrackedObjectArray
+from ud_test_helpers import shared_data, tool
 
 PKG = 'urban_detection'
 PARKED_MAX_MPS = 0.5
@@ -39,18 +39,6 @@ MIN_GT_POINTS = 30
 MIN_HITS = 5  # a track's velocity is judged after this many detections
 
 
-def shared_data():
-    if os.environ.get('UD_SHARED_DATA'):
-        return os.environ['UD_SHARED_DATA']
-    src = os.path.realpath(roslib.packages.get_pkg_dir(PKG))
-    return os.path.normpath(os.path.join(src, '..', 'shared', 'data'))
-
-
-def tool(name):
-    paths = roslib.packages.find_node(PKG, name)
-    if not paths:
-        raise RuntimeError('%s is not built' % name)
-    return paths[0]
 
 
 def matrix(t):

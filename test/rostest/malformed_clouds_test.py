@@ -21,18 +21,15 @@ import tempfile
 import threading
 import time
 import unittest
-import xmlrpc.client
 
 import rosbag
-import rosgraph
-import rosnode
-import roslib.packages
 import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import PointCloud2, PointField
 from urban_detection.msg import DetectedObjectArray, VelodyneScan
+from ud_test_helpers import node_pid, tool
 
 PKG = 'urban_detection'
 RSS_SLACK_MB = 20.0
@@ -40,20 +37,6 @@ MARK_S = 1000  # [s] stamps of the malformed clouds: far before any revolution's
 WAIT_S = 15.0  # [s] for a refusal and for /objects after it (a loaded 2-core machine)
 
 
-def tool(name):
-    return roslib.packages.find_node(PKG, name)[0]
-
-
-def node_pid(name):
-    try:
-        uri = rosnode.get_api_uri(rosgraph.Master('/malformed_clouds_test'), name,
-                                   skip_cache=True)
-        if not uri:
-            return None
-        code, _, pid = xmlrpc.client.ServerProxy(uri).getPid('/malformed_clouds_test')
-        return pid if code == 1 else None
-    except (OSError, xmlrpc.client.Error):
-        return None
 
 
 def rss_mb(pid):
@@ -207,7 +190,7 @@ class MalformedClouds(unittest.TestCase):
     def test_each_malformed_cloud_is_refused_and_the_pipeline_goes_on(self):
         self.assertTrue(self.wait(lambda: len(self.objects) >= 10, 40.0),
                         'no /objects before the malformed clouds')
-        manager = node_pid('/urban_detection_manager')
+        manager = node_pid('/urban_detection_manager', '/malformed_clouds_test')
         self.assertIsNotNone(manager)
         steady_mb = self.rss(manager, max)
 
@@ -218,7 +201,7 @@ class MalformedClouds(unittest.TestCase):
             refused = time.time()
             self.assertTrue(self.wait(lambda: self.objects_after(refused), WAIT_S),
                             '/objects did not go on after "%s"' % why)
-            self.assertEqual(node_pid('/urban_detection_manager'), manager,
+            self.assertEqual(node_pid('/urban_detection_manager', '/malformed_clouds_test'), manager,
                              'the manager died on "%s"' % why)
             rospy.loginfo('refused: %s', self.errors_with(why)[0])
 

@@ -20,17 +20,14 @@ import tempfile
 import threading
 import time
 import unittest
-import xmlrpc.client
 
 import rosbag
-import rosgraph
-import rosnode
-import roslib.packages
 import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from nodelet.srv import NodeletList
 from urban_detection.msg import DetectedObjectArray, VelodynePacket, VelodyneScan
+from ud_test_helpers import node_pid, tool
 
 PKG = 'urban_detection'
 HUGE_PACKETS = 100000
@@ -40,21 +37,6 @@ RSS_SLACK_MB = 20.0
 GAP_BOUND_S = 8.0
 
 
-def tool(name):
-    return roslib.packages.find_node(PKG, name)[0]
-
-
-def node_pid(name):
-    """The pid of a node registered with the master, None if it does not answer."""
-    try:
-        uri = rosnode.get_api_uri(rosgraph.Master('/oversized_scans_test'), name,
-                                   skip_cache=True)
-        if not uri:
-            return None
-        code, _, pid = xmlrpc.client.ServerProxy(uri).getPid('/oversized_scans_test')
-        return pid if code == 1 else None
-    except (OSError, xmlrpc.client.Error):
-        return None
 
 
 def rss_mb(pid):
@@ -160,7 +142,7 @@ class OversizedScans(unittest.TestCase):
     def test_oversized_scans_then_a_killed_loader(self):
         self.assertTrue(self.wait(lambda: len(self.objects) > 30, 30.0),
                         'no /objects before the oversized scans')
-        manager = node_pid('/urban_detection_manager')
+        manager = node_pid('/urban_detection_manager', '/oversized_scans_test')
         self.assertIsNotNone(manager)
         steady = []
         for _ in range(10):
@@ -218,7 +200,7 @@ class OversizedScans(unittest.TestCase):
         # the dead one's nodelet and loads it again at the first try: the first new loader
         # process is the one that holds the nodelet (one that failed would exit at once and a
         # second pid would appear).
-        loader = node_pid('/grid_segmentation')
+        loader = node_pid('/grid_segmentation', '/oversized_scans_test')
         self.assertIsNotNone(loader)
         listing = rospy.ServiceProxy('/urban_detection_manager/list', NodeletList)
         self.assertIn('/grid_segmentation', listing().nodelets)
@@ -229,7 +211,7 @@ class OversizedScans(unittest.TestCase):
         since = None
         while time.time() < killed + 60.0 and reloaded_at is None:
             time.sleep(0.1)
-            pid = node_pid('/grid_segmentation')
+            pid = node_pid('/grid_segmentation', '/oversized_scans_test')
             if pid is None or pid == loader or not os.path.exists('/proc/%d' % pid):
                 continue
             if not respawned or respawned[-1] != pid:

@@ -31,10 +31,10 @@ import time
 import unittest
 
 import rosbag
-import roslib.packages
 import rospy
 import rostest
 from urban_detection.msg import DetectedObjectArray
+from ud_test_helpers import tool
 
 PKG = 'urban_detection'
 MIN_RATE_HZ = 9.0
@@ -44,12 +44,6 @@ MIN_RATE_HZ = 9.0
 OBJECT_CLASSES = {7, 8, 9, 10, 11, 12}
 MIN_GT_POINTS = 20    # a ground-truth object with fewer points is not expected to be found
 
-
-def tool(name):
-    paths = roslib.packages.find_node(PKG, name)
-    if not paths:
-        raise RuntimeError('%s is not built' % name)
-    return paths[0]
 
 
 def free_udp_port():

@@ -20,23 +20,12 @@ import unittest
 import roslib.packages
 import rospy
 import rostest
+from ud_test_helpers import shared_data, tool
 
 PKG = 'urban_detection'
 SCANS = 10
 
 
-def shared_data():
-    if os.environ.get('UD_SHARED_DATA'):
-        return os.environ['UD_SHARED_DATA']
-    src = os.path.realpath(roslib.packages.get_pkg_dir(PKG))
-    return os.path.normpath(os.path.join(src, '..', 'shared', 'data'))
-
-
-def tool(name):
-    paths = roslib.packages.find_node(PKG, name)
-    if not paths:
-        raise RuntimeError('%s is not built' % name)
-    return paths[0]
 
 
 def evaluate(seq, *args):
