@@ -359,3 +359,124 @@ TEST_F(ToolsTest, EvalKittiTrackingRunsOnAWrittenSequence) {
                        " --classifier off --max-frames 2",
                    dir_ + "/kitti_tracking_short.log"));
 }
+
+// The shared data (UD_SHARED_DATA or ../shared/data beside the source), "" when absent.
+std::string sharedData() {
+  const char* env = std::getenv("UD_SHARED_DATA");
+  const fs::path root = env ? fs::path(env) : fs::path(UD_SOURCE_DIR) / ".." / "shared" / "data";
+  return fs::is_directory(root) ? fs::canonical(root).string() : std::string();
+}
+
+// urban_detection_spark's report on KITTI object frames with the box oracle (each labelled
+// object's camera class is its own KITTI type): every scored object gets its class, and the
+// precision table adds up (fusion can only keep fewer detections than the LiDAR alone).
+TEST_F(ToolsTest, SparkKittiReportWithTheBoxOracleIsRightOnEveryObject) {
+  const std::string data = sharedData();
+  if (data.empty() || !fs::is_directory(data + "/kitti_object/velodyne")) {
+    GTEST_SKIP() << "shared data not found (KITTI object frames): UD_SHARED_DATA";
+  }
+  const std::string path = dir_ + "/spark_kitti.json";
+  ASSERT_EQ(0, run(kTools + "/urban_detection_spark kitti --kitti " + data +
+                       "/kitti_object --box-oracle --config-dir " + kConfig + " --json " + path,
+                   dir_ + "/spark_kitti.log"))
+      << "see " << dir_ << "/spark_kitti.log";
+  const pt::ptree j = readJson(path);
+  EXPECT_EQ(j.get<int>("frames"), 6);
+  int scored = 0;
+  for (const auto& c : j.get_child("by_category")) {
+    EXPECT_EQ(c.second.get<int>("correct"), c.second.get<int>("n"))
+        << c.second.get<std::string>("category") << " " << c.second.get<std::string>("range");
+    scored += c.second.get<std::string>("range") == "all" ? c.second.get<int>("n") : 0;
+  }
+  EXPECT_GE(scored, 7);  // the 7 vehicles and people in view, at least
+  const int lidar_kept = j.get<int>("precision.lidar.kept");
+  EXPECT_GT(lidar_kept, 0);
+  for (const char* fused : {"fused_veto", "fused_relabel"}) {
+    const pt::ptree& p = j.get_child(std::string("precision.") + fused);
+    EXPECT_EQ(p.get<int>("kept") + p.get<int>("vetoed"), lidar_kept) << fused;
+    EXPECT_LE(p.get<int>("true"), p.get<int>("kept")) << fused;
+    EXPECT_NEAR(p.get<double>("precision"),
+                p.get<int>("kept") ? double(p.get<int>("true")) / p.get<int>("kept") : 0.0, 1e-5);
+  }
+}
+
+// urban_detection_spark synthetic, then run --render-only on it: the synthetic street and its
+// path give one rendered image and one JSON record per view.
+TEST_F(ToolsTest, SparkRendersTheSyntheticStreetAlongItsPath) {
+  const std::string syn = dir_ + "/spark_syn", out = dir_ + "/spark_run";
+  ASSERT_EQ(0,
+            run(kTools + "/urban_detection_spark synthetic --out " + syn, dir_ + "/spark_syn.log"));
+  ASSERT_TRUE(fs::exists(syn + "/scene.pcd"));
+  ASSERT_EQ(0, run(kTools + "/urban_detection_spark run --cloud " + syn + "/scene.pcd --path " +
+                       syn + "/path.json --render-only --out " + out,
+                   dir_ + "/spark_run.log"))
+      << "see " << dir_ << "/spark_run.log";
+  const pt::ptree path = readJson(syn + "/path.json");
+  std::size_t pngs = 0, records = 0;
+  for (const auto& e : fs::directory_iterator(out + "/images")) {
+    pngs += e.path().extension() == ".png";
+    records += e.path().extension() == ".json";
+  }
+  EXPECT_GT(pngs, 0u);
+  EXPECT_EQ(pngs, records);
+  const pt::ptree first = readJson(out + "/images/img_00000.json");
+  EXPECT_GT(first.get<int>("width_px"), 0);
+  EXPECT_GT(first.get<double>("metres_per_pixel"), 0.0);
+  EXPECT_NE(run(kTools + "/urban_detection_spark run --cloud " + syn + "/missing.pcd --path " +
+                    syn + "/path.json --render-only --out " + out,
+                dir_ + "/spark_missing.log"),
+            0);
+}
+
+// urban_detection_train_classifier's leave-one-sequence-out protocol on three sequences of
+// three SemanticKITTI scans each (links to the shared files): one fold per sequence, each
+// held-out sequence scored with the classifier off and on (the classifier only removes
+// detections: no more found objects, no more false ones), and the written model is one the
+// eval loads and that names its training sequences.
+TEST_F(ToolsTest, TrainClassifierFoldsLeaveEachSequenceOutAndWritesALoadableModel) {
+  const std::string data = sharedData();
+  const std::string sk = data + "/semantic_kitti/sequences";
+  if (data.empty() || !fs::is_directory(sk + "/00/velodyne")) {
+    GTEST_SKIP() << "shared data not found (SemanticKITTI): UD_SHARED_DATA";
+  }
+  const std::string root = dir_ + "/sk3";
+  const std::vector<std::string> sequences = {"00", "01", "04"};
+  for (const std::string& q : sequences) {
+    for (const char* sub : {"velodyne", "labels"}) {
+      fs::create_directories(root + "/sequences/" + q + "/" + sub);
+    }
+    for (const char* scan : {"000000", "000001", "000002"}) {
+      fs::create_symlink(sk + "/" + q + "/velodyne/" + scan + ".bin",
+                         root + "/sequences/" + q + "/velodyne/" + scan + ".bin");
+      fs::create_symlink(sk + "/" + q + "/labels/" + scan + ".label",
+                         root + "/sequences/" + q + "/labels/" + scan + ".label");
+    }
+  }
+  const std::string model = dir_ + "/sk3_model.yml.gz", json = dir_ + "/sk3_train.json";
+  ASSERT_EQ(0,
+            run(kTools + "/urban_detection_train_classifier --semantic-kitti " + root + configs() +
+                    " --trees 10 --no-kdtree --augment 0,0 --out " + model + " --json " + json,
+                dir_ + "/sk3_train.log"))
+      << "see " << dir_ << "/sk3_train.log";
+  const pt::ptree j = readJson(json);
+  EXPECT_EQ(j.get<int>("scans"), 9);
+  const pt::ptree& folds = j.get_child("loso.hierarchical_grid.sequences");
+  ASSERT_EQ(folds.size(), sequences.size());
+  for (const std::string& q : sequences) {
+    SCOPED_TRACE(q);
+    const pt::ptree& f = folds.get_child(q);
+    EXPECT_GT(f.get<int>("off.no"), 0);
+    EXPECT_LE(f.get<int>("on.fo"), f.get<int>("off.fo"));
+    EXPECT_LE(f.get<int>("on.no") - f.get<int>("on.mo"),
+              f.get<int>("off.no") - f.get<int>("off.mo"));
+  }
+  ASSERT_TRUE(fs::exists(model));
+  const std::string eval_log = dir_ + "/sk3_eval.log";
+  ASSERT_EQ(0, run(kTools + "/urban_detection_eval --semantic-kitti " + root + "/sequences/04" +
+                       configs() + " --classifier " + model,
+                   eval_log))
+      << "see " << eval_log;
+  std::ifstream in(eval_log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("trained on"), std::string::npos) << text.substr(0, 2000);
+}
