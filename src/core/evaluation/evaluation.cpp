@@ -1,11 +1,11 @@
 #include "urban_detection/core/evaluation/evaluation.h"
 
+#include "urban_detection/core/tracking/hungarian.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
-
-#include <dlib/optimization/max_cost_assignment.h>
 
 namespace urban_detection {
 namespace core {
@@ -65,27 +65,27 @@ std::vector<std::int32_t> assignMaxIou(const std::vector<std::vector<double>>& i
   std::vector<std::int32_t> result(rows, -1);
   if (rows == 0 || cols == 0) return result;
 
-  // dlib wants a square integer matrix. Only pairs at or above the threshold can become
-  // matches, so only they earn anything: a bonus larger than any possible sum of IoU terms
-  // (most valid matches first) plus their IoU scaled to integers with 1e-6 resolution (largest
-  // total IoU second). Letting sub-threshold pairs contribute would let the optimiser trade a
-  // valid match for two overlaps that count for nothing.
+  // A square matrix for the minimum-cost assignment (tracking/hungarian.h), of negated
+  // profits. Only pairs at or above the threshold can become matches, so only they earn
+  // anything: a bonus larger than any possible sum of IoU terms (most valid matches first) plus
+  // their IoU in integer steps of 1e-6 (largest total IoU second; integers keep the sums exact).
+  // Letting sub-threshold pairs contribute would let the optimiser trade a valid match for two
+  // overlaps that count for nothing.
   const std::size_t n = std::max(rows, cols);
-  const long kScale = 1000000;
-  const long bonus = static_cast<long>(n + 1) * kScale;
-  dlib::matrix<long> cost(static_cast<long>(n), static_cast<long>(n));
-  cost = 0;
+  const double kScale = 1e6;
+  const double bonus = static_cast<double>(n + 1) * kScale;
+  std::vector<double> cost(n * n, 0.0);
   for (std::size_t r = 0; r < rows; ++r) {
     for (std::size_t c = 0; c < iou[r].size(); ++c) {
       const double v = iou[r][c];
       if (!(v >= min_iou) || !(v > 0.0)) continue;  // also drops NaN
-      cost(static_cast<long>(r), static_cast<long>(c)) =
-          bonus + std::lround(std::min(v, 1.0) * kScale);
+      cost[r * n + c] = -(bonus + std::round(std::min(v, 1.0) * kScale));
     }
   }
-  const std::vector<long> assignment = dlib::max_cost_assignment(cost);
+  std::vector<int> assignment;
+  solveAssignment(cost, static_cast<int>(n), static_cast<int>(n), &assignment);
   for (std::size_t r = 0; r < rows; ++r) {
-    const long c = assignment[r];
+    const int c = assignment[r];
     if (c < 0 || static_cast<std::size_t>(c) >= iou[r].size()) continue;
     if (iou[r][c] >= min_iou) result[r] = static_cast<std::int32_t>(c);
   }

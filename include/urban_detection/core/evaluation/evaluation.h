@@ -112,7 +112,7 @@ struct FrameMatch {
 };
 
 /// Optimal one-to-one assignment on an IoU matrix (rows: detections, cols: GT objects) by the
-/// Hungarian algorithm (dlib::max_cost_assignment). It maximises first the number of pairs with
+/// Hungarian algorithm (tracking/hungarian.h). It maximises first the number of pairs with
 /// IoU >= min_iou and then the total IoU of those pairs; pairs below min_iou count for nothing
 /// (maximising the total of all IoUs could trade one valid match for two sub-threshold
 /// overlaps). Returns, per row, the assigned column or -1.
