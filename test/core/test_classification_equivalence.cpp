@@ -62,7 +62,7 @@ std::vector<Frame> realFrames() {
       if (core::readPcdXyzi(file, &c)) frames.push_back(detectFrame(file, c));
     }
   }
-  for (const char* seq : {"00", "05", "08"}) {
+  for (const char* seq : {"00", "05", "10"}) {
     const auto files =
         core::listFiles(root + "/semantic_kitti/sequences/" + seq + "/velodyne", ".bin");
     for (std::size_t i = 0; i < files.size() && i < 3; ++i) {
@@ -121,7 +121,8 @@ std::vector<core::ObjectFeatureVector> checkFeatures(const std::vector<Frame>& f
     for (std::size_t i = 0; i < f.objects.size(); ++i) {
       const core::ObjectFeatureVector fast = extractor.compute(f.foreground, f.objects[i]);
       const core::ObjectFeatureVector ref = extractor.computeReference(f.foreground, f.objects[i]);
-      EXPECT_TRUE(sameBits(fast, ref)) << f.name << " object " << i << ":" << differences(fast, ref);
+      EXPECT_TRUE(sameBits(fast, ref))
+          << f.name << " object " << i << ":" << differences(fast, ref);
       all.push_back(fast);
     }
     *objects += f.objects.size();
@@ -191,8 +192,8 @@ TEST(ClassificationEquivalence, HandMadeRowsEqualTheReference) {
     for (int l = 0; l < lasers; ++l) {
       for (int k = 0; k < per_laser; ++k) {
         // Two lasers per elevation row sometimes (0.05 deg apart): interleaved runs.
-        const float elev = (-0.1f + 0.006f * static_cast<float>(l / 2) +
-                            (l % 2 == 1 ? 0.0009f : 0.0f));
+        const float elev =
+            (-0.1f + 0.006f * static_cast<float>(l / 2) + (l % 2 == 1 ? 0.0009f : 0.0f));
         float az = 0.003f * static_cast<float>(k) + (l % 2 == 1 ? 0.0011f : 0.0f);
         if (ties) az = 0.003f * static_cast<float>(k / 2);
         const float r = range + (u(rng) < 0.3f ? 1.5f * u(rng) : 0.02f * u(rng));

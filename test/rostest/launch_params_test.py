@@ -49,7 +49,7 @@ class LaunchParams(unittest.TestCase):
         p = params('live.launch', 'detector:=both')
         self.assertEqual(sections(p, 'hierarchical_grid_detector') - {'thread_nice'},
                          {'hierarchical_grid', 'classifier', 'box_fitting'})
-        self.assertEqual(sections(p, 'kdtree_detector') - {'thread_nice', 'queue_size'},
+        self.assertEqual(sections(p, 'kdtree_detector') - {'thread_nice', 'thread_idle', 'queue_size'},
                          {'kdtree', 'classifier', 'box_fitting'})
         self.assertEqual(sections(p, 'object_markers'), {'markers'})
         self.assertEqual(sections(p, 'object_markers_kdtree'), {'markers'})
@@ -114,6 +114,11 @@ class LaunchParams(unittest.TestCase):
         self.assertIs(p['/packet_source/timestamp_first_packet'], True)
         self.assertEqual(params('live.launch', 'detector:=both')['/kdtree_detector/thread_nice'],
                          10)
+        # Beside the hierarchical chain the baseline only takes spare CPU; alone it does not.
+        self.assertIs(params('live.launch', 'detector:=both')['/kdtree_detector/thread_idle'],
+                      True)
+        self.assertIs(params('live.launch', 'detector:=kdtree')['/kdtree_detector/thread_idle'],
+                      False)
 
     def test_live_streams_unless_motion_compensated(self):
         streaming = nodes('live.launch')

@@ -5,7 +5,9 @@
 /// zero copy (fresh boost::shared_ptr per frame, never touched after publishing), input queue
 /// of ~queue_size revolutions (the newest win), StageDiagnostics on /diagnostics with the
 /// latency from header.stamp to `objects`. Detection runs on the stage's own thread
-/// (StageThread, niceness ~thread_nice), so a slow detector never holds up another stage. A derived
+/// (StageThread, niceness ~thread_nice; ~thread_idle: SCHED_IDLE, the CPU only when no other
+/// thread wants it, and the rate reported as best effort), so a slow detector never holds up
+/// another stage. A derived
 /// nodelet builds its core::ObjectDetector from its parameters and may serve
 /// dynamic_reconfigure, swapping in a new detector between two revolutions. The chain after the
 /// segmentation is core::Pipeline::detect(): the detector, then core::ObjectClassifier
@@ -68,6 +70,7 @@ class DetectorNodelet : public nodelet::Nodelet {
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   int queue_size_ = 2;
   int thread_nice_ = 0;
+  bool thread_idle_ = false;  // SCHED_IDLE stage thread, best-effort diagnostics
   std::unique_ptr<ros_conv::StageThread> thread_;  // runs foregroundCb
   std::unordered_map<std::uint32_t, std::uint32_t> id_of_index_;
   std::unique_ptr<ros_conv::LazyOutputs> lazy_;
