@@ -23,6 +23,8 @@ void DetectorNodelet::onInit() {
     loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
     loadParam(getPrivateNodeHandle(), "thread_nice", &thread_nice_, 0, 19,
               "(nice value of the stage's thread, 0 = the manager's)");
+    getPrivateNodeHandle().param("thread_idle", thread_idle_, false);
+    getPrivateNodeHandle().param("best_effort", best_effort_, false);
     std::unique_ptr<core::ObjectDetector> detector = createDetector(getPrivateNodeHandle());
     core::PipelineParams params;  // the chain after the segmentation (its own nodelet)
     params.detector = detector->name();
@@ -58,7 +60,8 @@ void DetectorNodelet::onInit() {
   diagnostics_ = std::make_unique<ros_conv::StageDiagnostics>(nh, getPrivateNodeHandle(), getName(),
                                                               "detection");
   diagnostics_->setActive(false);
-  thread_ = std::make_unique<ros_conv::StageThread>(thread_nice_);
+  diagnostics_->setBestEffort(best_effort_);
+  thread_ = std::make_unique<ros_conv::StageThread>(thread_nice_, thread_idle_);
   lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
     diagnostics_->setActive(wanted);
     if (!wanted) return sub_.shutdown();
@@ -71,8 +74,8 @@ void DetectorNodelet::onInit() {
   rejected_pub_ = lazy_->advertise<DetectedObjectArray>(nh, "objects/rejected", 2);
   if (classifier.params().enabled) {
     if (!thread_->niceError().empty()) {
-      NODELET_WARN("%s: thread_nice %d not applied: %s", getName().c_str(), thread_nice_,
-                   thread_->niceError().c_str());
+      NODELET_WARN("%s: thread_nice %d / thread_idle %s not applied: %s", getName().c_str(),
+                   thread_nice_, thread_idle_ ? "true" : "false", thread_->niceError().c_str());
     }
     NODELET_INFO("%s: %s detector ready, classifier %s (P(object) >= %.2f)", getName().c_str(),
                  pipeline_->detector().name().c_str(), classifier.params().model_path.c_str(),

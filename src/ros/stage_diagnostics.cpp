@@ -154,6 +154,12 @@ void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
   } else if (window_errors_ > 0) {
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "%s (%lu in %.1f s)",
                   window_error_.c_str(), static_cast<unsigned long>(window_errors_), window_s);
+  } else if (best_effort_ && active_ && (frames_.window > 0 || skipped_.window > 0)) {
+    stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK,
+                  "best effort: %.1f Hz out of %.1f Hz in, newest revolution only (skipped %lu "
+                  "in %.1f s)",
+                  output_hz, input_hz + static_cast<double>(skipped_.window) / window_s,
+                  static_cast<unsigned long>(skipped_.window), window_s);
   } else if (skipped_.window > 0) {
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                   "falling behind: skipped %lu revolutions in %.1f s (newest revolution wins)",
@@ -204,6 +210,7 @@ void StageDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("revolutions", frames_.total);
   stat.add("outputs", outputs_.total);
   stat.add("skipped_revolutions", skipped_.total);
+  if (best_effort_) stat.add("best_effort", "true (spare CPU, newest revolution only)");
   for (auto& kv : counters_) {
     stat.add(kv.first, kv.second.total);
     kv.second.window = 0;

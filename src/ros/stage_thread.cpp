@@ -1,5 +1,6 @@
 #include "urban_detection/ros/stage_thread.h"
 
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -22,14 +23,24 @@ std::mutex nice_mutex;  // nice_error_ written on the stage thread, read by the 
 // Runs once on the stage thread: sets that thread's niceness (Linux: per thread).
 class NiceCallback : public ros::CallbackInterface {
  public:
-  NiceCallback(int nice, std::shared_ptr<std::string> error,
+  NiceCallback(int nice, bool idle, std::shared_ptr<std::string> error,
                std::shared_ptr<std::promise<void>> done)
-      : nice_(nice), error_(std::move(error)), done_(std::move(done)) {}
+      : nice_(nice), idle_(idle), error_(std::move(error)), done_(std::move(done)) {}
   CallResult call() override {
     const pid_t tid = static_cast<pid_t>(syscall(SYS_gettid));
-    if (setpriority(PRIO_PROCESS, static_cast<id_t>(tid), nice_) != 0) {
+    if (nice_ != 0 && setpriority(PRIO_PROCESS, static_cast<id_t>(tid), nice_) != 0) {
       std::lock_guard<std::mutex> lock(nice_mutex);
       *error_ = std::string("setpriority: ") + std::strerror(errno);
+    }
+    if (idle_) {
+      // Per thread on Linux (the tid); an unprivileged thread may always lower its class.
+      sched_param param{};
+      param.sched_priority = 0;
+      if (sched_setscheduler(tid, SCHED_IDLE, &param) != 0) {
+        std::lock_guard<std::mutex> lock(nice_mutex);
+        *error_ += std::string(error_->empty() ? "" : "; ") +
+                   "sched_setscheduler(SCHED_IDLE): " + std::strerror(errno);
+      }
     }
     done_->set_value();
     return Success;
@@ -37,18 +48,23 @@ class NiceCallback : public ros::CallbackInterface {
 
  private:
   int nice_;
+  bool idle_;
   std::shared_ptr<std::string> error_;
   std::shared_ptr<std::promise<void>> done_;
 };
 }  // namespace
 
-StageThread::StageThread(int nice) : nice_(nice), nice_error_(std::make_shared<std::string>()) {
+StageThread::StageThread(int nice, bool idle)
+    : nice_(nice), idle_(idle), nice_error_(std::make_shared<std::string>()) {
   auto done = std::make_shared<std::promise<void>>();
   std::future<void> applied = done->get_future();
-  if (nice_ != 0) queue_.addCallback(boost::make_shared<NiceCallback>(nice_, nice_error_, done));
+  const bool adjust = nice_ != 0 || idle_;
+  if (adjust) {
+    queue_.addCallback(boost::make_shared<NiceCallback>(nice_, idle_, nice_error_, done));
+  }
   spinner_ = std::make_unique<ros::AsyncSpinner>(1, &queue_);
   spinner_->start();
-  if (nice_ != 0 && applied.wait_for(std::chrono::seconds(2)) != std::future_status::ready) {
+  if (adjust && applied.wait_for(std::chrono::seconds(2)) != std::future_status::ready) {
     std::lock_guard<std::mutex> lock(nice_mutex);
     *nice_error_ = "the stage thread did not start";
   }

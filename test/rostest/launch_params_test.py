@@ -49,7 +49,8 @@ class LaunchParams(unittest.TestCase):
         p = params('live.launch', 'detector:=both')
         self.assertEqual(sections(p, 'hierarchical_grid_detector') - {'thread_nice'},
                          {'hierarchical_grid', 'classifier', 'box_fitting'})
-        self.assertEqual(sections(p, 'kdtree_detector') - {'thread_nice', 'queue_size'},
+        self.assertEqual(sections(p, 'kdtree_detector') - {'thread_nice', 'thread_idle', 'best_effort',
+                                                           'queue_size'},
                          {'kdtree', 'classifier', 'box_fitting'})
         self.assertEqual(sections(p, 'object_markers'), {'markers'})
         self.assertEqual(sections(p, 'object_markers_kdtree'), {'markers'})
@@ -114,6 +115,15 @@ class LaunchParams(unittest.TestCase):
         self.assertIs(p['/packet_source/timestamp_first_packet'], True)
         self.assertEqual(params('live.launch', 'detector:=both')['/kdtree_detector/thread_nice'],
                          10)
+        # Beside the hierarchical chain the baseline is best effort (its status says so); alone it
+        # is the detector and falls behind like any other. SCHED_IDLE only when asked.
+        both = params('live.launch', 'detector:=both')
+        self.assertIs(both['/kdtree_detector/best_effort'], True)
+        self.assertIs(both['/kdtree_detector/thread_idle'], False)
+        self.assertIs(params('live.launch', 'detector:=kdtree')['/kdtree_detector/best_effort'],
+                      False)
+        self.assertIs(params('pipeline.launch', 'detector:=both', 'kdtree_idle:=true')[
+            '/kdtree_detector/thread_idle'], True)
 
     def test_live_streams_unless_motion_compensated(self):
         streaming = nodes('live.launch')

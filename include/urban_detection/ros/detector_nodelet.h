@@ -5,7 +5,9 @@
 /// zero copy (fresh boost::shared_ptr per frame, never touched after publishing), input queue
 /// of ~queue_size revolutions (the newest win), StageDiagnostics on /diagnostics with the
 /// latency from header.stamp to `objects`. Detection runs on the stage's own thread
-/// (StageThread, niceness ~thread_nice), so a slow detector never holds up another stage. A derived
+/// (StageThread, niceness ~thread_nice; ~thread_idle: SCHED_IDLE, the CPU only when no other
+/// thread wants it), so a slow detector never holds up another stage; ~best_effort (a baseline
+/// beside the live chain): its rate reported as what it is, not as falling behind. A derived
 /// nodelet builds its core::ObjectDetector from its parameters and may serve
 /// dynamic_reconfigure, swapping in a new detector between two revolutions. The chain after the
 /// segmentation is core::Pipeline::detect(): the detector, then core::ObjectClassifier
@@ -68,6 +70,8 @@ class DetectorNodelet : public nodelet::Nodelet {
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start
   int queue_size_ = 2;
   int thread_nice_ = 0;
+  bool thread_idle_ = false;  // SCHED_IDLE stage thread
+  bool best_effort_ = false;  // diagnostics: best-effort rate, newest revolution only
   std::unique_ptr<ros_conv::StageThread> thread_;  // runs foregroundCb
   std::unordered_map<std::uint32_t, std::uint32_t> id_of_index_;
   std::unique_ptr<ros_conv::LazyOutputs> lazy_;

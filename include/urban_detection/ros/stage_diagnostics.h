@@ -101,6 +101,10 @@ class StageDiagnostics {
   void setActive(bool active);
   /// Revolutions per second the sensor delivers (rpm / 60); 0 = not checked.
   void setExpectedRate(double hz);
+  /// A best-effort stage (a baseline on spare CPU, the newest revolution only): skipped
+  /// revolutions and a rate below the sensor's are its normal state, so the status stays OK
+  /// and says so, with its output rate, instead of "falling behind".
+  void setBestEffort(bool on) { best_effort_ = on; }
   /// For the stage that takes the sensor's data: while active and no input came for `warn_s`
   /// seconds the status is WARN "no sensor data for N s", after `error_s` ERROR (0: off).
   void setInputTimeouts(double warn_s, double error_s);
@@ -123,6 +127,7 @@ class StageDiagnostics {
   double load_warn_fraction_;
   std::mutex mutex_;
   bool active_ = true;
+  bool best_effort_ = false;
   double expected_hz_ = 0.0;
   double no_input_warn_s_ = 0.0, no_input_error_s_ = 0.0;
   ros::WallTime last_input_;  // or when the stage became active

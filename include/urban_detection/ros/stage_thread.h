@@ -21,8 +21,11 @@ namespace ros_conv {
 class StageThread {
  public:
   /// `nice` [0..19]: the thread's scheduling niceness (0 = the manager's; higher = yields the
-  /// CPU to the other stages, for a baseline that may run behind). Starts at once.
-  explicit StageThread(int nice = 0);
+  /// CPU to the other stages, for a baseline that may run behind). `idle`: the thread runs
+  /// under SCHED_IDLE (Linux), the lowest class: whenever another thread of the machine is
+  /// runnable it gets the CPU first, and a waking stage preempts this one at once (a niceness
+  /// only shares the CPU by weight). For a stage whose rate does not matter. Starts at once.
+  explicit StageThread(int nice = 0, bool idle = false);
   ~StageThread();  // stop()
   StageThread(const StageThread&) = delete;
   StageThread& operator=(const StageThread&) = delete;
@@ -32,13 +35,14 @@ class StageThread {
   /// Waits for the running callback to return and stops; later callbacks are dropped.
   /// Call it first in the nodelet's destructor, before the state the callbacks use goes.
   void stop();
-  /// Why the niceness could not be set ("" if it was, or nice = 0).
+  /// Why the niceness or the idle class could not be set ("" if they were, or not asked for).
   std::string niceError() const;
 
  private:
   ros::CallbackQueue queue_;
   std::unique_ptr<ros::AsyncSpinner> spinner_;
   int nice_ = 0;
+  bool idle_ = false;
   std::shared_ptr<std::string> nice_error_;
 };
 

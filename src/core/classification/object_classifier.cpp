@@ -185,6 +185,7 @@ ObjectClassifierModel ObjectClassifierModel::train(const std::vector<ObjectFeatu
   if (!forest->train(data)) throw std::runtime_error("classifier training: the forest failed");
   m.forest_ = forest;
   m.flatten();
+  m.compact();
   return m;
 }
 
@@ -353,6 +354,7 @@ ObjectClassifierModel ObjectClassifierModel::load(const std::string& path) {
         refuse(path, "a node outside the forest or testing an unknown feature");
       }
     }
+    m.compact();
   } catch (const cv::Exception& e) {
     refuse(path, std::string("corrupt (") + e.err + ")");
   }
@@ -381,7 +383,108 @@ void ObjectClassifierModel::flatten() {
   for (const int r : forest_->getRoots()) roots_.push_back(r);
 }
 
+void ObjectClassifierModel::compact() {
+  compact_.clear();
+  compact_roots_.clear();
+  vote_sums_.clear();
+  // Too large for the child field (or a feature index beyond var's bits): predict() walks
+  // flat_ as predictPlain() does.
+  if (flat_.size() >= (std::size_t{1} << (32 - kVarBits)) || usedFeatures() >= int(kLeaf)) return;
+  compact_.reserve(flat_.size());
+  // Depth first, left child first: an explicit stack of (node, compact node whose right
+  // child it is, or -1).
+  std::vector<std::pair<std::int32_t, std::int64_t>> stack;
+  for (const std::int32_t root : roots_) {
+    compact_roots_.push_back(static_cast<std::uint32_t>(compact_.size()));
+    stack.emplace_back(root, -1);
+    while (!stack.empty()) {
+      const auto [node, parent] = stack.back();
+      stack.pop_back();
+      if (compact_.size() >= flat_.size()) {
+        // More nodes than the source: subtrees shared between parents (a hand-made file; an
+        // OpenCV forest reaches each node once). Walk flat_ instead.
+        compact_.clear();
+        compact_roots_.clear();
+        return;
+      }
+      const std::uint32_t at = static_cast<std::uint32_t>(compact_.size());
+      if (parent >= 0) compact_[static_cast<std::size_t>(parent)].meta |= at << kVarBits;
+      const FlatNode& f = flat_[static_cast<std::size_t>(node)];
+      if (f.var < 0) {
+        const std::uint32_t label = f.label >= 0 && f.label < kNumObjectCategories
+                                        ? static_cast<std::uint32_t>(f.label)
+                                        : static_cast<std::uint32_t>(kNumObjectCategories);
+        compact_.push_back({0.0f, kLeaf | label << kVarBits});
+        continue;
+      }
+      compact_.push_back({f.threshold, static_cast<std::uint32_t>(f.var)});
+      stack.emplace_back(f.right, static_cast<std::int64_t>(at));
+      stack.emplace_back(f.left, -1);
+    }
+  }
+  const float vote = 1.0f / static_cast<float>(roots_.size());
+  vote_sums_.assign(roots_.size() + 1, 0.0f);
+  for (std::size_t k = 1; k < vote_sums_.size(); ++k) vote_sums_[k] = vote_sums_[k - 1] + vote;
+}
+
 void ObjectClassifierModel::predict(
+    const std::vector<ObjectFeatureVector>& features,
+    std::vector<std::array<float, kNumObjectCategories>>* probabilities) const {
+  if (compact_.empty()) return predictPlain(features, probabilities);
+  probabilities->assign(features.size(), std::array<float, kNumObjectCategories>{});
+  if (features.empty()) return;
+  const std::size_t rows = features.size();
+  const int used = usedFeatures();
+  constexpr std::size_t kCounts = kNumObjectCategories + 1;  // the last: leaves without class
+  std::vector<float> x(rows * kNumObjectFeatures);
+  std::vector<std::uint16_t> votes(rows * kCounts, 0);
+  for (std::size_t r = 0; r < rows; ++r) {
+    float* xr = &x[r * kNumObjectFeatures];
+    for (int k = 0; k < used; ++k) xr[k] = std::isfinite(features[r][k]) ? features[r][k] : 0.0f;
+  }
+  const CompactNode* const nodes = compact_.data();
+  for (const std::uint32_t root : compact_roots_) {
+    // Four rows at a time: their walks are independent chains of loads.
+    std::size_t r = 0;
+    for (; r + 4 <= rows; r += 4) {
+      const float* x0 = &x[r * kNumObjectFeatures];
+      const float* x1 = x0 + kNumObjectFeatures;
+      const float* x2 = x1 + kNumObjectFeatures;
+      const float* x3 = x2 + kNumObjectFeatures;
+      std::uint32_t i0 = root, i1 = root, i2 = root, i3 = root;
+      CompactNode n0 = nodes[i0], n1 = n0, n2 = n0, n3 = n0;
+      for (;;) {
+        const std::uint32_t v0 = n0.meta & kLeaf, v1 = n1.meta & kLeaf, v2 = n2.meta & kLeaf,
+                            v3 = n3.meta & kLeaf;
+        if ((v0 & v1 & v2 & v3) == kLeaf) break;
+        if (v0 != kLeaf) n0 = nodes[i0 = x0[v0] <= n0.threshold ? i0 + 1 : n0.meta >> kVarBits];
+        if (v1 != kLeaf) n1 = nodes[i1 = x1[v1] <= n1.threshold ? i1 + 1 : n1.meta >> kVarBits];
+        if (v2 != kLeaf) n2 = nodes[i2 = x2[v2] <= n2.threshold ? i2 + 1 : n2.meta >> kVarBits];
+        if (v3 != kLeaf) n3 = nodes[i3 = x3[v3] <= n3.threshold ? i3 + 1 : n3.meta >> kVarBits];
+      }
+      ++votes[r * kCounts + (n0.meta >> kVarBits)];
+      ++votes[(r + 1) * kCounts + (n1.meta >> kVarBits)];
+      ++votes[(r + 2) * kCounts + (n2.meta >> kVarBits)];
+      ++votes[(r + 3) * kCounts + (n3.meta >> kVarBits)];
+    }
+    for (; r < rows; ++r) {
+      const float* xr = &x[r * kNumObjectFeatures];
+      std::uint32_t i = root;
+      CompactNode n = nodes[i];
+      while ((n.meta & kLeaf) != kLeaf) {
+        i = xr[n.meta & kLeaf] <= n.threshold ? i + 1 : n.meta >> kVarBits;
+        n = nodes[i];
+      }
+      ++votes[r * kCounts + (n.meta >> kVarBits)];
+    }
+  }
+  for (std::size_t r = 0; r < rows; ++r) {
+    auto& p = (*probabilities)[r];
+    for (int c = 0; c < kNumObjectCategories; ++c) p[c] = vote_sums_[votes[r * kCounts + c]];
+  }
+}
+
+void ObjectClassifierModel::predictPlain(
     const std::vector<ObjectFeatureVector>& features,
     std::vector<std::array<float, kNumObjectCategories>>* probabilities) const {
   probabilities->assign(features.size(), std::array<float, kNumObjectCategories>{});

@@ -156,9 +156,16 @@ class ObjectClassifierModel {
   int trees() const;
 
   /// Class probabilities (vote shares, indexed by ObjectCategory value) of each row, from the
-  /// forest's flat copy (a few node loads per tree, no allocation).
+  /// forest's compact copy: 8-byte nodes in depth-first order (a left child follows its
+  /// parent), walked tree by tree over all rows (a tree's nodes stay in the caches for the
+  /// frame's objects), the votes counted and turned into shares by a table of the sums
+  /// predictPlain() forms. Equal bit for bit to predictPlain().
   void predict(const std::vector<ObjectFeatureVector>& features,
                std::vector<std::array<float, kNumObjectCategories>>* probabilities) const;
+  /// The plain walk of predict(): row by row, tree by tree through the flat copy of OpenCV's
+  /// node array, each vote added to its class's share.
+  void predictPlain(const std::vector<ObjectFeatureVector>& features,
+                    std::vector<std::array<float, kNumObjectCategories>>* probabilities) const;
   /// The same through OpenCV's RTrees::getVotes: the plain reference of predict() (tests).
   void predictReference(const std::vector<ObjectFeatureVector>& features,
                         std::vector<std::array<float, kNumObjectCategories>>* probabilities) const;
@@ -172,11 +179,24 @@ class ObjectClassifierModel {
     std::int32_t left, right;
     std::int32_t label;
   };
+  // One node of the compact forest: `meta` = var | child << kVarBits; an inner node tests
+  // feature var <= threshold and goes to the next node (true) or to node `child`; a leaf
+  // (var == kLeaf) votes for class `child` (kNumObjectCategories: no class).
+  struct CompactNode {
+    float threshold;
+    std::uint32_t meta;
+  };
+  static constexpr int kVarBits = 6;
+  static constexpr std::uint32_t kLeaf = (1u << kVarBits) - 1;
   int usedFeatures() const;
-  void flatten();                           // builds flat_ and roots_ from forest_
+  void flatten();  // builds flat_ and roots_ from forest_
+  void compact();  // builds compact_, compact_roots_ and vote_sums_ from the checked flat_
   std::shared_ptr<cv::ml::RTrees> forest_;  // cv::Ptr is std::shared_ptr in OpenCV 4
   std::vector<FlatNode> flat_;
   std::vector<std::int32_t> roots_;
+  std::vector<CompactNode> compact_;
+  std::vector<std::uint32_t> compact_roots_;
+  std::vector<float> vote_sums_;  // [k]: k votes added one by one, as predictPlain() does
   bool use_intensity_ = true;
   ClassDecision decision_;
   ObjectFeatureParams feature_params_;

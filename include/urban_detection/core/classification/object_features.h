@@ -140,7 +140,17 @@ class ObjectFeatureExtractor {
 
   /// Features of one object of the indexed foreground. Indices not found in the foreground and
   /// non-finite points are skipped; an object without any point gives all zeros but its box.
+  /// Bit for bit the features of computeReference(), in fewer passes: the moments, z and
+  /// elevation ranges in the gathering pass, each point's elevation bin computed once, and a
+  /// row that is neither in azimuth order nor reversed ordered by merging its ascending runs
+  /// (a row is a few interleaved runs: returns of neighbouring lasers, or both ends of the
+  /// seam) instead of a comparison sort; a row holding equal azimuths, whose order a sort
+  /// leaves open, is ordered by the reference's std::sort.
   ObjectFeatureVector compute(const LabeledCloud& foreground, const DetectedObject& object);
+  /// The plain reference of compute() (tests): one pass per quantity, the row's points
+  /// ordered by std::sort.
+  ObjectFeatureVector computeReference(const LabeledCloud& foreground,
+                                       const DetectedObject& object);
 
   /// Indexes the foreground and computes the features of every object of one frame.
   /// `features` is cleared and filled, one row per object.
@@ -158,6 +168,9 @@ class ObjectFeatureExtractor {
   ForegroundIndex index_;
   std::vector<RowPoint> rows_, sorted_;          // scratch: points, ordered by elevation bin
   std::vector<std::uint32_t> bin_start_, fill_;  // scratch of the counting sort
+  std::vector<std::uint32_t> bin_of_;            // scratch: each point's elevation bin
+  std::vector<RowPoint> row_copy_, merge_;       // scratch of the run merging
+  std::vector<std::size_t> runs_, next_runs_;    // scratch: run boundaries
   std::vector<float> intensities_;               // scratch
   std::vector<float> bucket_values_;             // scratch of the quantile selection
 };
