@@ -12,6 +12,7 @@
 #include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/object_tracking.h"
+#include "urban_detection/ros/packet_params.h"
 
 using namespace urban_detection;
 
@@ -41,6 +42,12 @@ int main(int argc, char** argv) {
          "server (nodelets, at start-up) and dynamic_reconfigure (live; the `.cfg` name of\n"
          "`hough/votes` is `hough_votes`). A value of the wrong type, an unknown YAML key or a\n"
          "number outside its range is refused with a message naming it; ranges are inclusive.\n\n";
+  section<ros_conv::PacketSourceParams>(
+      "Packet source (PacketSource)",
+      "`config/packet_source.yaml` (top level); nodelet parameters `~<name>`.");
+  section<ros_conv::PacketToCloudParams>(
+      "Packet decoder (PacketToCloud)",
+      "`config/packet_to_cloud.yaml` (top level); nodelet parameters `~<name>`.");
   section<core::GridSegmenterParams>(
       "Segmentation (GridSegmentation)",
       "`config/segmentation.yaml` (top level); nodelet parameters `~<name>`; tunable.");
