@@ -8,8 +8,7 @@
 #include <string>
 
 #include "urban_detection/core/params/params_yaml.h"
-#include "urban_detection/core/spark/camera_fusion.h"
-#include "urban_detection/core/spark/image_label_transfer.h"
+#include "urban_detection/core/spark/camera_model.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/object_tracking.h"
 #include "urban_detection/ros/packet_params.h"
@@ -69,14 +68,12 @@ int main(int argc, char** argv) {
   section<ros_conv::ObjectMarkerParams>(
       "Markers (ObjectMarkers)",
       "`config/markers.yaml`, map `markers:`; nodelet parameters `~markers/<name>`; tunable.");
-  section<core::ImageLabelTransferParams>(
-      "Camera class transfer (ImageLabelTransfer)",
-      "`config/image_label_transfer.yaml`, map `transfer:`; nodelet parameters "
-      "`~transfer/<name>` (the model's parameters: `docs/spark.md`).");
-  section<core::CameraFusionParams>(
-      "Camera fusion rule (ImageLabelTransfer)",
-      "`config/image_label_transfer.yaml`, map `fusion_rule:`; nodelet parameters "
-      "`~fusion_rule/<name>`; the mode is `~fusion` (lidar, camera, fused).");
+  section<core::CameraStageParams>(
+      "Camera stage (ImageLabelTransfer, urban_detection_spark)",
+      "`config/image_label_transfer.yaml` (top level; presets such as "
+      "`config/spark_enet_cityscapes.yaml` load over it); nodelet parameters `~<name>`; "
+      "`urban_detection_spark --model-config`. Relative model files are found in `model/dir` "
+      "(`docs/spark.md`).");
   section<core::TrackerParams>(
       "Tracker (ObjectTracker)",
       "`config/object_tracker.yaml`, map `tracker:`; nodelet parameters `~tracker/<name>`; "

@@ -13,6 +13,7 @@
 #include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/spark/camera_fusion.h"
+#include "urban_detection/core/spark/camera_model.h"
 #include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/tracking/tracker.h"
 
@@ -30,7 +31,8 @@ using Structs =
                      DistanceWeightParams, FarObjectMergerParams, KdTreeDetectorParams,
                      ObjectClassifierParams, TrackerParams, CameraFusionParams,
                      ImageLabelTransferParams, PipelineParams, ObjectFeatureParams,
-                     ClassifierTrainingParams, DecoderParams>;
+                     ClassifierTrainingParams, SegmentationModelParams, CameraModelParams,
+                     CameraStageParams, DecoderParams>;
 TYPED_TEST_SUITE(FieldTable, Structs);
 
 // Unique names, a description each, finite ordered ranges around the in-class default.

@@ -153,6 +153,13 @@ bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& sec
   return applyFields(root, path + ": ", p, error);
 }
 
+bool loadCameraStageParamsYaml(const std::string& path, CameraStageParams* params,
+                               std::string* error) {
+  YAML::Node root;
+  if (!loadRoot(path, "", &root, error)) return false;
+  return applyFields(root, path + ": ", params, error);
+}
+
 bool loadHierarchicalGridParamsYaml(const std::string& path, HierarchicalGridDetectorParams* params,
                                     std::string* error) {
   YAML::Node root;
