@@ -9,6 +9,7 @@
 
 #include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/spark/camera_model.h"
+#include "urban_detection/core/spark/spark_capture.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/object_tracking.h"
 #include "urban_detection/ros/packet_params.h"
@@ -74,6 +75,10 @@ int main(int argc, char** argv) {
       "`config/spark_enet_cityscapes.yaml` load over it); nodelet parameters `~<name>`; "
       "`urban_detection_spark --model-config`. Relative model files are found in `model/dir` "
       "(`docs/spark.md`).");
+  section<core::CapturePathParams>(
+      "SPARK capture path (urban_detection_spark run)",
+      "the `--path PATH.json` file: these keys besides `path` (the camera positions, a list of "
+      "`[x, y, z]`); `colour` is rgb, intensity or height.");
   section<core::TrackerParams>(
       "Tracker (ObjectTracker)",
       "`config/object_tracker.yaml`, map `tracker:`; nodelet parameters `~tracker/<name>`; "
