@@ -2,12 +2,7 @@
 
 #include <tf2_eigen/tf2_eigen.h>
 #include <algorithm>
-#include <array>
-#include <cmath>
 #include <opencv2/imgproc.hpp>
-
-#include "urban_detection/ros/object_conversions.h"
-#include "urban_detection/ros/param_loading.h"
 
 namespace urban_detection {
 namespace ros_conv {
@@ -89,116 +84,66 @@ bool lookupCameraFromCloud(const tf2_ros::Buffer& tf, const std_msgs::Header& im
   return true;
 }
 
-void applyVotes(const DetectedObjectArray& objects, const std::vector<core::ObjectClassVote>& votes,
-                const std::vector<std::string>& names, DetectedObjectArray* out) {
-  *out = objects;
-  for (DetectedObject& o : out->objects) {
-    o.class_label = kUnknownClass;
-    o.class_confidence = 0.0f;
-    const auto it = std::lower_bound(
-        votes.begin(), votes.end(), o.id,
-        [](const core::ObjectClassVote& v, std::uint32_t id) { return v.object_id < id; });
-    if (it == votes.end() || it->object_id != o.id || it->class_id < 0) continue;
-    const auto id = static_cast<std::size_t>(it->class_id);
-    o.class_label =
-        id < names.size() && !names[id].empty() ? names[id] : "class_" + std::to_string(id);
-    o.class_confidence = it->confidence;
+void toClassLabels(const DetectedObjectArray& objects,
+                   std::vector<core::ObjectClassLabel>* labels) {
+  labels->resize(objects.objects.size());
+  for (std::size_t k = 0; k < labels->size(); ++k) {
+    const DetectedObject& o = objects.objects[k];
+    (*labels)[k] = {o.id, o.class_label, o.class_confidence, false};
   }
 }
 
-void applyFusedClasses(const DetectedObjectArray& objects,
-                       const std::vector<core::FusedClass>& fused, DetectedObjectArray* out) {
+void applyClassLabels(const DetectedObjectArray& objects,
+                      const std::vector<core::ObjectClassLabel>& labels, DetectedObjectArray* out) {
   out->header = objects.header;
   out->detector = objects.detector;
   out->objects.clear();
   out->objects.reserve(objects.objects.size());
   for (std::size_t k = 0; k < objects.objects.size(); ++k) {
-    if (k < fused.size() && fused[k].vetoed) continue;
+    if (k < labels.size() && labels[k].vetoed) continue;
     out->objects.push_back(objects.objects[k]);
-    if (k >= fused.size() || !fused[k].camera_used) continue;  // unseen: label kept verbatim
-    DetectedObject& o = out->objects.back();
-    o.class_label = core::toString(fused[k].category);
-    o.class_confidence =
-        fused[k].category == core::ObjectCategory::kUnknown ? 0.0f : fused[k].confidence;
+    if (k >= labels.size()) continue;
+    out->objects.back().class_label = labels[k].class_label;
+    out->objects.back().class_confidence = labels[k].class_confidence;
   }
 }
 
-core::ObjectCategory lidarCategory(const DetectedObject& o) {
-  core::ObjectCategory c = core::ObjectCategory::kUnknown;
-  if (!core::parseObjectCategory(o.class_label, &c)) return core::ObjectCategory::kUnknown;
-  return c;
+void CameraMasks::setInfo(const sensor_msgs::CameraInfo::ConstPtr& info) {
+  std::lock_guard<std::mutex> lock(info_mutex_);
+  info_ = info;
 }
 
-namespace {
-
-std::vector<std::string> loadStringList(const ros::NodeHandle& nh, const std::string& name) {
-  std::vector<std::string> list;
-  if (nh.hasParam(name) && !nh.getParam(name, list)) {
-    throw ParamError("parameter '" + nh.resolveName(name) +
-                     "' must be a list of class names (strings)");
+bool CameraMasks::segment(const sensor_msgs::Image& image, std::string* error,
+                          std::string* warning) {
+  warning->clear();
+  sensor_msgs::CameraInfo::ConstPtr info;
+  {
+    std::lock_guard<std::mutex> lock(info_mutex_);
+    info = info_;
   }
-  return list;
-}
-
-void loadTriple(const ros::NodeHandle& nh, const std::string& name, std::array<double, 3>* v,
-                bool nonzero) {
-  if (!nh.hasParam(name)) return;
-  std::vector<double> list;
-  if (!nh.getParam(name, list) || list.size() != 3) {
-    throw ParamError("parameter '" + nh.resolveName(name) + "' must be a list of 3 numbers");
+  if (!info) {
+    *error = kNoCameraInfo;
+    return false;
   }
-  for (int c = 0; c < 3; ++c) {
-    if (!std::isfinite(list[c]) || (nonzero && list[c] == 0.0)) {
-      throw ParamError("parameter '" + nh.resolveName(name) + "' must hold finite" +
-                       (nonzero ? " non-zero" : "") + " numbers");
-    }
-    (*v)[c] = list[c];
+  auto mask = std::make_shared<Mask>();
+  mask->header = image.header;
+  try {
+    if (!imageToBgr(image, &scratch_, &bgr_, error) ||
+        !cameraFromInfo(*info, &mask->camera, error) || !network_->run(bgr_, &scores_, error))
+      return false;
+  } catch (const std::exception& e) {  // OpenCV
+    *error = e.what();
+    return false;
   }
-}
-
-}  // namespace
-
-void loadImageLabelTransferParams(const ros::NodeHandle& pnh, ImageLabelTransferRosParams* p) {
-  const ros::NodeHandle model(pnh, "model");
-  loadParam(model, "path", &p->model.model_path);
-  loadParam(model, "input_width_px", &p->model.input_width_px, 8, 8192, "px");
-  loadParam(model, "input_height_px", &p->model.input_height_px, 8, 8192, "px");
-  loadParam(model, "input_rgb", &p->model.input_rgb);
-  loadTriple(model, "mean", &p->model.mean, false);
-  loadTriple(model, "scale", &p->model.scale, true);
-  loadParam(model, "output_softmax", &p->model.output_softmax);
-  loadParam(model, "config_file", &p->model.config_path);
-  loadParam(model, "dir", &p->model_dir);
-  loadParam(model, "class_names_file", &p->class_names_file);
-  if (model.hasParam("keep_classes")) p->keep_classes = loadStringList(model, "keep_classes");
-  p->vehicle_classes = loadStringList(model, "vehicle_classes");
-  p->pedestrian_classes = loadStringList(model, "pedestrian_classes");
-  p->cyclist_classes = loadStringList(model, "cyclist_classes");
-  p->other_object_classes = loadStringList(model, "other_object_classes");
-  p->background_classes = loadStringList(model, "background_classes");
-  loadParam(model, "inference_threads", &p->inference_threads, 0, 64);
-  loadParam(model, "inference_nice", &p->inference_nice, 0, 19);
-  // Relative files are found in model/dir (the launch file's model_dir argument), so a preset
-  // names the files of a network and the folder holding them is given where it is run.
-  if (!p->model_dir.empty()) {
-    for (std::string* f : {&p->model.model_path, &p->model.config_path, &p->class_names_file})
-      if (!f->empty() && (*f)[0] != '/') *f = p->model_dir + "/" + *f;
+  if (mask->camera.width_px != bgr_.cols || mask->camera.height_px != bgr_.rows) {
+    *warning = "camera_info is " + std::to_string(mask->camera.width_px) + "x" +
+               std::to_string(mask->camera.height_px) + " but the image " +
+               std::to_string(bgr_.cols) + "x" + std::to_string(bgr_.rows) +
+               "; projecting with camera_info's size";
   }
-  std::string mode = core::toString(p->fusion.mode);
-  loadParam(pnh, "fusion", &mode);
-  if (!core::parseFusionMode(mode, &p->fusion.mode)) {
-    throw ParamError("parameter '" + pnh.resolveName("fusion") + "' is '" + mode +
-                     "'; accepted: lidar, camera, fused");
-  }
-  const ros::NodeHandle rule(pnh, "fusion_rule");
-  loadFields(rule, &p->fusion);
-  const ros::NodeHandle t(pnh, "transfer");
-  loadFields(t, &p->transfer);
-  loadParam(t, "queue_size", &p->queue_size, 1, 100);
-  loadParam(t, "max_sync_interval_s", &p->max_sync_interval_s, 0.0, 1.0, "s");
-  loadParam(t, "max_mask_gap_s", &p->max_mask_gap_s, 0.0, 10.0, "s");
-  loadParam(t, "fixed_frame", &p->fixed_frame);
-  loadParam(t, "tf_timeout_s", &p->tf_timeout_s, 0.0, 1.0, "s");
+  scores_.reduceTo(&mask->scores);
+  history_.push(image.header.stamp.toSec(), std::move(mask));
+  return true;
 }
 
 }  // namespace ros_conv

@@ -49,5 +49,10 @@ void loadParam(const ros::NodeHandle& nh, const std::string& name, std::vector<d
   readOptional(nh, name, value, "a list of numbers");
 }
 
+void loadParam(const ros::NodeHandle& nh, const std::string& name,
+               std::vector<std::string>* value) {
+  readOptional(nh, name, value, "a list of strings");
+}
+
 }  // namespace ros_conv
 }  // namespace urban_detection

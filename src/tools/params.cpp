@@ -8,10 +8,11 @@
 #include <string>
 
 #include "urban_detection/core/params/params_yaml.h"
-#include "urban_detection/core/spark/camera_fusion.h"
-#include "urban_detection/core/spark/image_label_transfer.h"
+#include "urban_detection/core/spark/camera_model.h"
+#include "urban_detection/core/spark/spark_capture.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/object_tracking.h"
+#include "urban_detection/ros/packet_params.h"
 
 using namespace urban_detection;
 
@@ -41,6 +42,12 @@ int main(int argc, char** argv) {
          "server (nodelets, at start-up) and dynamic_reconfigure (live; the `.cfg` name of\n"
          "`hough/votes` is `hough_votes`). A value of the wrong type, an unknown YAML key or a\n"
          "number outside its range is refused with a message naming it; ranges are inclusive.\n\n";
+  section<ros_conv::PacketSourceParams>(
+      "Packet source (PacketSource)",
+      "`config/packet_source.yaml` (top level); nodelet parameters `~<name>`.");
+  section<ros_conv::PacketToCloudParams>(
+      "Packet decoder (PacketToCloud)",
+      "`config/packet_to_cloud.yaml` (top level); nodelet parameters `~<name>`.");
   section<core::GridSegmenterParams>(
       "Segmentation (GridSegmentation)",
       "`config/segmentation.yaml` (top level); nodelet parameters `~<name>`; tunable.");
@@ -62,14 +69,16 @@ int main(int argc, char** argv) {
   section<ros_conv::ObjectMarkerParams>(
       "Markers (ObjectMarkers)",
       "`config/markers.yaml`, map `markers:`; nodelet parameters `~markers/<name>`; tunable.");
-  section<core::ImageLabelTransferParams>(
-      "Camera class transfer (ImageLabelTransfer)",
-      "`config/image_label_transfer.yaml`, map `transfer:`; nodelet parameters "
-      "`~transfer/<name>` (the model's parameters: `docs/spark.md`).");
-  section<core::CameraFusionParams>(
-      "Camera fusion rule (ImageLabelTransfer)",
-      "`config/image_label_transfer.yaml`, map `fusion_rule:`; nodelet parameters "
-      "`~fusion_rule/<name>`; the mode is `~fusion` (lidar, camera, fused).");
+  section<core::CameraStageParams>(
+      "Camera stage (ImageLabelTransfer, urban_detection_spark)",
+      "`config/image_label_transfer.yaml` (top level; presets such as "
+      "`config/spark_enet_cityscapes.yaml` load over it); nodelet parameters `~<name>`; "
+      "`urban_detection_spark --model-config`. Relative model files are found in `model/dir` "
+      "(`docs/spark.md`).");
+  section<core::CapturePathParams>(
+      "SPARK capture path (urban_detection_spark run)",
+      "the `--path PATH.json` file: these keys besides `path` (the camera positions, a list of "
+      "`[x, y, z]`); `colour` is rgb, intensity or height.");
   section<core::TrackerParams>(
       "Tracker (ObjectTracker)",
       "`config/object_tracker.yaml`, map `tracker:`; nodelet parameters `~tracker/<name>`; "

@@ -27,7 +27,6 @@
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <pcl/io/pcd_io.h>
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <chrono>
@@ -46,6 +45,7 @@
 #include "tool_common.h"
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/spark/camera_fusion.h"
 #include "urban_detection/core/spark/image_label_transfer.h"
@@ -54,7 +54,6 @@
 #include "urban_detection/core/spark/spark_instances.h"
 #include "urban_detection/core/spark/spark_scene.h"
 #include "urban_detection/core/spark/spark_segmenter.h"
-#include "urban_detection/ros/image_label_transfer_ros.h"
 #include "urban_detection/ros/object_conversions.h"
 
 namespace ud = urban_detection;
@@ -83,138 +82,72 @@ std::vector<std::string> splitList(const std::string& s) {
   std::exit(1);
 }
 
-// The `model:` map of config/image_label_transfer.yaml (the nodelet's file), so one tuned file
-// serves both. Only the keys present override the defaults.
+// The camera model: config/image_label_transfer.yaml's settings (--model-config, read and checked
+// as the nodelet reads them: core::CameraStageParams), then the command line's overrides.
 struct ModelOptions {
-  core::SegmentationModelParams params;
-  std::vector<std::string> keep;
-  std::string names_file;
-  std::vector<std::string> names;
-  std::string model_dir;  // relative model / names files start here (--model-dir, model/dir)
-  // Camera classes of each object category (model/*_classes of the nodelet's YAML).
-  std::vector<std::string> vehicle, pedestrian, cyclist, other_object, background;
-  core::CameraFusionParams fusion;
+  core::CameraStageParams stage;
+  core::CameraModel model;   // after loadModel()
   std::string colours_file;  // one "r g b" line per class (masks as colour PNGs)
 };
 
-void loadModelYaml(const std::string& path, ModelOptions* mo) {
-  core::SegmentationModelParams* m = &mo->params;
-  std::vector<std::string>* keep = &mo->keep;
-  std::string* names_file = &mo->names_file;
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const std::exception& e) {
-    fail("cannot read " + path + ": " + e.what());
+// --model-config wherever it stands, so every other option overrides the file.
+ModelOptions readModelConfig(int argc, char** argv) {
+  ModelOptions mo;
+  std::string error;
+  for (int i = 2; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) == "--model-config" &&
+        !core::loadCameraStageParamsYaml(argv[i + 1], &mo.stage, &error))
+      fail(error);
   }
-  const YAML::Node n = root["model"];
-  if (!n || !n.IsMap()) fail(path + " has no `model:` map");
-  try {
-    if (n["path"] && !n["path"].as<std::string>().empty())
-      m->model_path = n["path"].as<std::string>();
-    if (n["input_width_px"]) m->input_width_px = n["input_width_px"].as<int>();
-    if (n["input_height_px"]) m->input_height_px = n["input_height_px"].as<int>();
-    if (n["input_rgb"]) m->input_rgb = n["input_rgb"].as<bool>();
-    if (n["output_softmax"]) m->output_softmax = n["output_softmax"].as<bool>();
-    for (const char* key : {"mean", "scale"}) {
-      if (!n[key]) continue;
-      const auto v = n[key].as<std::vector<double>>();
-      if (v.size() != 3) fail(std::string("model/") + key + " needs 3 numbers");
-      auto& dst = std::string(key) == "mean" ? m->mean : m->scale;
-      std::copy(v.begin(), v.end(), dst.begin());
-    }
-    if (n["keep_classes"]) *keep = n["keep_classes"].as<std::vector<std::string>>();
-    if (n["class_names_file"] && !n["class_names_file"].as<std::string>().empty())
-      *names_file = n["class_names_file"].as<std::string>();
-    if (n["config_file"] && !n["config_file"].as<std::string>().empty())
-      m->config_path = n["config_file"].as<std::string>();
-    if (n["dir"] && !n["dir"].as<std::string>().empty() && mo->model_dir.empty())
-      mo->model_dir = n["dir"].as<std::string>();
-    const std::pair<const char*, std::vector<std::string>*> lists[] = {
-        {"vehicle_classes", &mo->vehicle},
-        {"pedestrian_classes", &mo->pedestrian},
-        {"cyclist_classes", &mo->cyclist},
-        {"other_object_classes", &mo->other_object},
-        {"background_classes", &mo->background}};
-    for (const auto& [key, dst] : lists)
-      if (n[key]) *dst = n[key].as<std::vector<std::string>>();
-    if (root["fusion"] &&
-        !core::parseFusionMode(root["fusion"].as<std::string>(), &mo->fusion.mode))
-      fail(path + ": fusion must be lidar, camera or fused");
-    if (const YAML::Node r = root["fusion_rule"]) {
-      if (r["min_visible_points"])
-        mo->fusion.min_visible_points = r["min_visible_points"].as<int>();
-      if (r["veto_share"]) mo->fusion.veto_share = r["veto_share"].as<double>();
-      if (r["min_camera_share"]) mo->fusion.min_camera_share = r["min_camera_share"].as<double>();
-      if (r["relabel"]) mo->fusion.relabel = r["relabel"].as<bool>();
-    }
-  } catch (const YAML::Exception& e) {
-    fail(path + ": " + e.what());
-  }
+  return mo;
 }
 
 // Common model options; returns true when argv[*i] was one of them.
 bool modelOption(int argc, char** argv, int* i, ModelOptions* m) {
   const std::string a = argv[*i];
   auto value = [&](const char* o) { return ud::tools::optionValue(argc, argv, i, o); };
+  core::CameraModelParams& mp = m->stage.model;
   auto triple = [&](const char* o, std::array<double, 3>* dst) {
     const auto v = splitList(value(o));
     if (v.size() != 3) fail(std::string(o) + " needs three comma-separated numbers");
     for (int c = 0; c < 3; ++c) (*dst)[c] = std::stod(v[c]);
   };
   if (a == "--model")
-    m->params.model_path = value("--model");
+    mp.network.model_path = value("--model");
   else if (a == "--model-config")
-    loadModelYaml(value("--model-config"), m);
+    value("--model-config");  // read first, by readModelConfig()
   else if (a == "--model-dir")
-    m->model_dir = value("--model-dir");
+    mp.dir = value("--model-dir");
   else if (a == "--colours")
     m->colours_file = value("--colours");
   else if (a == "--classes")
-    m->names_file = value("--classes");
+    mp.class_names_file = value("--classes");
   else if (a == "--keep")
-    m->keep = splitList(value("--keep"));
+    mp.keep_classes = splitList(value("--keep"));
   else if (a == "--input-size") {
     int w = 0, h = 0;
     if (std::sscanf(value("--input-size").c_str(), "%dx%d", &w, &h) != 2) fail("--input-size WxH");
-    m->params.input_width_px = w;
-    m->params.input_height_px = h;
+    mp.network.input_width_px = w;
+    mp.network.input_height_px = h;
   } else if (a == "--mean")
-    triple("--mean", &m->params.mean);
+    triple("--mean", &mp.network.mean);
   else if (a == "--scale")
-    triple("--scale", &m->params.scale);
+    triple("--scale", &mp.network.scale);
   else if (a == "--bgr")
-    m->params.input_rgb = false;
+    mp.network.input_rgb = false;
   else if (a == "--probabilities")
-    m->params.output_softmax = false;
+    mp.network.output_softmax = false;
   else
     return false;
   return true;
 }
 
-// Relative model, config, names and colours files are found in --model-dir / model/dir.
-void resolveModelFiles(ModelOptions* m) {
-  if (m->model_dir.empty()) return;
-  for (std::string* f :
-       {&m->params.model_path, &m->params.config_path, &m->names_file, &m->colours_file})
-    if (!f->empty() && (*f)[0] != '/') *f = m->model_dir + "/" + *f;
-}
-
-void loadModel(ModelOptions* m, core::SegmentationModel* model) {
+// The nodelet's model loading (core::loadCameraModel); the colours file is also found in the
+// model folder.
+void loadModel(ModelOptions* m, bool load_network) {
   std::string error;
-  resolveModelFiles(m);
-  if (!model->load(m->params, &error)) fail(error);
-  if (!m->names_file.empty() && !core::readClassNames(m->names_file, &m->names, &error))
-    fail(error);
-}
-
-core::CameraClassMap classMap(const ModelOptions& m) {
-  core::CameraClassMap map;
-  std::string error;
-  if (!core::buildCameraClassMap(m.names, m.vehicle, m.pedestrian, m.cyclist, m.other_object,
-                                 m.background, &map, &error))
-    fail(error);
-  return map;
+  if (!core::loadCameraModel(m->stage.model, load_network, &m->model, &error)) fail(error);
+  m->colours_file = core::inModelDir(m->stage.model.dir, m->colours_file);
 }
 
 // Colour of each class id: the colours file ("r g b" or "r,g,b" per line, line n = class n), else a
@@ -315,7 +248,7 @@ bool writeSubCloud(const std::string& path, const ud::CloudXYZIRT& cloud,
 // ---------------------------------------------------------------------------------------------
 int runOffline(int argc, char** argv) {
   std::string cloud_path, path_json, out_dir;
-  ModelOptions mo;
+  ModelOptions mo = readModelConfig(argc, argv);
   core::SparkParams sp;
   std::vector<std::string> cut;
   bool instance_pcd = false, write_images = true, write_masks = false, render_only = false;
@@ -362,22 +295,17 @@ int runOffline(int argc, char** argv) {
   }
   if (cloud_path.empty() || path_json.empty() || out_dir.empty())
     fail("run needs --cloud, --path, --out and one of --model, --masks, --render-only");
-  if (render_only + !masks_dir.empty() + !mo.params.model_path.empty() != 1)
+  if (render_only + !masks_dir.empty() + !mo.stage.model.network.model_path.empty() != 1)
     fail("run needs exactly one of --model NET.onnx, --masks DIR and --render-only");
   if (render_only && !write_images) fail("--render-only writes images; drop --no-images");
   if (!(sp.dbscan_eps_m > 0.0)) fail("--eps must be > 0");
   std::string error;
   core::CapturePathParams cp;
   if (!core::readCapturePathJson(path_json, &cp, &error)) fail(error);
-  core::SegmentationModel model;
-  std::string error_names;
-  if (!mo.params.model_path.empty()) {
-    loadModel(&mo, &model);
-  } else {
-    resolveModelFiles(&mo);
-    if (!mo.names_file.empty() && !core::readClassNames(mo.names_file, &mo.names, &error_names))
-      fail(error_names);
-  }
+  loadModel(&mo, !mo.stage.model.network.model_path.empty());
+  core::SegmentationModel& model = mo.model.network;
+  const std::vector<std::string>& names = mo.model.names;
+  sp.kept_classes = mo.model.kept_classes;
   ud::CloudXYZIRT cloud;
   std::vector<cv::Vec3b> rgb, colours;
   if (!readCloud(cloud_path, &cloud, &rgb, &error)) fail(error);
@@ -403,7 +331,6 @@ int runOffline(int argc, char** argv) {
   cv::Mat image;
   double render_ms = 0, net_ms = 0, cast_ms = 0, io_ms = 0;
   std::size_t drawn = 0, cast_votes = 0;
-  bool kept_resolved = false;
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const auto t0 = Clock::now();
     drawn += renderer.render(cloud, colours, poses[k], cp.splat_radius_px, &image);
@@ -434,14 +361,6 @@ int runOffline(int argc, char** argv) {
       fail(error);
     }
     const auto t3 = Clock::now();
-    if (!kept_resolved) {
-      const int bound =
-          mo.names.empty() ? scores.classIdBound() : static_cast<int>(mo.names.size());
-      if (!core::resolveKeptClasses(mo.keep, mo.names, bound, &sp.kept_classes, &error))
-        fail(error);
-      if (mo.keep.empty()) sp.kept_classes.clear();
-      kept_resolved = true;
-    }
     if (write_masks) {
       const cv::Mat labels = scores.labelImage();
       cv::imwrite(out_dir + "/masks/" + name + ".png", labels);
@@ -478,7 +397,6 @@ int runOffline(int argc, char** argv) {
   std::size_t classified = 0;
   for (const int c : point_class) classified += c >= 0;
 
-  std::vector<std::string> names = mo.names;
   if (!core::writeInstancesJson(out_dir + "/instances.json", cloud_path, instances, names, &error))
     fail(error);
   if (instance_pcd) {
@@ -606,9 +524,9 @@ int runKitti(int argc, char** argv) {
   std::string data = "../shared/data/kitti_object", json_path, config_dir = "config";
   std::string classifier_model;
   std::vector<std::string> configs;
-  ModelOptions mo;
+  ModelOptions mo = readModelConfig(argc, argv);
   bool oracle = false;
-  core::ImageLabelTransferParams tp;
+  core::ImageLabelTransferParams tp = mo.stage.transfer;
   double near_m = 30.0;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
@@ -633,28 +551,35 @@ int runKitti(int argc, char** argv) {
     else if (a == "--occlusion-margin")
       tp.occlusion_margin_m = std::stod(value(a.c_str()));
     else if (a == "--veto-share")
-      mo.fusion.veto_share = std::stod(value(a.c_str()));
+      mo.stage.fusion.veto_share = std::stod(value(a.c_str()));
     else
       fail("unknown option " + a);
   }
-  if (oracle == !mo.params.model_path.empty())
+  if (oracle == !mo.stage.model.network.model_path.empty())
     fail("kitti needs exactly one of --model NET (or --model-config) and --box-oracle");
-  const std::string fusion_error = core::validate(mo.fusion);
+  const std::string fusion_error = core::validate(mo.stage.fusion);
   if (!fusion_error.empty()) fail(fusion_error);
-  core::SegmentationModel model;
-  if (oracle) {
-    mo.names = {"background",     "Car",     "Van",  "Truck", "Pedestrian",
-                "Person_sitting", "Cyclist", "Tram", "Misc"};
-    mo.vehicle = {"Car", "Van", "Truck", "Tram"};
-    mo.pedestrian = {"Pedestrian", "Person_sitting"};
-    mo.cyclist = {"Cyclist"};
-    mo.other_object = {"Misc"};
-    mo.background = {};
+  std::string error;
+  if (oracle) {  // the KITTI types painted as classes: no network, no names file
+    mo.model.names = {"background",     "Car",     "Van",  "Truck", "Pedestrian",
+                      "Person_sitting", "Cyclist", "Tram", "Misc"};
+    const int bound = static_cast<int>(mo.model.names.size());
+    if (!core::resolveKeptClasses(mo.stage.model.keep_classes, mo.model.names, bound,
+                                  &mo.model.kept_classes, &error) ||
+        !core::buildCameraClassMap(mo.model.names, {"Car", "Van", "Truck", "Tram"},
+                                   {"Pedestrian", "Person_sitting"}, {"Cyclist"}, {"Misc"}, {},
+                                   &mo.model.class_map, &error))
+      fail(error);
+    if (mo.stage.model.keep_classes.empty()) mo.model.kept_classes.clear();
   } else {
-    loadModel(&mo, &model);
+    loadModel(&mo, true);
   }
-  if (mo.names.empty()) fail("kitti needs the class names (--classes or model/class_names_file)");
-  const core::CameraClassMap class_map = classMap(mo);
+  if (mo.model.names.empty())
+    fail("kitti needs the class names (--classes or model/class_names_file)");
+  core::SegmentationModel& model = mo.model.network;
+  const std::vector<std::string>& names = mo.model.names;
+  const core::CameraClassMap& class_map = mo.model.class_map;
+  tp.kept_classes = mo.model.kept_classes;
 
   // The LiDAR chain: segmentation, hierarchical grid detector, classifier.
   if (configs.empty()) {
@@ -681,7 +606,6 @@ int runKitti(int argc, char** argv) {
 
   const auto ids = core::listFiles(data + "/label_2", ".txt");
   if (ids.empty()) fail("no label_2/*.txt under " + data);
-  std::string error;
   std::map<std::string, RangeCounts> near_counts, all_counts;  // by KITTI category
   PrecisionCounts lidar_p, veto_p, relabel_p;
   std::vector<double> net_ms, pre_ms, transfer_ms;
@@ -706,13 +630,13 @@ int runKitti(int argc, char** argv) {
       });
       cv::Mat mask(f.image.rows, f.image.cols, CV_8U, cv::Scalar(0));
       for (const std::size_t k : order) {
-        const auto it = std::find(mo.names.begin(), mo.names.end(), f.labels[k].type);
-        if (it == mo.names.end()) continue;
+        const auto it = std::find(names.begin(), names.end(), f.labels[k].type);
+        if (it == names.end()) continue;
         const auto& b = f.labels[k].bbox;
         mask(cv::Rect(cv::Point(static_cast<int>(b[0]), static_cast<int>(b[1])),
                       cv::Point(static_cast<int>(b[2]) + 1, static_cast<int>(b[3]) + 1)) &
              cv::Rect(0, 0, mask.cols, mask.rows))
-            .setTo(static_cast<int>(it - mo.names.begin()));
+            .setTo(static_cast<int>(it - names.begin()));
       }
       scores.assignLabels(mask, -1);
     } else {
@@ -720,14 +644,8 @@ int runKitti(int argc, char** argv) {
       net_ms.push_back(model.stats().inference_ms);
       pre_ms.push_back(model.stats().preprocess_ms);
     }
-    if (tp.kept_classes.empty() && !mo.keep.empty()) {
-      const int bound =
-          mo.names.empty() ? scores.classIdBound() : static_cast<int>(mo.names.size());
-      if (!core::resolveKeptClasses(mo.keep, mo.names, bound, &tp.kept_classes, &error))
-        fail(error);
-    }
     core::ImageLabelTransfer transfer(tp);
-    core::CameraFusionParams camera_mode = mo.fusion;
+    core::CameraFusionParams camera_mode = mo.stage.fusion;
     camera_mode.mode = core::FusionMode::kCamera;
 
     // 1. Labelled objects.
@@ -757,14 +675,14 @@ int runKitti(int argc, char** argv) {
       }
       std::printf("%-7s %-15s %6.1f %7u %7u %-13s %-12s %6.2f %6.2f %s\n", id.c_str(),
                   l.type.c_str(), range, v.points, v.considered,
-                  className(mo.names, best_class).c_str(), cam_name.c_str(), e.best_share,
+                  className(names, best_class).c_str(), cam_name.c_str(), e.best_share,
                   e.background_share(), scored ? (ok ? "yes" : "NO") : "-");
       objects_json << (objects_json.tellp() > 0 ? ",\n  " : "  ") << "{\"frame\": \"" << id
                    << "\", \"type\": \"" << l.type
                    << "\", \"range_m\": " << ud::tools::jsonNumber(range)
                    << ", \"points\": " << v.points << ", \"visible\": " << v.considered
                    << ", \"camera_class\": \""
-                   << ud::tools::jsonEscape(className(mo.names, best_class))
+                   << ud::tools::jsonEscape(className(names, best_class))
                    << "\", \"camera_category\": \"" << cam_name
                    << "\", \"share\": " << ud::tools::jsonNumber(e.best_share)
                    << ", \"background_share\": " << ud::tools::jsonNumber(e.background_share())
@@ -837,7 +755,7 @@ int runKitti(int argc, char** argv) {
         e = core::cameraEvidence(
             transfer.classScores(static_cast<std::size_t>(vit - votes.begin())),
             transfer.classBound(), vit->considered, class_map);
-      core::CameraFusionParams veto = mo.fusion, relabel = mo.fusion;
+      core::CameraFusionParams veto = mo.stage.fusion, relabel = mo.stage.fusion;
       veto.mode = relabel.mode = core::FusionMode::kFused;
       veto.relabel = false;
       relabel.relabel = true;
@@ -875,7 +793,7 @@ int runKitti(int argc, char** argv) {
   // Tables.
   auto pct = [](int a, int b) { return b ? 100.0 * a / b : 0.0; };
   std::printf("\ncamera class of labelled objects in the camera view (%s, %d frames)\n",
-              oracle ? "box oracle" : mo.params.model_path.c_str(), frames);
+              oracle ? "box oracle" : mo.stage.model.network.model_path.c_str(), frames);
   std::printf("%-11s %-8s %5s %8s %7s  %s\n", "KITTI", "range", "n", "correct", "%", "got");
   std::ostringstream by_type;
   for (const char* cat : {"vehicle", "pedestrian", "cyclist"}) {
@@ -909,18 +827,21 @@ int runKitti(int argc, char** argv) {
   if (!oracle)
     std::printf(
         "\nnetwork: median preprocess %.1f ms + inference %.1f ms per image (%dx%d input)\n",
-        mean_pre, mean_net, mo.params.input_width_px, mo.params.input_height_px);
+        mean_pre, mean_net, mo.stage.model.network.input_width_px,
+        mo.stage.model.network.input_height_px);
   std::printf("transfer on the detector's objects: median %.3f ms per revolution\n", mean_tr);
   if (!json_path.empty()) {
     std::ofstream out(json_path);
     if (!out) fail("cannot write " + json_path);
     out << "{\n\"what\": \"urban_detection_spark kitti: camera classes of labelled KITTI objects "
            "in view, and precision of in-view detections with and without the camera\",\n"
-        << "\"model\": \"" << ud::tools::jsonEscape(oracle ? "box oracle" : mo.params.model_path)
-        << "\",\n\"input_px\": [" << mo.params.input_width_px << ", " << mo.params.input_height_px
-        << "],\n\"frames\": " << frames << ",\n\"near_m\": " << ud::tools::jsonNumber(near_m)
-        << ",\n\"veto_share\": " << ud::tools::jsonNumber(mo.fusion.veto_share)
-        << ",\n\"min_camera_share\": " << ud::tools::jsonNumber(mo.fusion.min_camera_share)
+        << "\"model\": \""
+        << ud::tools::jsonEscape(oracle ? "box oracle" : mo.stage.model.network.model_path)
+        << "\",\n\"input_px\": [" << mo.stage.model.network.input_width_px << ", "
+        << mo.stage.model.network.input_height_px << "],\n\"frames\": " << frames
+        << ",\n\"near_m\": " << ud::tools::jsonNumber(near_m)
+        << ",\n\"veto_share\": " << ud::tools::jsonNumber(mo.stage.fusion.veto_share)
+        << ",\n\"min_camera_share\": " << ud::tools::jsonNumber(mo.stage.fusion.min_camera_share)
         << ",\n\"inference_ms_median\": " << ud::tools::jsonNumber(mean_net)
         << ",\n\"preprocess_ms_median\": " << ud::tools::jsonNumber(mean_pre)
         << ",\n\"transfer_ms_median\": " << ud::tools::jsonNumber(mean_tr)

@@ -11,7 +11,9 @@
 #include <string>
 
 #include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/core/spark/camera_fusion.h"
+#include "urban_detection/core/spark/camera_model.h"
 #include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/tracking/tracker.h"
 
@@ -29,7 +31,8 @@ using Structs =
                      DistanceWeightParams, FarObjectMergerParams, KdTreeDetectorParams,
                      ObjectClassifierParams, TrackerParams, CameraFusionParams,
                      ImageLabelTransferParams, PipelineParams, ObjectFeatureParams,
-                     ClassifierTrainingParams>;
+                     ClassifierTrainingParams, SegmentationModelParams, CameraModelParams,
+                     CameraStageParams, DecoderParams>;
 TYPED_TEST_SUITE(FieldTable, Structs);
 
 // Unique names, a description each, finite ordered ranges around the in-class default.
@@ -52,9 +55,19 @@ TYPED_TEST(FieldTable, IsWellFormedAndHoldsTheDefaults) {
         EXPECT_EQ(info.min, std::floor(info.min)) << info.name;
         EXPECT_EQ(info.max, std::floor(info.max)) << info.name;
       }
+    } else if constexpr (kRangedArray<T>) {
+      EXPECT_TRUE(std::isfinite(info.min) && std::isfinite(info.max)) << info.name;
+      for (const double v : value) {
+        EXPECT_TRUE(v >= info.min && v <= info.max) << info.name << ": default outside its range";
+      }
     } else {
       EXPECT_TRUE(std::isinf(info.min) && std::isinf(info.max))
           << info.name << ": a range on a field that is not a number";
+    }
+    if constexpr (std::is_enum_v<T>) {
+      EXPECT_FALSE(choiceName(info, value).empty()) << info.name << ": default has no name";
+    } else {
+      EXPECT_TRUE(info.choices.empty()) << info.name << ": choices on a field that is no enum";
     }
   });
   EXPECT_GT(fields, 0);
@@ -92,6 +105,32 @@ TYPED_TEST(FieldTable, ValidateRefusesEveryFieldOutsideItsRange) {
         });
         EXPECT_FALSE(validate(p).empty()) << info.name << " = NaN accepted";
       }
+    }
+  });
+  // Each element of a fixed-size list, and an enum value without a name, likewise.
+  forEachField(defaults, [&](const FieldInfo& info, const auto& default_value) {
+    using T = std::decay_t<decltype(default_value)>;
+    if constexpr (kRangedArray<T>) {
+      ++ranged;
+      for (std::size_t i = 0; i < default_value.size(); ++i) {
+        TypeParam p;
+        forEachField(p, [&](const FieldInfo& f, auto& v) {
+          if constexpr (std::is_same_v<std::decay_t<decltype(v)>, T>) {
+            if (f.name == info.name) v[i] = info.max + 1.0;
+          }
+        });
+        const std::string error = validate(p);
+        EXPECT_NE(error.find("'" + info.name + "[" + std::to_string(i) + "]'"), std::string::npos)
+            << error;
+      }
+    } else if constexpr (std::is_enum_v<T>) {
+      TypeParam p;
+      forEachField(p, [&](const FieldInfo& f, auto& v) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(v)>, T>) {
+          if (f.name == info.name) v = static_cast<T>(info.choices.size());
+        }
+      });
+      EXPECT_NE(validate(p).find("'" + info.name + "'"), std::string::npos) << validate(p);
     }
   });
   if (!std::is_same_v<TypeParam, DistanceWeightParams>) EXPECT_GT(ranged, 0);

@@ -1,5 +1,5 @@
 // the camera stage with a real network. The fusion rule, the owned label map the
-// inference thread hands over, the newest-image mailbox and mask history, and ENet (Cityscapes,
+// inference thread hands over, and the mask history, and ENet (Cityscapes,
 // Torch7, ../shared/data/models/enet-cityscapes) on a real KITTI frame: the near car of frame
 // 000003 must come out as a vehicle. Tests that need the shared data skip visibly without it.
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
@@ -9,12 +9,11 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <thread>
 
 #include "urban_detection/core/spark/camera_fusion.h"
 #include "urban_detection/core/spark/image_label_transfer.h"
 #include "urban_detection/core/spark/kitti_spark_eval.h"
-#include "urban_detection/core/spark/latest_slot.h"
+#include "urban_detection/core/spark/mask_history.h"
 #include "urban_detection/core/spark/spark_segmenter.h"
 
 namespace urban_detection {
@@ -186,21 +185,6 @@ TEST(SegmentationScores, ReducedLabelMapMatchesScoresEverywhere) {
     }
     blob.ptr<float>()[5] = std::numeric_limits<float>::quiet_NaN();
   }
-}
-
-TEST(LatestSlot, KeepsOnlyTheNewestAndCountsDrops) {
-  core::LatestSlot<int> slot;
-  slot.put(std::make_shared<const int>(1));
-  slot.put(std::make_shared<const int>(2));
-  slot.put(std::make_shared<const int>(3));
-  EXPECT_EQ(slot.dropped(), 2u);
-  EXPECT_EQ(*slot.take(), 3);
-  std::thread closer([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    slot.close();
-  });
-  EXPECT_EQ(slot.take(), nullptr);  // woken by close()
-  closer.join();
 }
 
 TEST(MaskHistory, NewestWithinTheGap) {

@@ -1,5 +1,6 @@
-// ROS glue of the image -> object label transfer: image and CameraInfo conversions, votes into
-// DetectedObjectArray, class names and colours on the markers. No ROS master.
+// ROS glue of the image -> object label transfer: image and CameraInfo conversions, the objects'
+// classes out of and into DetectedObjectArray, class names and colours on the markers. No ROS
+// master.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -89,40 +90,9 @@ TEST(CameraFromInfo, UsesPThenK) {
   EXPECT_FALSE(ros_conv::cameraFromInfo(info, &cam, &error));
 }
 
-TEST(ApplyVotes, FillsClassByObjectId) {
-  DetectedObjectArray objects;
-  objects.header.frame_id = "velodyne";
-  for (std::uint32_t id : {1u, 2u, 3u, 4u}) {
-    DetectedObject o;
-    o.id = id;
-    o.class_label = "unknown";
-    o.indices = {id, id + 10};
-    objects.objects.push_back(o);
-  }
-  std::vector<core::ObjectClassVote> votes(3);
-  votes[0].object_id = 1;
-  votes[0].class_id = 1;
-  votes[0].confidence = 0.9f;
-  votes[1].object_id = 2;
-  votes[1].class_id = -1;  // rejected
-  votes[1].confidence = 0.1f;
-  votes[2].object_id = 4;
-  votes[2].class_id = 7;  // beyond the names
-  votes[2].confidence = 0.5f;
-  DetectedObjectArray out;
-  ros_conv::applyVotes(objects, votes, {"background", "car"}, &out);
-  ASSERT_EQ(out.objects.size(), 4u);
-  EXPECT_EQ(out.header.frame_id, "velodyne");
-  EXPECT_EQ(out.objects[0].class_label, "car");
-  EXPECT_FLOAT_EQ(out.objects[0].class_confidence, 0.9f);
-  EXPECT_EQ(out.objects[1].class_label, "unknown");
-  EXPECT_FLOAT_EQ(out.objects[1].class_confidence, 0.0f);
-  EXPECT_EQ(out.objects[2].class_label, "unknown");  // no points, no vote
-  EXPECT_EQ(out.objects[3].class_label, "class_7");
-  EXPECT_EQ(out.objects[3].indices, (std::vector<std::uint32_t>{4, 14}));
-}
-
-TEST(ApplyFusedClasses, WritesCategoriesAndLeavesNonObjectsOut) {
+// The objects' classes out of and back into the message: labels by position, vetoed objects
+// left out with their ids and indices untouched (objects/points still refers to them).
+TEST(ClassLabels, RoundTripThroughTheMessage) {
   DetectedObjectArray in;
   in.header.frame_id = "velodyne";
   in.detector = "hierarchical_grid";
@@ -134,36 +104,25 @@ TEST(ApplyFusedClasses, WritesCategoriesAndLeavesNonObjectsOut) {
     o.indices = {id, id + 10};
     in.objects.push_back(o);
   }
-  EXPECT_EQ(ros_conv::lidarCategory(in.objects[0]), core::ObjectCategory::kVehicle);
-  DetectedObject odd;
-  odd.class_label = "Car";  // a camera class name is no LiDAR category
-  EXPECT_EQ(ros_conv::lidarCategory(odd), core::ObjectCategory::kUnknown);
-  in.objects.push_back(in.objects[0]);
-  in.objects.back().id = 4;
-  in.objects.back().class_label = "bin";  // not a category: kept verbatim when unseen
-  std::vector<core::FusedClass> fused(4);
-  for (auto& f : fused) f.camera_used = true;
-  fused[0].category = core::ObjectCategory::kVehicle;
-  fused[0].confidence = 0.8f;
-  fused[1].category = core::ObjectCategory::kNonObject;
-  fused[1].vetoed = true;
-  fused[2].category = core::ObjectCategory::kUnknown;
-  fused[2].confidence = 0.4f;
-  fused[3].camera_used = false;  // outside the image
-  fused[3].category = core::ObjectCategory::kUnknown;
+  std::vector<core::ObjectClassLabel> labels;
+  ros_conv::toClassLabels(in, &labels);
+  ASSERT_EQ(labels.size(), 3u);
+  EXPECT_EQ(labels[2].id, 3u);
+  EXPECT_EQ(labels[2].class_label, "vehicle");
+  EXPECT_FLOAT_EQ(labels[2].class_confidence, 0.6f);
+  EXPECT_FALSE(labels[2].vetoed);
+  labels[0].class_label = "car";
+  labels[0].class_confidence = 0.9f;
+  labels[1].vetoed = true;
   DetectedObjectArray out;
-  ros_conv::applyFusedClasses(in, fused, &out);
+  ros_conv::applyClassLabels(in, labels, &out);
   EXPECT_EQ(out.header.frame_id, "velodyne");
   EXPECT_EQ(out.detector, "hierarchical_grid");
-  ASSERT_EQ(out.objects.size(), 3u);
-  EXPECT_EQ(out.objects[2].class_label, "bin");
-  EXPECT_FLOAT_EQ(out.objects[2].class_confidence, 0.6f);
-  EXPECT_EQ(out.objects[0].id, 1u);
-  EXPECT_EQ(out.objects[0].class_label, "vehicle");
-  EXPECT_FLOAT_EQ(out.objects[0].class_confidence, 0.8f);
-  EXPECT_EQ(out.objects[1].id, 3u);  // ids kept: objects/points still refer to them
-  EXPECT_EQ(out.objects[1].class_label, "unknown");
-  EXPECT_FLOAT_EQ(out.objects[1].class_confidence, 0.0f);
+  ASSERT_EQ(out.objects.size(), 2u);
+  EXPECT_EQ(out.objects[0].class_label, "car");
+  EXPECT_FLOAT_EQ(out.objects[0].class_confidence, 0.9f);
+  EXPECT_EQ(out.objects[1].id, 3u);
+  EXPECT_EQ(out.objects[1].class_label, "vehicle");
   EXPECT_EQ(out.objects[1].indices, (std::vector<std::uint32_t>{3, 13}));
 }
 

@@ -25,6 +25,7 @@
 #include "urban_detection/core/tracking/tracker.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/object_tracking.h"
+#include "urban_detection/ros/packet_params.h"
 #include "urban_detection/ros/tunable_fields.h"
 
 namespace urban_detection {
@@ -114,14 +115,20 @@ TYPED_TEST(ConfigFields, RoundTripThroughAConfigKeepsEveryListedField) {
 // params_yaml tests).
 template <class Params>
 void expectYamlKeysAreTheTable(const std::string& file, const std::string& section) {
-  const YAML::Node node = YAML::LoadFile(std::string(UD_SOURCE_DIR) + "/config/" + file);
-  ASSERT_TRUE(node[section].IsMap()) << file << ": " << section;
+  YAML::Node node = YAML::LoadFile(std::string(UD_SOURCE_DIR) + "/config/" + file);
+  if (section.empty()) {  // the whole file
+    YAML::Node root;
+    root["root"] = node;
+    node = root;
+  }
+  const std::string key = section.empty() ? "root" : section;
+  ASSERT_TRUE(node[key].IsMap()) << file << ": " << section;
   std::vector<std::string> table;
   const Params defaults;
   core::forEachField(defaults,
                      [&](const core::FieldInfo& info, const auto&) { table.push_back(info.name); });
   std::vector<std::string> keys;
-  for (const auto& kv : node[section]) keys.push_back(kv.first.as<std::string>());
+  for (const auto& kv : node[key]) keys.push_back(kv.first.as<std::string>());
   EXPECT_EQ(keys, table) << file << ": " << section;
 }
 
@@ -129,6 +136,34 @@ TEST(ConfigFiles, RosLayerYamlKeysAreTableFields) {
   expectYamlKeysAreTheTable<ros_conv::ObjectMarkerParams>("markers.yaml", "markers");
   expectYamlKeysAreTheTable<core::TrackerParams>("object_tracker.yaml", "tracker");
   expectYamlKeysAreTheTable<ros_conv::TrackMarkerParams>("object_tracker.yaml", "markers");
+  expectYamlKeysAreTheTable<ros_conv::PacketSourceParams>("packet_source.yaml", "");
+  expectYamlKeysAreTheTable<ros_conv::PacketToCloudParams>("packet_to_cloud.yaml", "");
+}
+
+// The packet nodelets' rules beyond the ranges, as validate() (and so loadFields) applies them.
+TEST(PacketParams, FormatAndCrossFieldRules) {
+  ros_conv::PacketSourceParams source;
+  EXPECT_EQ(validate(source), "");
+  source.device_ip = "192.168.3.300";
+  EXPECT_NE(validate(source).find("'device_ip' = '192.168.3.300' is not an IPv4 address"),
+            std::string::npos)
+      << validate(source);
+  source = ros_conv::PacketSourceParams();
+  source.frame_id.clear();
+  EXPECT_NE(validate(source).find("'frame_id' must not be empty"), std::string::npos);
+  source = ros_conv::PacketSourceParams();
+  source.rpm = 1500.0;
+  EXPECT_EQ(validate(source),
+            "parameter 'rpm' = 1500 is out of range: accepted [300, 1200] rev/min");
+  ros_conv::PacketToCloudParams cloud;
+  EXPECT_EQ(validate(cloud), "");
+  cloud.decoder.min_range_m = 50.0;
+  cloud.decoder.max_range_m = 40.0;  // each in range, together not
+  EXPECT_NE(validate(cloud).find("accepted min_range < max_range"), std::string::npos)
+      << validate(cloud);
+  cloud = ros_conv::PacketToCloudParams();
+  cloud.max_packets_per_scan = 0;
+  EXPECT_NE(validate(cloud).find("'max_packets_per_scan' = 0 is out of range"), std::string::npos);
 }
 
 }  // namespace

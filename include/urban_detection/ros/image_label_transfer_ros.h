@@ -1,22 +1,23 @@
 /// \file image_label_transfer_ros.h
-/// ROS glue of the image -> object label transfer: sensor_msgs/Image and CameraInfo
-/// to OpenCV / core types, parameter loading, and writing the votes into DetectedObjectArray.
-/// No ROS master needed except for loadImageLabelTransferParams().
+/// ROS glue of the image -> object label transfer (core/spark/camera_labeller.h):
+/// sensor_msgs/Image and CameraInfo to OpenCV / core types, the camera <- LiDAR transform, and
+/// the objects' classes to and from DetectedObjectArray, the segmented images waiting for the
+/// objects (CameraMasks). No ROS master needed.
 #pragma once
 
-#include <ros/node_handle.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <tf2_ros/buffer.h>
 
+#include <memory>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
 #include "urban_detection/DetectedObjectArray.h"
-#include "urban_detection/core/spark/camera_fusion.h"
-#include "urban_detection/core/spark/image_label_transfer.h"
-#include "urban_detection/core/spark/spark_segmenter.h"
+#include "urban_detection/core/spark/camera_labeller.h"
+#include "urban_detection/core/spark/mask_history.h"
 
 namespace urban_detection {
 namespace ros_conv {
@@ -39,50 +40,50 @@ bool lookupCameraFromCloud(const tf2_ros::Buffer& tf, const std_msgs::Header& im
                            double timeout_s, Eigen::Isometry3d* camera_from_cloud,
                            std::string* error);
 
-/// Copies `objects` into `out` and fills class_label / class_confidence of every object from
-/// `votes` (matched by id): the class name (`names[id]`, or "class_<id>") when a class won,
-/// "unknown" and 0 otherwise.
-void applyVotes(const DetectedObjectArray& objects, const std::vector<core::ObjectClassVote>& votes,
-                const std::vector<std::string>& names, DetectedObjectArray* out);
+/// The camera stage's view of `objects` (core/spark/camera_labeller.h): id, class label and
+/// confidence of each, in order.
+void toClassLabels(const DetectedObjectArray& objects, std::vector<core::ObjectClassLabel>* labels);
 
-/// Writes the fused classes into `out` (a copy of `objects`): per object, `fused[k]` for
-/// `objects.objects[k]`; objects the camera vetoed are left out of `out` (their points stay in
-/// objects/points under their id). Category names as the LiDAR classifier's ("vehicle", ...).
-/// Objects the camera did not see (camera_used false) keep their label and confidence verbatim.
-void applyFusedClasses(const DetectedObjectArray& objects,
-                       const std::vector<core::FusedClass>& fused, DetectedObjectArray* out);
+/// `objects` with the classes the camera stage gave them (`labels[k]` for `objects.objects[k]`);
+/// vetoed objects are left out of `out` (their points stay in objects/points under their id).
+void applyClassLabels(const DetectedObjectArray& objects,
+                      const std::vector<core::ObjectClassLabel>& labels, DetectedObjectArray* out);
 
-/// The LiDAR class of a message object: its class_label parsed as an ObjectCategory
-/// (kUnknown for "unknown" or any other name).
-core::ObjectCategory lidarCategory(const DetectedObject& o);
+/// The camera half of the ImageLabelTransfer stage: the newest camera_info, each image through
+/// the network into an owned mask (it outlives the network's next run), and the last few masks
+/// for the objects to pick from. segment() runs on the stage's inference thread, the rest on
+/// any thread.
+class CameraMasks {
+ public:
+  struct Mask {
+    std_msgs::Header header;  // the image's
+    core::PinholeCamera camera;
+    core::SegmentationScores scores;
+  };
+  /// segment()'s error before the first camera_info (a warning, not a fault).
+  static constexpr const char* kNoCameraInfo = "no camera_info yet";
+  /// `network` (loaded) is used by segment() only.
+  explicit CameraMasks(core::SegmentationModel* network) : network_(network) {}
 
-/// Everything the ImageLabelTransfer nodelet reads from its private namespace
-/// (config/image_label_transfer.yaml).
-struct ImageLabelTransferRosParams {
-  core::SegmentationModelParams model;      // model/*
-  core::ImageLabelTransferParams transfer;  // transfer/* (kept_classes from keep_classes)
-  core::CameraFusionParams fusion;          // fusion (mode) and fusion_rule/*
-  std::string class_names_file;             // one class name per line; empty: "class_<id>"
-  std::string model_dir;                    // relative model/config/names paths start here
-  std::vector<std::string> keep_classes;    // names or ids that vote; empty: all
-  /// model/{vehicle,pedestrian,cyclist,other_object,background}_classes: camera classes of each
-  /// object category (fusion and the veto); background = road, building, vegetation, ...
-  std::vector<std::string> vehicle_classes, pedestrian_classes, cyclist_classes,
-      other_object_classes, background_classes;
-  int inference_nice = 19;            // [-] nice of the inference thread (0..19)
-  int inference_threads = 1;          // [-] OpenCV threads (process-wide); 0 = OpenCV's
-  double max_mask_gap_s = 0.15;       // [s] newest mask within this of the cloud stamp
-  int queue_size = 5;                 // [-] per input and for the synchroniser
-  double max_sync_interval_s = 0.06;  // [s] objects vs. objects/points stamps
-  std::string fixed_frame;            // [-] non-empty: tf between the image and cloud
-                                      // stamps through this frame (moving platform)
-  double tf_timeout_s = 0.0;          // [s] wait for the camera <- LiDAR transform (0:
-                                      // use what tf has; the LiDAR side never waits)
+  void setInfo(const sensor_msgs::CameraInfo::ConstPtr& info);
+  /// Segments `image` with the newest camera_info into a new mask. False with `error` when the
+  /// image is skipped (no camera_info yet, bad encoding or camera_info, network failure);
+  /// `warning` is set when camera_info's size differs from the image's (projected with
+  /// camera_info's).
+  bool segment(const sensor_msgs::Image& image, std::string* error, std::string* warning);
+  /// The newest mask whose image stamp is within `max_gap_s` of `stamp` (null if none).
+  std::shared_ptr<const Mask> newestWithin(const ros::Time& stamp, double max_gap_s) const {
+    return history_.newestWithin(stamp.toSec(), max_gap_s);
+  }
+
+ private:
+  core::SegmentationModel* network_;
+  std::mutex info_mutex_;
+  sensor_msgs::CameraInfo::ConstPtr info_;
+  cv::Mat scratch_, bgr_;
+  core::SegmentationScores scores_;
+  core::MaskHistory<Mask> history_{4};
 };
-
-/// Loads the parameters from `pnh` (model/*, transfer/*); throws ParamError naming the
-/// parameter and its accepted range. The model and class names files are read by the caller.
-void loadImageLabelTransferParams(const ros::NodeHandle& pnh, ImageLabelTransferRosParams* p);
 
 }  // namespace ros_conv
 }  // namespace urban_detection

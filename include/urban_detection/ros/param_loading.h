@@ -11,9 +11,12 @@
 
 #include "urban_detection/core/common/param_fields.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace urban_detection {
@@ -50,6 +53,31 @@ void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value);
 
 /// A list of numbers (e.g. polynomial coefficients).
 void loadParam(const ros::NodeHandle& nh, const std::string& name, std::vector<double>* value);
+/// A list of strings (e.g. class names).
+void loadParam(const ros::NodeHandle& nh, const std::string& name, std::vector<std::string>* value);
+
+/// A list of exactly N numbers (ranges are checked afterwards, per element).
+template <std::size_t N>
+void loadParam(const ros::NodeHandle& nh, const std::string& name, std::array<double, N>* value) {
+  if (!nh.hasParam(name)) return;
+  std::vector<double> list;
+  loadParam(nh, name, &list);
+  if (list.size() != N) {
+    throw ParamError("parameter '" + nh.resolveName(name) + "' must be a list of " +
+                     std::to_string(N) + " numbers");
+  }
+  std::copy(list.begin(), list.end(), value->begin());
+}
+
+/// An enum field of a table: one of the names `info` lists.
+template <class E, typename = std::enable_if_t<std::is_enum_v<E>>>
+void loadParam(const ros::NodeHandle& nh, const core::FieldInfo& info, E* value) {
+  std::string name = core::choiceName(info, *value);
+  loadParam(nh, info.name, &name);
+  if (!core::parseChoice(info, name, value)) {
+    throw ParamError(core::badChoiceMessage(nh.resolveName(info.name), name, info.choices));
+  }
+}
 
 /// "" when `params` is valid, else why not: the field table's ranges (core/common/param_fields.h)
 /// with the parameter named as resolved in `nh`, then validate()'s cross-field rules. The
@@ -70,7 +98,11 @@ std::string checkFields(const ros::NodeHandle& nh, const Params& params) {
 template <class Params>
 void loadFields(const ros::NodeHandle& nh, Params* params) {
   core::forEachField(*params, [&nh](const core::FieldInfo& info, auto& field) {
-    loadParam(nh, info.name, &field);
+    if constexpr (std::is_enum_v<std::decay_t<decltype(field)>>) {
+      loadParam(nh, info, &field);
+    } else {
+      loadParam(nh, info.name, &field);
+    }
   });
   const std::string error = checkFields(nh, *params);
   if (!error.empty()) throw ParamError(error);

@@ -1,5 +1,6 @@
 #include "urban_detection/core/params/params_yaml.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -20,11 +21,29 @@ namespace {
 template <class Params>
 bool applyFields(const YAML::Node& node, const std::string& where, Params* params,
                  std::string* error) {
-  std::map<std::string, std::function<void(const YAML::Node&)>> setters;
+  // A setter returns "" or why the value was refused (a YAML::Exception: the wrong type).
+  std::map<std::string, std::function<std::string(const YAML::Node&)>> setters;
   std::set<std::string> groups;  // "hough", "weight", ...: names of nested maps
   forEachField(*params, [&](const FieldInfo& info, auto& field) {
     using T = std::decay_t<decltype(field)>;
-    setters[info.name] = [&field](const YAML::Node& n) { field = n.as<T>(); };
+    setters[info.name] = [&field, info, where](const YAML::Node& n) -> std::string {
+      if constexpr (std::is_enum_v<T>) {
+        const std::string name = n.as<std::string>();
+        if (!parseChoice(info, name, &field)) {
+          return where + badChoiceMessage(info.name, name, info.choices);
+        }
+      } else if constexpr (kRangedArray<T>) {
+        const auto list = n.as<std::vector<double>>();
+        if (list.size() != field.size()) {
+          return where + "parameter '" + info.name + "' needs " + std::to_string(field.size()) +
+                 " numbers, has " + std::to_string(list.size());
+        }
+        std::copy(list.begin(), list.end(), field.begin());
+      } else {
+        field = n.as<T>();
+      }
+      return "";
+    };
     for (std::size_t slash = info.name.find('/'); slash != std::string::npos;
          slash = info.name.find('/', slash + 1)) {
       groups.insert(info.name.substr(0, slash));
@@ -41,11 +60,11 @@ bool applyFields(const YAML::Node& node, const std::string& where, Params* param
       const auto setter = setters.find(name);
       if (setter != setters.end()) {
         try {
-          setter->second(kv.second);
+          *error = setter->second(kv.second);
         } catch (const YAML::Exception& e) {
           *error = where + name + ": wrong type (" + e.what() + ")";
-          return false;
         }
+        if (!error->empty()) return false;
       } else if (groups.count(name)) {
         if (!walk(kv.second, name + "/")) return false;
       } else {
@@ -132,6 +151,13 @@ bool loadGridSegmenterParamsYaml(const std::string& path, const std::string& sec
   YAML::Node root;
   if (!loadRoot(path, section, &root, error)) return false;
   return applyFields(root, path + ": ", p, error);
+}
+
+bool loadCameraStageParamsYaml(const std::string& path, CameraStageParams* params,
+                               std::string* error) {
+  YAML::Node root;
+  if (!loadRoot(path, "", &root, error)) return false;
+  return applyFields(root, path + ": ", params, error);
 }
 
 bool loadHierarchicalGridParamsYaml(const std::string& path, HierarchicalGridDetectorParams* params,

@@ -28,6 +28,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
+#include <sstream>
 #include <string>
 
 #if defined(__SSE2__)
@@ -143,6 +144,17 @@ PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderParams
     t.max_intensity[l] = static_cast<float>(c.max_intensity);
     t.ring[l] = calibration_.ring_of_laser[l];
   }
+}
+
+std::string validate(const DecoderParams& params) {
+  std::string error = checkFieldRanges(params);
+  if (error.empty() && !(params.min_range_m < params.max_range_m)) {
+    std::ostringstream msg;
+    msg << "parameters 'min_range' = " << params.min_range_m
+        << " and 'max_range' = " << params.max_range_m << ": accepted min_range < max_range";
+    error = msg.str();
+  }
+  return error;
 }
 
 std::string velodyneModelName(const std::uint8_t* data, std::size_t size) {

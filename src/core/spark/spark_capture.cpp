@@ -6,6 +6,7 @@
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
+#include <type_traits>
 
 namespace urban_detection {
 namespace core {
@@ -13,12 +14,6 @@ namespace core {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
-
-bool rangeError(const std::string& field, double min, double max, std::string* error) {
-  *error =
-      "'" + field + "' must be within [" + std::to_string(min) + ", " + std::to_string(max) + "]";
-  return false;
-}
 
 // cv::FileNode numbers: JSON integers come back as INT, others as REAL.
 bool readNumber(const cv::FileNode& n, double* value) {
@@ -40,21 +35,8 @@ bool validateCapturePath(const CapturePathParams& p, std::string* error) {
       return false;
     }
   }
-  if (!(p.interval_m >= 0.01 && p.interval_m <= 1e5))
-    return rangeError("interval_m", 0.01, 1e5, error);
-  if (p.rotations < 1 || p.rotations > 360) return rangeError("rotations", 1, 360, error);
-  if (!(p.pitch_deg >= -90.0 && p.pitch_deg <= 90.0))
-    return rangeError("pitch_deg", -90, 90, error);
-  if (p.image_width_px < 8 || p.image_width_px > 8192)
-    return rangeError("image_width_px", 8, 8192, error);
-  if (p.image_height_px < 8 || p.image_height_px > 8192)
-    return rangeError("image_height_px", 8, 8192, error);
-  if (!(p.metres_per_pixel >= 1e-4 && p.metres_per_pixel <= 100.0))
-    return rangeError("metres_per_pixel", 1e-4, 100, error);
-  if (!(p.max_depth_m > 0.0 && p.max_depth_m <= 1e5))
-    return rangeError("max_depth_m", 0, 1e5, error);
-  if (p.splat_radius_px < 0 || p.splat_radius_px > 16)
-    return rangeError("splat_radius_px", 0, 16, error);
+  *error = checkFieldRanges(p);
+  if (!error->empty()) return false;
   if (p.colour != "rgb" && p.colour != "intensity" && p.colour != "height") {
     *error = "'colour' must be \"rgb\", \"intensity\" or \"height\"";
     return false;
@@ -80,18 +62,8 @@ bool readCapturePathJson(const std::string& path, CapturePathParams* params, std
       *error = "'" + path + "' must hold a JSON object";
       return false;
     }
-    static const std::set<std::string> known = {"path",
-                                                "interval_m",
-                                                "rotations",
-                                                "pitch_deg",
-                                                "image_width_px",
-                                                "image_height_px",
-                                                "metres_per_pixel",
-                                                "max_depth_m",
-                                                "splat_radius_px",
-                                                "colour",
-                                                "height_min_m",
-                                                "height_max_m"};
+    std::set<std::string> known = {"path"};
+    forEachField(p, [&](const FieldInfo& info, const auto&) { known.insert(info.name); });
     for (const std::string& key : root.keys()) {
       if (!known.count(key)) {
         *error = "unknown key '" + key + "' in '" + path + "'";
@@ -129,22 +101,26 @@ bool readCapturePathJson(const std::string& path, CapturePathParams* params, std
       *value = static_cast<int>(v);
       return true;
     };
-    if (!number("interval_m", &p.interval_m) || !integer("rotations", &p.rotations) ||
-        !number("pitch_deg", &p.pitch_deg) || !integer("image_width_px", &p.image_width_px) ||
-        !integer("image_height_px", &p.image_height_px) ||
-        !number("metres_per_pixel", &p.metres_per_pixel) ||
-        !number("max_depth_m", &p.max_depth_m) || !integer("splat_radius_px", &p.splat_radius_px) ||
-        !number("height_min_m", &p.height_min_m) || !number("height_max_m", &p.height_max_m)) {
-      return false;
-    }
-    const cv::FileNode colour = root["colour"];
-    if (!colour.empty() && !colour.isNone()) {
-      if (!colour.isString()) {
-        *error = "'colour' must be a string";
-        return false;
+    bool ok = true;
+    forEachField(p, [&](const FieldInfo& info, auto& field) {
+      using T = std::decay_t<decltype(field)>;
+      if (!ok) return;
+      if constexpr (std::is_same_v<T, int>) {
+        ok = integer(info.name.c_str(), &field);
+      } else if constexpr (std::is_same_v<T, double>) {
+        ok = number(info.name.c_str(), &field);
+      } else {
+        const cv::FileNode n = root[info.name];
+        if (n.empty() || n.isNone()) return;
+        if (!n.isString()) {
+          *error = "'" + info.name + "' must be a string";
+          ok = false;
+          return;
+        }
+        field = static_cast<std::string>(n);
       }
-      p.colour = static_cast<std::string>(colour);
-    }
+    });
+    if (!ok) return false;
   } catch (const cv::Exception& e) {
     *error = "cannot parse '" + path + "' as JSON: " + e.what();
     return false;

@@ -155,6 +155,10 @@ cv::Mat SegmentationScores::labelImage() const {
   return out;
 }
 
+std::string validate(const SegmentationModelParams& params) {
+  return checkFieldRanges(params);
+}
+
 bool SegmentationModel::load(const SegmentationModelParams& params, std::string* error) {
   loaded_ = false;
   params_ = params;
@@ -162,18 +166,8 @@ bool SegmentationModel::load(const SegmentationModelParams& params, std::string*
     *error = "no segmentation model given (model_path is empty)";
     return false;
   }
-  if (params.input_width_px < 8 || params.input_width_px > 8192 || params.input_height_px < 8 ||
-      params.input_height_px > 8192) {
-    *error = "input size must be within [8, 8192] px";
-    return false;
-  }
-  for (int c = 0; c < 3; ++c) {
-    if (!std::isfinite(params.mean[c]) || !std::isfinite(params.scale[c]) ||
-        params.scale[c] == 0.0) {
-      *error = "mean must be finite and scale finite and non-zero";
-      return false;
-    }
-  }
+  *error = validate(params);
+  if (!error->empty()) return false;
   for (const std::string* f : {&params.model_path, &params.config_path}) {
     if (f->empty()) continue;
     std::ifstream probe(*f, std::ios::binary);
@@ -207,12 +201,12 @@ bool SegmentationModel::readNet(std::string* error) {
 bool SegmentationModel::setInputSize(int width_px, int height_px, std::string* error) {
   if (width_px == params_.input_width_px && height_px == params_.input_height_px && loaded_)
     return true;
-  if (width_px < 8 || width_px > 8192 || height_px < 8 || height_px > 8192) {
-    *error = "input size must be within [8, 8192] px";
-    return false;
-  }
-  params_.input_width_px = width_px;
-  params_.input_height_px = height_px;
+  SegmentationModelParams sized = params_;
+  sized.input_width_px = width_px;
+  sized.input_height_px = height_px;
+  *error = validate(sized);
+  if (!error->empty()) return false;
+  params_ = sized;
   return readNet(error);
 }
 

@@ -16,10 +16,15 @@
 /// A table is `template <class P, class F> static void visit(P& p, F&& f)` (P is the struct or
 /// const struct) calling `f(FieldInfo{...}, p.member)` for every field in order; nested
 /// parameter structs are visited with forEachField(p.sub, "sub", f), which names their fields
-/// "sub/field". Fields are double, int, bool, std::string or std::vector<double>; ranges apply to
-/// the numbers (and are inclusive), the other types take any value of their type.
+/// "sub/field". Fields are double, int, bool, std::string, std::vector<double>,
+/// std::vector<std::string>, std::array<double, N> or an enum. Ranges apply to the numbers and to
+/// each element of a std::array (inclusive); an enum field is written as one of the names its
+/// FieldInfo::choice() lists (the names of its values 0, 1, 2, ... in order); the other types
+/// take any value of their type.
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -42,12 +47,21 @@ struct FieldInfo {
   /// A flag, a text or a list (no range).
   FieldInfo(std::string name, std::string description)
       : name(std::move(name)), description(std::move(description)) {}
+  /// An enum field: `choices` are the names of its values 0, 1, 2, ... (what files and the
+  /// parameter server hold).
+  static FieldInfo choice(std::string name, std::vector<std::string> choices,
+                          std::string description) {
+    FieldInfo info(std::move(name), std::move(description));
+    info.choices = std::move(choices);
+    return info;
+  }
 
   std::string name;  // relative name; nested structs as "sub/field"
   std::string unit;
   double min = -std::numeric_limits<double>::infinity();
   double max = std::numeric_limits<double>::infinity();
   std::string description;
+  std::vector<std::string> choices;  // enum fields: the name of each value
 };
 
 /// Specialised beside every parameter struct (see the file comment).
@@ -74,6 +88,41 @@ void forEachField(Sub& sub, const std::string& prefix, F&& f) {
 template <class T>
 constexpr bool kRangedField = std::is_arithmetic_v<T> && !std::is_same_v<T, bool>;
 
+/// True for fixed-size lists of numbers (std::array<double, N>): the range applies to each.
+template <class T>
+struct IsRangedArray : std::false_type {};
+template <std::size_t N>
+struct IsRangedArray<std::array<double, N>> : std::true_type {};
+template <class T>
+constexpr bool kRangedArray = IsRangedArray<T>::value;
+
+/// The name of enum `value` in `info.choices` ("" when it has none).
+template <class E>
+std::string choiceName(const FieldInfo& info, E value) {
+  const auto i = static_cast<std::size_t>(value);
+  return i < info.choices.size() ? info.choices[i] : std::string();
+}
+
+/// Sets enum `*value` from its name; false (value unchanged) for a name `info` does not list.
+template <class E>
+bool parseChoice(const FieldInfo& info, const std::string& name, E* value) {
+  for (std::size_t i = 0; i < info.choices.size(); ++i) {
+    if (info.choices[i] == name) {
+      *value = static_cast<E>(i);
+      return true;
+    }
+  }
+  return false;
+}
+
+/// "parameter '<name>' = '<value>' is not one of: a, b, c" (the one wording of a bad name).
+inline std::string badChoiceMessage(const std::string& name, const std::string& value,
+                                    const std::vector<std::string>& choices) {
+  std::string msg = "parameter '" + name + "' = '" + value + "' is not one of:";
+  for (std::size_t i = 0; i < choices.size(); ++i) msg += (i ? ", " : " ") + choices[i];
+  return msg;
+}
+
 /// The one wording of an out-of-range value, at start-up, in YAML files, in a refused
 /// dynamic_reconfigure update and in validate(): "parameter '<name>' = <value> is out of range:
 /// accepted [<min>, <max>] <unit>".
@@ -98,6 +147,18 @@ std::string checkFieldRanges(const Params& params, Shown shown) {
       if (error.empty() && !(value >= info.min && value <= info.max)) {
         error = outOfRangeMessage(shown(info.name), value, static_cast<T>(info.min),
                                   static_cast<T>(info.max), info.unit);
+      }
+    } else if constexpr (kRangedArray<T>) {
+      for (std::size_t i = 0; i < value.size() && error.empty(); ++i) {
+        if (!(value[i] >= info.min && value[i] <= info.max)) {
+          error = outOfRangeMessage(shown(info.name) + "[" + std::to_string(i) + "]", value[i],
+                                    info.min, info.max, info.unit);
+        }
+      }
+    } else if constexpr (std::is_enum_v<T>) {
+      if (error.empty() && choiceName(info, value).empty()) {
+        error = badChoiceMessage(shown(info.name), std::to_string(static_cast<long long>(value)),
+                                 info.choices);
       }
     }
   });
@@ -124,6 +185,19 @@ std::string fieldTableMarkdown(const Params& params) {
       md << "\"" << value << "\" | | | ";
     } else if constexpr (std::is_same_v<T, std::vector<double>>) {
       md << value.size() << " numbers | | | ";
+    } else if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+      md << "[";
+      for (std::size_t i = 0; i < value.size(); ++i) md << (i ? ", " : "") << value[i];
+      md << "] | | | ";
+    } else if constexpr (kRangedArray<T>) {
+      md << "[";
+      for (std::size_t i = 0; i < value.size(); ++i) md << (i ? ", " : "") << value[i];
+      md << "] | [" << info.min << ", " << info.max << "] each | " << info.unit << " | ";
+    } else if constexpr (std::is_enum_v<T>) {
+      md << choiceName(info, value) << " | ";
+      for (std::size_t i = 0; i < info.choices.size(); ++i)
+        md << (i ? ", " : "") << info.choices[i];
+      md << " | | ";
     } else {
       md << value << " | [" << static_cast<T>(info.min) << ", " << static_cast<T>(info.max)
          << "] | " << info.unit << " | ";

@@ -13,6 +13,7 @@
 #include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
+#include "urban_detection/core/spark/camera_model.h"
 #include "urban_detection/core/tracking/tracker.h"
 
 namespace urban_detection {
@@ -69,6 +70,13 @@ bool loadPipelineConfigsYaml(const std::vector<std::string>& paths, PipelinePara
 /// Overrides the fields of `params` from the `tracker:` map of a file (config/object_tracker.yaml),
 /// or from its root when it has no such map.
 bool loadTrackerParamsYaml(const std::string& path, TrackerParams* params, std::string* error);
+
+/// Overrides the fields of `params` present in a camera stage file
+/// (config/image_label_transfer.yaml, or a preset such as config/spark_enet_cityscapes.yaml
+/// loaded over it): `fusion`, `fusion_rule:`, `model:`, `transfer:`. Unknown keys, values of the
+/// wrong type and out-of-range values are errors naming the key.
+bool loadCameraStageParamsYaml(const std::string& path, CameraStageParams* params,
+                               std::string* error);
 
 }  // namespace core
 }  // namespace urban_detection

@@ -10,8 +10,10 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
+#include "urban_detection/core/common/param_fields.h"
 #include "urban_detection/core/common/point_types.h"
 #include "urban_detection/core/sensor/calibration.h"
 
@@ -61,6 +63,20 @@ std::string velodyneModelName(const std::uint8_t* data, std::size_t size);
 struct DecoderParams {
   double min_range_m = 0.9;    // [m] returns closer than this are dropped
   double max_range_m = 130.0;  // [m] returns farther than this are dropped
+};
+
+/// "" when valid: the table's ranges, then min_range < max_range.
+std::string validate(const DecoderParams& params);
+
+/// DecoderParams' field table (core/common/param_fields.h); the parameter names are
+/// velodyne_pointcloud's (`min_range`, `max_range`).
+template <>
+struct ParamFields<DecoderParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f({"min_range", "m", 0.0, 250.0, "returns closer than this are dropped"}, p.min_range_m);
+    f({"max_range", "m", 0.1, 250.0, "returns farther than this are dropped"}, p.max_range_m);
+  }
 };
 
 /// Counters of one decode call (accumulate them across calls for diagnostics).

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "urban_detection/core/common/param_fields.h"
 #include "urban_detection/core/common/point_types.h"
 
 namespace urban_detection {
@@ -34,6 +35,28 @@ struct CapturePathParams {
   double height_max_m = 4.0;          ///< [m] z mapped to the last colour of "height"
 };
 
+/// CapturePathParams' field table (core/common/param_fields.h): the keys of the capture path JSON
+/// file besides "path" (readCapturePathJson() reads exactly these).
+template <>
+struct ParamFields<CapturePathParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f({"interval_m", "m", 0.01, 1e5, "distance between capture points along the path"},
+      p.interval_m);
+    f({"rotations", "", 1, 360, "captures per point, yaw evenly spaced over 360 deg"}, p.rotations);
+    f({"pitch_deg", "deg", -90, 90, "camera pitch, negative looks down, -90 = nadir"}, p.pitch_deg);
+    f({"image_width_px", "px", 8, 8192, "image width"}, p.image_width_px);
+    f({"image_height_px", "px", 8, 8192, "image height"}, p.image_height_px);
+    f({"metres_per_pixel", "m/px", 1e-4, 100, "orthographic pixel size"}, p.metres_per_pixel);
+    f({"max_depth_m", "m", 1e-3, 1e5, "points farther along the view ray are not drawn"},
+      p.max_depth_m);
+    f({"splat_radius_px", "px", 0, 16, "a point covers a (2r+1)^2 square"}, p.splat_radius_px);
+    f({"colour", "point colours: rgb, intensity or height"}, p.colour);
+    f({"height_min_m", "m", -1e4, 1e4, "z mapped to the first colour of height"}, p.height_min_m);
+    f({"height_max_m", "m", -1e4, 1e4, "z mapped to the last colour of height"}, p.height_max_m);
+  }
+};
+
 /// Reads a capture path JSON file:
 /// `{"path": [[x, y, z], ...], "interval_m": 5, "rotations": 4, "pitch_deg": -30,
 ///   "image_width_px": 640, "image_height_px": 480, "metres_per_pixel": 0.05,
@@ -41,7 +64,8 @@ struct CapturePathParams {
 /// Returns false with `error` for a missing file, a path of fewer than one point, unknown keys
 /// or out-of-range values.
 bool readCapturePathJson(const std::string& path, CapturePathParams* params, std::string* error);
-/// Checks the ranges of `params`; false with `error` naming the field and the accepted range.
+/// Checks `params`: the path, the table's ranges, the colour mode and height_min_m <
+/// height_max_m; false with `error` naming the field (and the accepted range).
 bool validateCapturePath(const CapturePathParams& params, std::string* error);
 
 /// Pose and projection of one orthographic capture. Camera axes in the cloud frame: `right`

@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "urban_detection/core/common/param_fields.h"
+
 namespace urban_detection {
 namespace core {
 
@@ -77,6 +79,30 @@ struct SegmentationModelParams {
   /// Per-channel factor applied after the mean (1 / standard deviation; 1/255 for [0, 1]).
   std::array<double, 3> scale = {1.0 / 58.395, 1.0 / 57.12, 1.0 / 57.375};
   bool output_softmax = true;  ///< outputs are logits (true) or probabilities (false)
+};
+
+/// "" when every field is in its table range (ParamFields<SegmentationModelParams> below).
+std::string validate(const SegmentationModelParams& params);
+
+/// SegmentationModelParams' field table (core/common/param_fields.h): the network's keys of the
+/// `model:` map of config/image_label_transfer.yaml (CameraModelParams, camera_model.h).
+template <>
+struct ParamFields<SegmentationModelParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f({"path", "network file cv::dnn::readNet reads (.onnx, .t7/.net Torch7, .caffemodel, .pb)"},
+      p.model_path);
+    f({"config_file", "second file of some formats (Caffe .prototxt, TF .pbtxt)"}, p.config_path);
+    f({"input_width_px", "px", 8, 8192, "the image is resized to this for the network"},
+      p.input_width_px);
+    f({"input_height_px", "px", 8, 8192, "the image is resized to this for the network"},
+      p.input_height_px);
+    f({"input_rgb", "the network expects RGB channel order (images come BGR)"}, p.input_rgb);
+    f({"mean", "", 0, 255, "per-channel mean subtracted from the 0..255 pixel values"}, p.mean);
+    f({"scale", "", 1e-6, 1000, "per-channel factor applied after the mean (1 / std dev)"},
+      p.scale);
+    f({"output_softmax", "outputs are logits (false: probabilities)"}, p.output_softmax);
+  }
 };
 
 /// Timings of one SegmentationModel::run() [ms].
