@@ -8,10 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstdlib>
-#include <iostream>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <iostream>
 #include <numeric>
 #include <string>
 #include <tuple>
@@ -71,8 +71,8 @@ CloudXYZIRT sweepOrder(const CloudXYZIRT& cloud, double seam, double sense) {
 }
 
 // What identifies an object across the two modes (ids aside).
-using ObjectKey = std::tuple<std::vector<std::uint32_t>, int, float, float, float, float, float,
-                             float, float>;
+using ObjectKey =
+    std::tuple<std::vector<std::uint32_t>, int, float, float, float, float, float, float, float>;
 ObjectKey keyOf(const DetectedObject& o) {
   std::vector<std::uint32_t> idx(o.indices.begin(), o.indices.end());
   std::sort(idx.begin(), idx.end());
@@ -153,10 +153,10 @@ int objectWith(const std::vector<DetectedObject>& objects, std::uint32_t i) {
 // Far enough that the Hough window (20 m) does not hold them.
 std::vector<test::Box> seamScene() {
   return {
-      {28.0f, -1.0f, 0.0f, 32.0f, 1.0f, 1.5f, 1},     // a car across the seam (azimuth 0)
-      {-32.0f, -1.0f, 0.0f, -28.0f, 1.0f, 1.5f, 2},   // a car opposite (azimuth 180 deg)
-      {1.0f, 28.0f, 0.0f, 3.0f, 32.0f, 1.5f, 3},      // a car at azimuth ~90 deg
-      {12.0f, 24.0f, 0.0f, 18.0f, 25.2f, 1.4f, 4},    // a van-long object at 60-65 deg
+      {28.0f, -1.0f, 0.0f, 32.0f, 1.0f, 1.5f, 1},    // a car across the seam (azimuth 0)
+      {-32.0f, -1.0f, 0.0f, -28.0f, 1.0f, 1.5f, 2},  // a car opposite (azimuth 180 deg)
+      {1.0f, 28.0f, 0.0f, 3.0f, 32.0f, 1.5f, 3},     // a car at azimuth ~90 deg
+      {12.0f, 24.0f, 0.0f, 18.0f, 25.2f, 1.4f, 4},   // a van-long object at 60-65 deg
   };
 }
 

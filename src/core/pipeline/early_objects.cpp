@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace urban_detection {
 namespace core {
@@ -37,7 +38,9 @@ double medianAzimuth(const CloudXYZIRT& cloud, std::size_t n, bool from_end,
 
 }  // namespace
 
-std::string validate(const EarlyObjectsParams& p) { return checkFieldRanges(p); }
+std::string validate(const EarlyObjectsParams& p) {
+  return checkFieldRanges(p);
+}
 
 SectorCompletion::SectorCompletion(const EarlyObjectsParams& params) : params_(params) {}
 
@@ -90,58 +93,94 @@ std::uint8_t SectorCompletion::componentState(const GridSegmenter& segmenter, st
   const GridSegmenterParams& sp = segmenter.params();
   const HoughWallRefinerParams& hp = sp.hough;
   const double cell_m = grid.params().cell_size_m;
-  const int gap_cells = static_cast<int>(std::floor(hp.max_line_gap_m / cell_m));
-  const int w = hp.line_half_width_cells;
-  const int link = std::max(1, gap_cells + 1 + 2 * w);
   const int rows = grid.rows(), cols = grid.cols();
+  // A tall cell low enough to be a vehicle candidate of the segmentation's step 4b, or a short
+  // cell the Hough refinement made tall (lower than tall_min_height_m): both may change class
+  // with their 8-connected group.
+  const float low_h = static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_height_m));
+  const float low_range =
+      static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_range_m));
+  auto groupable = [&](std::int32_t c) {
+    if (cls[c] == SegmentClass::kShort) return true;
+    if (cls[c] != SegmentClass::kTall) return false;
+    const GridCell& cell = grid.cell(c);
+    const float g = segmenter.cellHasGround(c) ? segmenter.cellGround(c) : 0.0f;
+    return cell.z_max - g <= low_h && cell.zRange() <= low_range;
+  };
   auto occupied = [&](std::int32_t c) {
     return cls[c] == SegmentClass::kTall || cls[c] == SegmentClass::kShort;
   };
-  component_.clear();
-  stack_.clear();
-  stack_.push_back(seed);
-  state_[seed] = 3;  // visiting
-  touched_.push_back(seed);
-  bool open = false;
-  int rmin = rows, rmax = -1, cmin = cols, cmax = -1;
-  while (!stack_.empty()) {
-    const std::int32_t c = stack_.back();
-    stack_.pop_back();
-    component_.push_back(c);
-    if (!cellClosed(grid, c)) open = true;
-    const int r = grid.rowOf(c), col = c - r * cols;
-    rmin = std::min(rmin, r), rmax = std::max(rmax, r);
-    cmin = std::min(cmin, col), cmax = std::max(cmax, col);
-    for (int dr = -link; dr <= link; ++dr) {
-      const int rr = r + dr;
-      if (rr < 0 || rr >= rows) continue;
-      for (int dc = -link; dc <= link; ++dc) {
-        const int cc = col + dc;
-        if (cc < 0 || cc >= cols) continue;
-        const std::int32_t n = rr * cols + cc;
-        if (state_[n] != 0 || !occupied(n)) continue;
-        state_[n] = 3;
-        touched_.push_back(n);
-        stack_.push_back(n);
+  // Breadth first from `seed` over the cells `member` accepts within Chebyshev `link`; fills
+  // component_ and its box; true when every cell of it is closed (stops at the first open one).
+  int rmin = 0, rmax = 0, cmin = 0, cmax = 0;
+  auto grow = [&](int link, auto&& member, std::uint8_t mark) {
+    component_.clear();
+    stack_.clear();
+    stack_.push_back(seed);
+    mark_[seed] = mark;
+    marked_.push_back(seed);
+    rmin = cmin = std::numeric_limits<int>::max();
+    rmax = cmax = -1;
+    while (!stack_.empty()) {
+      const std::int32_t c = stack_.back();
+      stack_.pop_back();
+      component_.push_back(c);
+      if (!cellClosed(grid, c)) return false;
+      const int r = grid.rowOf(c), col = c - r * cols;
+      rmin = std::min(rmin, r), rmax = std::max(rmax, r);
+      cmin = std::min(cmin, col), cmax = std::max(cmax, col);
+      for (int dr = -link; dr <= link; ++dr) {
+        const int rr = r + dr;
+        if (rr < 0 || rr >= rows) continue;
+        for (int dc = -link; dc <= link; ++dc) {
+          const int cc = col + dc;
+          if (cc < 0 || cc >= cols) continue;
+          const std::int32_t n = rr * cols + cc;
+          if (mark_[n] == mark || !member(n)) continue;
+          mark_[n] = mark;
+          marked_.push_back(n);
+          stack_.push_back(n);
+        }
       }
     }
-  }
-  // Hough: a run of min_line_length_m along a line through the window needs a component that
-  // long (its box diagonal with the line's half width on both ends).
-  bool hough_reach = false;
+    return true;
+  };
+  auto settle = [&](std::uint8_t state) {
+    for (const std::int32_t c : component_) {
+      if (state_[c] == 0) touched_.push_back(c);
+      state_[c] = state;
+    }
+    for (const std::int32_t c : marked_) mark_[c] = 0;
+    marked_.clear();
+    return state;
+  };
+  // The vehicle groups and every neighbour rule of the segmentation: 8-connected.
+  if (!grow(1, groupable, 1)) return settle(2);
+  const std::vector<std::int32_t> local = component_;
+  // Hough: within the window (and the line's half width), a run needs the component linked
+  // within the run's gap and half widths to be min_line_length_m long.
   if (hp.enabled) {
+    const int w = hp.line_half_width_cells;
     const int half = static_cast<int>(std::ceil(hp.max_range_m / cell_m));
-    const int r0 = rows / 2 - half, r1 = rows / 2 + half;
-    const int c0 = cols / 2 - half, c1 = cols / 2 + half;
-    const bool in_window = rmax >= r0 && rmin < r1 && cmax >= c0 && cmin < c1;
-    const double len = std::hypot(static_cast<double>(rmax - rmin + 2 * w),
-                                  static_cast<double>(cmax - cmin + 2 * w)) +
-                       1.0;
-    hough_reach = in_window && len >= hp.min_line_length_m / cell_m;
+    const int r0 = rows / 2 - half - w, r1 = rows / 2 + half + w;
+    const int c0 = cols / 2 - half - w, c1 = cols / 2 + half + w;
+    if (rmax >= r0 && rmin < r1 && cmax >= c0 && cmin < c1) {
+      for (const std::int32_t c : marked_) mark_[c] = 0;
+      marked_.clear();
+      const int gap_cells = static_cast<int>(std::floor(hp.max_line_gap_m / cell_m));
+      const int link = std::max(1, gap_cells + 1 + 2 * w);
+      const bool closed = grow(link, occupied, 2);
+      const double len = std::hypot(static_cast<double>(rmax - rmin + 2 * w),
+                                    static_cast<double>(cmax - cmin + 2 * w)) +
+                         1.0;
+      if (!closed || len >= hp.min_line_length_m / cell_m) {
+        component_ = local;
+        return settle(4);
+      }
+      component_ = local;
+    }
   }
-  const std::uint8_t state = open ? 2 : hough_reach ? 4 : 1;
-  for (const std::int32_t c : component_) state_[c] = state;
-  return state;
+  return settle(1);
 }
 
 void SectorCompletion::finalObjects(const CloudXYZIRT& cloud, const GridSegmenter& segmenter,
@@ -156,7 +195,9 @@ void SectorCompletion::finalObjects(const CloudXYZIRT& cloud, const GridSegmente
   const SimpleGrid& grid = segmenter.grid();
   if (state_.size() != grid.numCells()) {
     state_.assign(grid.numCells(), 0);
+    mark_.assign(grid.numCells(), 0);
     touched_.clear();
+    marked_.clear();
   }
   for (const std::int32_t c : touched_) state_[c] = 0;
   touched_.clear();

@@ -12,21 +12,22 @@
 ///    front: no later point of the revolution can fall into it, nor within margin_m of it.
 ///    margin_m covers the segmentation's local reach (terrain fill, ground growing across gaps)
 ///    and the detector's links (radial and roof bridges, the far-object merger).
-///  - The structure an object sits in: the occupied non-ground cells (tall or short after
-///    the segmentation) linked within link_cells (Chebyshev), link_cells =
-///    ceil(hough/max_line_gap_m / cell) + 1 + 2 * hough/line_half_width_cells. Every
-///    neighbourhood rule of the segmentation that changes a cell's class is contained in such
-///    a component: the vehicle groups (8-connected), "touches another tall cell", and a Hough
-///    run (consecutive occupied pixels of a run are at most max_line_gap_m apart and each is
-///    within line_half_width_cells of an occupied cell). An object is final when all cells of
-///    its component are closed.
+///  - The group an object sits in: its cells' 8-connected component over short cells and
+///    the tall cells low enough to be a vehicle candidate (top above the local ground and z
+///    range within max(vehicle_max_height_m, tall_min_height_m / tall_min_range_m)). Every
+///    neighbour rule of the segmentation's cell classes stays inside it and its ring of
+///    neighbours: the vehicle groups (8-connected over candidates and short cells, "touches a
+///    higher tall cell"), the curb rule. An object is final when all of it is closed.
 ///  - The Hough refinement is global over the revolution (cv::HoughLinesP votes over the whole
 ///    window, in a random order seeded per call, and extend_lines walks a line across the
-///    window), so a line found at the end may cross an early sector. A run can only relabel
-///    cells when it is at least min(min_line_length_m, min_mixed_wall_length_m) long, and a
-///    run lies within one component: a component reaching into the Hough window whose extent
-///    (box diagonal plus the line's half width on both ends) can hold such a run is not final
-///    before the seam closes; smaller ones cannot be touched by any line.
+///    window), so a line found at the end may cross an early sector. A run only relabels cells
+///    when it is at least hough/min_line_length_m long, and its occupied cells are linked
+///    within link = floor(max_line_gap_m / cell) + 1 + 2 * line_half_width_cells cells
+///    (Chebyshev; consecutive occupied pixels of a run are at most the gap apart, each within
+///    the half width of an occupied cell). So for a group reaching into the window (widened
+///    by the half width): its component over tall and short cells linked within `link` must
+///    be closed and too small to hold such a run (box diagonal plus the half width at both
+///    ends); otherwise the object waits for the seam.
 ///  - The ground growing is seeded near the sensor over the whole revolution; the margin keeps
 ///    an early cell's terrain away from later points, and Pipeline::finishRevolution() checks
 ///    every early object against the classic result (PipelineResult::early_mismatches).
@@ -62,7 +63,8 @@ struct ParamFields<EarlyObjectsParams> {
   static void visit(P& p, F&& f) {
     f({"margin_m", "m", 0.0, 100.0, "an early object's structure is this far from later points"},
       p.margin_m);
-    f({"angle_margin_deg", "deg", 0.0, 90.0, "further azimuth margin to the sweep's front and seam"},
+    f({"angle_margin_deg", "deg", 0.0, 90.0,
+       "further azimuth margin to the sweep's front and seam"},
       p.angle_margin_deg);
     f({"front_points", "points", 1, 100000,
        "the sweep's front (seam) is the median azimuth of this many last (first) points"},
@@ -111,6 +113,8 @@ class SectorCompletion {
   // Per cell: the component state of the current call (0 unknown), reset on touched_ only.
   std::vector<std::uint8_t> state_;
   std::vector<std::int32_t> touched_;
+  std::vector<std::uint8_t> mark_;  // per cell: visited by the current search (reset on marked_)
+  std::vector<std::int32_t> marked_;
   std::vector<std::int32_t> stack_;
   std::vector<std::int32_t> component_;
   std::size_t last_open_ = 0, last_hough_ = 0;
