@@ -106,7 +106,7 @@ EarlyRun runEarly(Pipeline* pipeline, const CloudXYZIRT& cloud, int sectors,
     run.pending_hough += r.pending_hough;
     if (std::getenv("UD_EARLY_DEBUG")) {
       std::cout << "sector " << s << ": given " << r.objects.size() << " pending " << r.pending
-                << " (hough " << r.pending_hough << ")\n";
+                << " (hough " << r.pending_hough << ") swept " << r.swept_deg << " deg\n";
     }
   }
   CloudXYZIRT whole = cloud;

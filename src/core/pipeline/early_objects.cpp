@@ -86,101 +86,110 @@ bool SectorCompletion::cellClosed(const SimpleGrid& grid, std::int32_t cell) con
   return u - w >= 0.0 && u + w <= swept_rad_;
 }
 
-std::uint8_t SectorCompletion::componentState(const GridSegmenter& segmenter, std::int32_t seed) {
-  if (state_[seed] != 0) return state_[seed];
+namespace {
+
+// The detector's reach beyond an object's own cells: its radial, gap and roof bridges (at most
+// 1.6 m with the shipped parameters) and the far-object merger's gap (1.2 m).
+constexpr double kDetectorReach_m = 2.0;
+
+}  // namespace
+
+bool SectorCompletion::grow(const GridSegmenter& segmenter, std::int32_t seed, int link,
+                            bool occupied_only) {
   const SimpleGrid& grid = segmenter.grid();
   const std::vector<SegmentClass>& cls = segmenter.cellClasses();
-  const GridSegmenterParams& sp = segmenter.params();
-  const HoughWallRefinerParams& hp = sp.hough;
-  const double cell_m = grid.params().cell_size_m;
   const int rows = grid.rows(), cols = grid.cols();
-  // A tall cell low enough to be a vehicle candidate of the segmentation's step 4b, or a short
-  // cell the Hough refinement made tall (lower than tall_min_height_m): both may change class
-  // with their 8-connected group.
-  const float low_h = static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_height_m));
-  const float low_range =
-      static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_range_m));
-  auto groupable = [&](std::int32_t c) {
-    if (cls[c] == SegmentClass::kShort) return true;
-    if (cls[c] != SegmentClass::kTall) return false;
-    const GridCell& cell = grid.cell(c);
-    const float g = segmenter.cellHasGround(c) ? segmenter.cellGround(c) : 0.0f;
-    return cell.z_max - g <= low_h && cell.zRange() <= low_range;
-  };
-  auto occupied = [&](std::int32_t c) {
-    return cls[c] == SegmentClass::kTall || cls[c] == SegmentClass::kShort;
-  };
-  // Breadth first from `seed` over the cells `member` accepts within Chebyshev `link`; fills
-  // component_ and its box; true when every cell of it is closed (stops at the first open one).
-  int rmin = 0, rmax = 0, cmin = 0, cmax = 0;
-  auto grow = [&](int link, auto&& member, std::uint8_t mark) {
-    component_.clear();
-    stack_.clear();
-    stack_.push_back(seed);
-    mark_[seed] = mark;
-    marked_.push_back(seed);
-    rmin = cmin = std::numeric_limits<int>::max();
-    rmax = cmax = -1;
-    while (!stack_.empty()) {
-      const std::int32_t c = stack_.back();
-      stack_.pop_back();
-      component_.push_back(c);
-      if (!cellClosed(grid, c)) return false;
-      const int r = grid.rowOf(c), col = c - r * cols;
-      rmin = std::min(rmin, r), rmax = std::max(rmax, r);
-      cmin = std::min(cmin, col), cmax = std::max(cmax, col);
-      for (int dr = -link; dr <= link; ++dr) {
-        const int rr = r + dr;
-        if (rr < 0 || rr >= rows) continue;
-        for (int dc = -link; dc <= link; ++dc) {
-          const int cc = col + dc;
-          if (cc < 0 || cc >= cols) continue;
-          const std::int32_t n = rr * cols + cc;
-          if (mark_[n] == mark || !member(n)) continue;
-          mark_[n] = mark;
-          marked_.push_back(n);
-          stack_.push_back(n);
-        }
+  component_.clear();
+  stack_.clear();
+  for (const std::int32_t c : marked_) mark_[c] = 0;
+  marked_.clear();
+  stack_.push_back(seed);
+  mark_[seed] = 1;
+  marked_.push_back(seed);
+  rmin_ = cmin_ = std::numeric_limits<int>::max();
+  rmax_ = cmax_ = -1;
+  bool closed = true;
+  while (!stack_.empty()) {
+    const std::int32_t c = stack_.back();
+    stack_.pop_back();
+    component_.push_back(c);
+    if (!cellClosed(grid, c)) closed = false;
+    const int r = grid.rowOf(c), col = c - r * cols;
+    rmin_ = std::min(rmin_, r), rmax_ = std::max(rmax_, r);
+    cmin_ = std::min(cmin_, col), cmax_ = std::max(cmax_, col);
+    for (int dr = -link; dr <= link; ++dr) {
+      const int rr = r + dr;
+      if (rr < 0 || rr >= rows) continue;
+      for (int dc = -link; dc <= link; ++dc) {
+        const int cc = col + dc;
+        if (cc < 0 || cc >= cols) continue;
+        const std::int32_t n = rr * cols + cc;
+        if (mark_[n]) continue;
+        const bool member = occupied_only
+                                ? (cls[n] == SegmentClass::kTall || cls[n] == SegmentClass::kShort)
+                                : groupable(segmenter, n);
+        if (!member) continue;
+        mark_[n] = 1;
+        marked_.push_back(n);
+        stack_.push_back(n);
       }
-    }
-    return true;
-  };
-  auto settle = [&](std::uint8_t state) {
-    for (const std::int32_t c : component_) {
-      if (state_[c] == 0) touched_.push_back(c);
-      state_[c] = state;
-    }
-    for (const std::int32_t c : marked_) mark_[c] = 0;
-    marked_.clear();
-    return state;
-  };
-  // The vehicle groups and every neighbour rule of the segmentation: 8-connected.
-  if (!grow(1, groupable, 1)) return settle(2);
-  const std::vector<std::int32_t> local = component_;
-  // Hough: within the window (and the line's half width), a run needs the component linked
-  // within the run's gap and half widths to be min_line_length_m long.
-  if (hp.enabled) {
-    const int w = hp.line_half_width_cells;
-    const int half = static_cast<int>(std::ceil(hp.max_range_m / cell_m));
-    const int r0 = rows / 2 - half - w, r1 = rows / 2 + half + w;
-    const int c0 = cols / 2 - half - w, c1 = cols / 2 + half + w;
-    if (rmax >= r0 && rmin < r1 && cmax >= c0 && cmin < c1) {
-      for (const std::int32_t c : marked_) mark_[c] = 0;
-      marked_.clear();
-      const int gap_cells = static_cast<int>(std::floor(hp.max_line_gap_m / cell_m));
-      const int link = std::max(1, gap_cells + 1 + 2 * w);
-      const bool closed = grow(link, occupied, 2);
-      const double len = std::hypot(static_cast<double>(rmax - rmin + 2 * w),
-                                    static_cast<double>(cmax - cmin + 2 * w)) +
-                         1.0;
-      if (!closed || len >= hp.min_line_length_m / cell_m) {
-        component_ = local;
-        return settle(4);
-      }
-      component_ = local;
     }
   }
-  return settle(1);
+  return closed;
+}
+
+bool SectorCompletion::groupable(const GridSegmenter& segmenter, std::int32_t c) const {
+  const SegmentClass cls = segmenter.cellClasses()[c];
+  if (cls == SegmentClass::kShort) return true;
+  if (cls != SegmentClass::kTall) return false;
+  const GridSegmenterParams& sp = segmenter.params();
+  const GridCell& cell = segmenter.grid().cell(c);
+  const float g = segmenter.cellHasGround(c) ? segmenter.cellGround(c) : 0.0f;
+  return cell.z_max - g <=
+             static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_height_m)) &&
+         cell.zRange() <=
+             static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_range_m));
+}
+
+bool SectorCompletion::flippable(const GridSegmenter& segmenter, std::int32_t c) const {
+  const SegmentClass cls = segmenter.cellClasses()[c];
+  if (cls == SegmentClass::kTall) return groupable(segmenter, c);
+  if (cls != SegmentClass::kShort) return false;
+  // A short cell with the statistics of a tall one: a vehicle candidate made short.
+  const GridSegmenterParams& sp = segmenter.params();
+  const GridCell& cell = segmenter.grid().cell(c);
+  const float g = segmenter.cellHasGround(c) ? segmenter.cellGround(c) : 0.0f;
+  return cell.z_max - g > static_cast<float>(sp.tall_min_height_m) ||
+         cell.zRange() > static_cast<float>(sp.tall_min_range_m);
+}
+
+std::uint8_t SectorCompletion::groupState(const GridSegmenter& segmenter, std::int32_t seed) {
+  if (group_state_[seed] != 0) return group_state_[seed];
+  const std::uint8_t state = grow(segmenter, seed, 1, false) ? 1 : 2;
+  for (const std::int32_t c : component_) {
+    if (group_state_[c] == 0 && hough_state_[c] == 0) touched_.push_back(c);
+    group_state_[c] = state;
+  }
+  return state;
+}
+
+std::uint8_t SectorCompletion::houghState(const GridSegmenter& segmenter, std::int32_t seed) {
+  if (hough_state_[seed] != 0) return hough_state_[seed];
+  const HoughWallRefinerParams& hp = segmenter.params().hough;
+  const double cell_m = segmenter.grid().params().cell_size_m;
+  const int w = hp.line_half_width_cells;
+  const int gap_cells = static_cast<int>(std::floor(hp.max_line_gap_m / cell_m));
+  const int link = std::max(1, gap_cells + 1 + 2 * w);
+  const bool closed = grow(segmenter, seed, link, true);
+  const double len = std::hypot(static_cast<double>(rmax_ - rmin_ + 2 * w),
+                                static_cast<double>(cmax_ - cmin_ + 2 * w)) +
+                     1.0;
+  const std::uint8_t state = closed && len < hp.min_line_length_m / cell_m ? 1 : 2;
+  for (const std::int32_t c : component_) {
+    if (group_state_[c] == 0 && hough_state_[c] == 0) touched_.push_back(c);
+    hough_state_[c] = state;
+  }
+  return state;
 }
 
 void SectorCompletion::finalObjects(const CloudXYZIRT& cloud, const GridSegmenter& segmenter,
@@ -193,49 +202,73 @@ void SectorCompletion::finalObjects(const CloudXYZIRT& cloud, const GridSegmente
     return;
   }
   const SimpleGrid& grid = segmenter.grid();
-  if (state_.size() != grid.numCells()) {
-    state_.assign(grid.numCells(), 0);
+  if (group_state_.size() != grid.numCells()) {
+    group_state_.assign(grid.numCells(), 0);
+    hough_state_.assign(grid.numCells(), 0);
     mark_.assign(grid.numCells(), 0);
     touched_.clear();
     marked_.clear();
   }
-  for (const std::int32_t c : touched_) state_[c] = 0;
+  for (const std::int32_t c : touched_) group_state_[c] = hough_state_[c] = 0;
   touched_.clear();
+  const HoughWallRefinerParams& hp = segmenter.params().hough;
+  const double cell_m = grid.params().cell_size_m;
+  const int rows = grid.rows(), cols = grid.cols();
+  const int w = hp.line_half_width_cells;
+  const int half = static_cast<int>(std::ceil(hp.max_range_m / cell_m));
+  const int wr0 = rows / 2 - half - w, wr1 = rows / 2 + half + w;
+  const int wc0 = cols / 2 - half - w, wc1 = cols / 2 + half + w;
+  const int reach = static_cast<int>(std::ceil(kDetectorReach_m / cell_m));
   for (std::size_t k = 0; k < objects.size(); ++k) {
-    bool ok = true, hough = false;
+    // The object's cells, all closed.
+    cells_.clear();
+    bool ok = true;
     for (const std::uint32_t i : objects[k].indices) {
-      if (i >= cloud.size()) {
+      std::int32_t c = i < cloud.size() ? grid.pointCell(i) : SimpleGrid::kNoCell;
+      if (c == SimpleGrid::kNoCell && i < cloud.size()) c = grid.cellAt(cloud[i].x, cloud[i].y);
+      if (c == SimpleGrid::kNoCell || !cellClosed(grid, c)) {
         ok = false;
         break;
       }
-      const std::int32_t c = grid.pointCell(i);
-      if (c == SimpleGrid::kNoCell) {  // a point the grid does not hold: judge by its own cell
-        const std::int32_t pc = grid.cellAt(cloud[i].x, cloud[i].y);
-        if (pc == SimpleGrid::kNoCell || !cellClosed(grid, pc)) {
-          ok = false;
-          break;
+      cells_.push_back(c);
+    }
+    std::sort(cells_.begin(), cells_.end());
+    cells_.erase(std::unique(cells_.begin(), cells_.end()), cells_.end());
+    // Cells within the detector's reach that may change class with their vehicle group: the
+    // group must be closed.
+    for (std::size_t j = 0; ok && j < cells_.size(); ++j) {
+      const int r = grid.rowOf(cells_[j]), col = cells_[j] - r * cols;
+      for (int dr = -reach; ok && dr <= reach; ++dr) {
+        for (int dc = -reach; ok && dc <= reach; ++dc) {
+          const int rr = r + dr, cc = col + dc;
+          if (rr < 0 || rr >= rows || cc < 0 || cc >= cols) continue;
+          const std::int32_t n = rr * cols + cc;
+          if (flippable(segmenter, n) && groupState(segmenter, n) != 1) ok = false;
         }
-        continue;
-      }
-      if (state_[c] == 0 && !(segmenter.cellClasses()[c] == SegmentClass::kTall ||
-                              segmenter.cellClasses()[c] == SegmentClass::kShort)) {
-        // A foreground point in a cell of another class (cannot happen with the grid
-        // segmenter): closed cell required.
-        if (!cellClosed(grid, c)) {
-          ok = false;
-          break;
-        }
-        continue;
-      }
-      const std::uint8_t state = componentState(segmenter, c);
-      if (state != 1) {
-        ok = false;
-        hough = state == 4;
-        break;
       }
     }
-    (*final)[k] = ok ? 1 : 0;
-    if (!ok) ++(hough ? last_hough_ : last_open_);
+    if (!ok) {
+      ++last_open_;
+      continue;
+    }
+    // Hough: cells in the window (widened by the half width) must not be on a possible run.
+    if (hp.enabled) {
+      for (const std::int32_t c : cells_) {
+        const int r = grid.rowOf(c), col = c - r * cols;
+        if (r < wr0 || r >= wr1 || col < wc0 || col >= wc1) continue;
+        const SegmentClass cls = segmenter.cellClasses()[c];
+        if (cls != SegmentClass::kTall && cls != SegmentClass::kShort) continue;
+        if (houghState(segmenter, c) != 1) {
+          ok = false;
+          break;
+        }
+      }
+      if (!ok) {
+        ++last_hough_;
+        continue;
+      }
+    }
+    (*final)[k] = 1;
   }
 }
 

@@ -189,6 +189,7 @@ const EarlySectorResult& Pipeline::addSector(std::uint32_t revolution, const Poi
   e.completion.updateSweep(e.cloud);
   e.completion.finalObjects(e.cloud, e.segmenter, e.objects, &e.final);
   out.pending_hough = e.completion.lastHough();
+  out.swept_deg = e.completion.sweptRad() * 180.0 / 3.14159265358979323846;
   e.candidates.clear();
   for (std::size_t k = 0; k < e.objects.size(); ++k) {
     if (!e.final[k]) {

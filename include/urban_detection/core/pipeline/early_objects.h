@@ -100,9 +100,20 @@ class SectorCompletion {
   bool cellClosed(const SimpleGrid& grid, std::int32_t cell) const;
 
  private:
-  // Component of `seed` over tall/short cells (Chebyshev link_cells): 1 final, 2 open, 4
-  // closed but within the Hough rule.
-  std::uint8_t componentState(const GridSegmenter& segmenter, std::int32_t seed);
+  // Depth first from `seed` over the cells within Chebyshev `link`: tall and short cells
+  // (occupied_only) or groupable ones; fills component_ and its box (rmin_ ...); true when all
+  // of them are closed.
+  bool grow(const GridSegmenter& segmenter, std::int32_t seed, int link, bool occupied_only);
+  // A short cell, or a tall one low enough to be a vehicle candidate (or a short cell the
+  // Hough refinement made tall).
+  bool groupable(const GridSegmenter& segmenter, std::int32_t c) const;
+  // A cell whose class a vehicle group may change: a groupable tall cell, or a short cell
+  // with a tall cell's statistics (a candidate made short).
+  bool flippable(const GridSegmenter& segmenter, std::int32_t c) const;
+  // Memoised per call: 1 the cell's 8-connected group is closed, 2 not.
+  std::uint8_t groupState(const GridSegmenter& segmenter, std::int32_t seed);
+  // Memoised per call: 1 the cell's Hough component is closed and holds no run, 2 not.
+  std::uint8_t houghState(const GridSegmenter& segmenter, std::int32_t seed);
 
   EarlyObjectsParams params_;
   bool sweep_valid_ = false;
@@ -110,8 +121,10 @@ class SectorCompletion {
   double sense_ = 1.0;      // +1: azimuth grows with time, -1: it falls
   double swept_rad_ = 0.0;  // [rad] from the seam to the front, in the rotation sense
   std::vector<float> scratch_az_;
-  // Per cell: the component state of the current call (0 unknown), reset on touched_ only.
-  std::vector<std::uint8_t> state_;
+  // Per cell: the states of the current call (0 unknown), reset on touched_ only.
+  std::vector<std::uint8_t> group_state_, hough_state_;
+  std::vector<std::int32_t> cells_;  // scratch: one object's cells
+  int rmin_ = 0, rmax_ = 0, cmin_ = 0, cmax_ = 0;
   std::vector<std::int32_t> touched_;
   std::vector<std::uint8_t> mark_;  // per cell: visited by the current search (reset on marked_)
   std::vector<std::int32_t> marked_;

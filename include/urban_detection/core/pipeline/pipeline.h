@@ -110,6 +110,7 @@ struct EarlySectorResult {
   std::size_t rejected = 0;              // final objects the classifier rejected (not given)
   std::size_t pending = 0;               // objects found but not final yet ...
   std::size_t pending_hough = 0;         // ... of which closed but held by the Hough rule
+  double swept_deg = 0.0;                // [deg] of the revolution swept so far (0: unknown)
   std::vector<StageTiming> timings;      // the stages of this sector
 };
 
