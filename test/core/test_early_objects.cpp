@@ -280,6 +280,29 @@ TEST(EarlyObjects, SimulatedDriveGivesTheClassicObjects) {
             << " objects given before the seam\n";
 }
 
+TEST(EarlyObjects, ARevolutionJoinedLateGivesEverythingAtTheSeam) {
+  std::vector<int> tags;
+  const CloudXYZIRT raw = test::rayCast(1.73f, seamScene(), &tags, 64, 1800, 2.0f, -24.8f, 50.0f);
+  const CloudXYZIRT cloud = sweepOrder(raw, 0.0, 1.0);
+  const PipelineParams p;
+  Pipeline pipeline(p);
+  // The first 4 of 16 sectors never arrive.
+  const std::size_t n = cloud.size();
+  for (int s = 4; s < 16; ++s) {
+    const std::size_t a = n * s / 16, b = n * (s + 1) / 16;
+    EXPECT_TRUE(pipeline.addSector(5, &cloud[a], b - a).objects.empty()) << "sector " << s;
+  }
+  CloudXYZIRT whole = cloud;
+  whole.header.seq = 5;
+  const PipelineResult& r = pipeline.finishRevolution(whole);
+  EXPECT_GT(r.objects.size(), 0u);
+  EXPECT_EQ(r.early_mismatches, 0u);
+  for (const std::uint8_t g : r.given_early) EXPECT_EQ(g, 0u);
+  // The next revolution, whole, gives early again.
+  EarlyRun run = runEarly(&pipeline, cloud, 16, 6);
+  EXPECT_GT(expectSameAsClassic(p, cloud, run, "after a late join"), 0u);
+}
+
 TEST(EarlyObjects, RealScansGiveTheClassicObjects) {
   const std::string root = UD_SHARED_DATA;
   const auto files = listFiles(root + "/semantic_kitti/sequences/00/velodyne", ".bin");

@@ -114,6 +114,7 @@ Pipeline::Pipeline(const PipelineParams& params, std::unique_ptr<ObjectDetector>
 struct Pipeline::EarlyState {
   explicit EarlyState(const PipelineParams& p) : segmenter(p.segmentation), completion(p.early) {}
   bool active = false;
+  bool joined_late = false;
   std::uint32_t revolution = 0;
   CloudXYZIRT cloud;  // the revolution so far
   GridSegmenter segmenter;
@@ -173,7 +174,11 @@ const EarlySectorResult& Pipeline::addSector(std::uint32_t revolution, const Poi
     e.finished.clear();
     e.given.clear();
     e.next_id = 1;
+    // A revolution joined after its start (the first sectors missed: its first point is later
+    // than this sector's span) has no seam to measure from; its objects all come at the seam.
+    e.joined_late = count > 1 && points[0].time > points[count - 1].time - points[0].time;
   }
+  if (e.joined_late) return out;
   e.cloud.header.seq = revolution;
   e.cloud.insert(e.cloud.end(), points, points + count);
   e.cloud.width = static_cast<std::uint32_t>(e.cloud.size());

@@ -148,7 +148,9 @@ class Pipeline {
   /// Early objects (early_objects.h): the next `count` points of the revolution `revolution`
   /// (its cloud's header.seq; a new number starts a revolution), in time order. Runs the chain
   /// on the revolution's points so far and returns the objects that are final now and were
-  /// not given before (valid until the next call). Ids count on over the revolution.
+  /// not given before (valid until the next call). Ids count on over the revolution. A
+  /// revolution whose first sector starts later than that sector's own span (its start was
+  /// missed) gives nothing early.
   const EarlySectorResult& addSector(std::uint32_t revolution, const PointXYZIRT* points,
                                      std::size_t count);
   /// At the seam: process() of the whole revolution (whose first points must be those given
