@@ -12,6 +12,9 @@
 #                                          manager: ENet (config/spark_enet_cityscapes.yaml) on a
 #                                          KITTI image at 10 Hz (urban_detection_camera_replay);
 #                                          also measures objects/classified
+#   scripts/run latency 60 --early         early objects on (early_objects:=true): also
+#                                          measures objects/early, each object from its own
+#                                          last point (results/latency_early.json)
 # Further options: --warmup S (default 10), --launch-arg NAME:=VALUE (repeatable).
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -25,12 +28,14 @@ WARMUP=10
 DETECTOR=hierarchical
 EXTRA=()
 CAMERA=false
+EARLY=false
 while [ $# -gt 0 ]; do
   case "$1" in
     --warmup) WARMUP="$2"; shift 2 ;;
     --detector) DETECTOR="$2"; shift 2 ;;
     --launch-arg) EXTRA+=("$2"); shift 2 ;;
     --camera) CAMERA=true; shift ;;
+    --early) EARLY=true; EXTRA+=(early_objects:=true); shift ;;
     *) echo "latency: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -38,6 +43,7 @@ mkdir -p "$OUT"
 SUFFIX=""
 [ "$DETECTOR" != hierarchical ] && SUFFIX="_$DETECTOR"
 [ "$CAMERA" = true ] && SUFFIX="${SUFFIX}_camera"
+[ "$EARLY" = true ] && SUFFIX="${SUFFIX}_early"
 JSON="$OUT/latency$SUFFIX.json"
 LOG="$OUT/latency${SUFFIX}_roslaunch.log"
 PCAP="$OUT/soak_drive.pcap"  # shared with scripts/soak.sh
@@ -98,6 +104,7 @@ if [ "$DETECTOR" = both ]; then
 elif [ "$DETECTOR" = kdtree ]; then
   TOPICS=(--objects objects --markers objects/markers)
 fi
+[ "$EARLY" = true ] && TOPICS+=(--stamped-objects objects/early)
 # The probe subscribes first (the chain is lazy), then the sensor starts sending.
 PROBE_JSON="$JSON.probe"
 "$BIN/urban_detection_latency_probe" "${TOPICS[@]}" --warmup "$WARMUP" \

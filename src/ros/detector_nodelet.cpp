@@ -1,5 +1,6 @@
 #include "urban_detection/ros/detector_nodelet.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -25,6 +26,7 @@ void DetectorNodelet::onInit() {
               "(nice value of the stage's thread, 0 = the manager's)");
     getPrivateNodeHandle().param("thread_idle", thread_idle_, false);
     getPrivateNodeHandle().param("best_effort", best_effort_, false);
+    loadParam(getPrivateNodeHandle(), "early_objects", &early_objects_);
     std::unique_ptr<core::ObjectDetector> detector = createDetector(getPrivateNodeHandle());
     core::PipelineParams params;  // the chain after the segmentation (its own nodelet)
     params.detector = detector->name();
@@ -32,6 +34,7 @@ void DetectorNodelet::onInit() {
                                          &params.classifier);
     loadFields(ros::NodeHandle(getPrivateNodeHandle(), "box_fitting"), &params.box_fitting);
     pipeline_ = std::make_unique<core::Pipeline>(params, std::move(detector));
+    if (early_objects_) startEarly(getPrivateNodeHandle());
   } catch (const std::exception& e) {
     refusal_ = ros_conv::RefusalDiagnostics::report(
         getNodeHandle(), getPrivateNodeHandle(), getName(),
@@ -51,6 +54,11 @@ void DetectorNodelet::onInit() {
       if (!error.empty()) return error;
       std::lock_guard<std::mutex> lock(detector_mutex_);  // between two revolutions
       classifier.setDecision(p.min_object_probability, p.reject_non_objects, p.keep_uncertain);
+      if (early_pipeline_) {
+        std::lock_guard<std::mutex> early_lock(early_mutex_);
+        early_pipeline_->classifier().setDecision(p.min_object_probability, p.reject_non_objects,
+                                                  p.keep_uncertain);
+      }
       return "";
     };
     classifier_reconfigure_ =
@@ -88,11 +96,105 @@ void DetectorNodelet::onInit() {
 
 DetectorNodelet::~DetectorNodelet() {
   if (thread_) thread_->stop();  // no callback runs on the members below any more
+  if (early_thread_) early_thread_->stop();
+}
+
+void DetectorNodelet::startEarly(const ros::NodeHandle& pnh) {
+  // The whole chain from the points: the segmentation with the segmentation nodelet's
+  // parameters (the launch file loads them into ~segmentation), the same detector, classifier
+  // and box fitting as the classic chain.
+  core::PipelineParams params = pipeline_->params();
+  loadFields(ros::NodeHandle(pnh, "segmentation"), &params.segmentation);
+  loadFields(ros::NodeHandle(pnh, "early"), &params.early);
+  early_pipeline_ = std::make_unique<core::Pipeline>(params, createDetector(pnh));
+  early_thread_ = std::make_unique<ros_conv::StageThread>(thread_nice_);
+  ros::NodeHandle& nh = getNodeHandle();
+  early_lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
+    if (!wanted) {
+      early_sector_sub_.shutdown();
+      early_cloud_sub_.shutdown();
+      return;
+    }
+    ros::NodeHandle h = early_thread_->handle(getNodeHandle());
+    early_sector_sub_ = h.subscribe("velodyne_points/sectors", 64, &DetectorNodelet::sectorCb, this,
+                                    ros::TransportHints().tcpNoDelay());
+    early_cloud_sub_ = h.subscribe("velodyne_points", 2, &DetectorNodelet::revolutionCb, this,
+                                   ros::TransportHints().tcpNoDelay());
+  });
+  early_pub_ = early_lazy_->advertise<DetectedObjectArray>(nh, "objects/early", 64);
+  NODELET_INFO("%s: early objects on objects/early", getName().c_str());
+}
+
+void DetectorNodelet::publishEarly(const core::DetectedObject& object, const std::string& frame_id,
+                                   const ros::Time& stamp) {
+  std_msgs::Header header;
+  header.frame_id = frame_id;
+  header.stamp = stamp;
+  auto msg = boost::make_shared<DetectedObjectArray>();
+  ros_conv::toMsg(std::vector<core::DetectedObject>{object}, pipeline_->detector().name(), header,
+                  msg.get());
+  early_pub_.publish(boost::shared_ptr<const DetectedObjectArray>(msg));
+}
+
+namespace {
+
+// The stamp of a point swept `behind_s` before the point that stamps `stamp` (clamped at 0).
+ros::Time before(const ros::Time& stamp, double behind_s) {
+  const double s = stamp.toSec() - std::max(0.0, behind_s);
+  return s > 0.0 ? ros::Time(s) : stamp;
+}
+
+}  // namespace
+
+void DetectorNodelet::sectorCb(const boost::shared_ptr<const CloudXYZIRT>& sector) {
+  if (sector->empty() || !cloudRefusal(*sector).empty()) return;  // the seam gives them all
+  std::lock_guard<std::mutex> lock(early_mutex_);
+  const core::EarlySectorResult& r =
+      early_pipeline_->addSector(sector->header.seq, sector->points.data(), sector->size());
+  std_msgs::Header header;
+  pcl_conversions::fromPCL(sector->header, header);
+  const float last = sector->points.back().time;
+  for (std::size_t k = 0; k < r.objects.size(); ++k) {
+    publishEarly(r.objects[k], header.frame_id,
+                 before(header.stamp, static_cast<double>(last - r.last_point_time_s[k])));
+  }
+}
+
+void DetectorNodelet::revolutionCb(const boost::shared_ptr<const CloudXYZIRT>& cloud) {
+  if (cloud->empty() || !cloudRefusal(*cloud).empty()) return;
+  std::lock_guard<std::mutex> lock(early_mutex_);
+  const core::PipelineResult& r = early_pipeline_->finishRevolution(*cloud);
+  std_msgs::Header header;
+  pcl_conversions::fromPCL(cloud->header, header);
+  float last = 0.0f;
+  for (const PointXYZIRT& p : cloud->points) last = std::max(last, p.time);
+  for (std::size_t k = 0; k < r.objects.size(); ++k) {
+    if (r.given_early[k]) continue;
+    publishEarly(r.objects[k], header.frame_id,
+                 before(header.stamp, static_cast<double>(last - r.last_point_time_s[k])));
+  }
+  if (r.early_mismatches > 0) {
+    early_mismatches_ += r.early_mismatches;
+    NODELET_WARN_THROTTLE(5.0, "%s: %zu early objects not in their revolution (%zu so far)",
+                          getName().c_str(), r.early_mismatches, early_mismatches_);
+  }
 }
 
 void DetectorNodelet::replaceDetector(std::unique_ptr<core::ObjectDetector> detector) {
   std::lock_guard<std::mutex> lock(detector_mutex_);
   pipeline_->setDetector(std::move(detector));
+}
+
+void DetectorNodelet::replaceDetector(std::unique_ptr<core::ObjectDetector> detector,
+                                      std::unique_ptr<core::ObjectDetector> early) {
+  {
+    std::lock_guard<std::mutex> lock(detector_mutex_);
+    pipeline_->setDetector(std::move(detector));
+  }
+  if (early_pipeline_) {
+    std::lock_guard<std::mutex> lock(early_mutex_);
+    early_pipeline_->setDetector(std::move(early));
+  }
 }
 
 void DetectorNodelet::foregroundCb(const ros::MessageEvent<const LabeledCloud>& event) {

@@ -7,7 +7,9 @@
 // clockwise (azimuth atan2(-y, x)) from --cut-deg over --revolution-s ending at header.stamp,
 // so the object's last point was swept at the azimuth of its axis-aligned box corner swept
 // last (an upper bound on its points', so the figure is a lower bound by at most the box's
-// angular extent); recorded under "<topic> per object".
+// angular extent); recorded under "<topic> per object". A --stamped-objects topic (objects/early)
+// stamps every message at its objects' own last point, so there each object's latency is its
+// message's (recorded under "<topic> per object" too).
 // Also keeps the last /diagnostics status of every stage reporting a processing time, and writes
 // its timing, rate and skip figures under "stages" (where a latency figure comes from).
 #include <algorithm>
@@ -38,6 +40,8 @@ void usage() {
   std::printf(
       "usage: urban_detection_latency_probe [options]\n"
       "  --objects TOPIC   a DetectedObjectArray topic (repeatable; default: objects)\n"
+      "  --stamped-objects TOPIC  a DetectedObjectArray topic whose messages are stamped at\n"
+      "                    their objects' last point (objects/early; repeatable)\n"
       "  --markers TOPIC   a MarkerArray topic, stamp of its first marker (repeatable;\n"
       "                    default: objects/markers)\n"
       "  --warmup S        seconds ignored after the first message of every topic (default 5)\n"
@@ -119,6 +123,21 @@ class Probe {
     }
   }
 
+  // Objects of a message stamped at their own last point: each one's latency is the message's.
+  void recordStampedObjects(const std::string& topic, const ud::DetectedObjectArray& m) {
+    const ros::Time now = ros::Time::now();
+    const ros::WallTime wall = ros::WallTime::now();
+    if (m.header.stamp.isZero() || m.objects.empty()) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (start_.isZero() || (wall - start_).toSec() < warmup_s_) return;
+    TopicRecord& r = records_[topic];
+    if (r.latency_ms.empty()) r.first = wall;
+    r.last = wall;
+    const double ms =
+        1e-6 * (static_cast<double>(now.toNSec()) - static_cast<double>(m.header.stamp.toNSec()));
+    for (std::size_t k = 0; k < m.objects.size(); ++k) r.latency_ms.push_back(ms);
+  }
+
   bool started() {
     std::lock_guard<std::mutex> lock(mutex_);
     return !start_.isZero() && (ros::WallTime::now() - start_).toSec() >= warmup_s_;
@@ -181,13 +200,15 @@ class Probe {
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "latency_probe", ros::init_options::AnonymousName);
-  std::vector<std::string> objects, markers;
+  std::vector<std::string> objects, markers, stamped;
   double warmup_s = 5.0, duration_s = 60.0, revolution_s = 0.1, cut_deg = 0.0;
   std::string out_path;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--objects")
       objects.push_back(ud::tools::optionValue(argc, argv, &i, "--objects"));
+    else if (a == "--stamped-objects")
+      stamped.push_back(ud::tools::optionValue(argc, argv, &i, "--stamped-objects"));
     else if (a == "--markers")
       markers.push_back(ud::tools::optionValue(argc, argv, &i, "--markers"));
     else if (a == "--warmup")
@@ -213,7 +234,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: --warmup >= 0 and --duration > 0 needed\n");
     return 2;
   }
-  if (objects.empty() && markers.empty()) {
+  if (objects.empty() && markers.empty() && stamped.empty()) {
     objects.push_back("objects");
     markers.push_back("objects/markers");
   }
@@ -232,6 +253,19 @@ int main(int argc, char** argv) {
          cut_deg](const ud::DetectedObjectArray::ConstPtr& m) {
           probe.record(name, m->header.stamp);
           probe.recordObjects(per_object, *m, revolution_s, cut_deg);
+        },
+        ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+  }
+  for (const std::string& t : stamped) {
+    const std::string name = nh.resolveName(t);
+    const std::string per_object = name + " per object";
+    topics.push_back(name);
+    topics.push_back(per_object);
+    subs.push_back(nh.subscribe<ud::DetectedObjectArray>(
+        t, 256,
+        [&probe, name, per_object](const ud::DetectedObjectArray::ConstPtr& m) {
+          probe.record(name, m->header.stamp);
+          probe.recordStampedObjects(per_object, *m);
         },
         ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
   }

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "urban_detection/core/params/params_yaml.h"
+#include "urban_detection/core/pipeline/early_objects.h"
 #include "urban_detection/core/spark/camera_model.h"
 #include "urban_detection/core/spark/spark_capture.h"
 #include "urban_detection/ros/object_markers.h"
@@ -79,6 +80,10 @@ int main(int argc, char** argv) {
       "SPARK capture path (urban_detection_spark run)",
       "the `--path PATH.json` file: these keys besides `path` (the camera positions, a list of "
       "`[x, y, z]`); `colour` is rgb, intensity or height.");
+  section<core::EarlyObjectsParams>(
+      "Early objects (HierarchicalGridDetector with `early_objects:=true`)",
+      "nodelet parameters `~early/<name>` (defaults when absent); `docs/design.md`, "
+      "\"Early objects\".");
   section<core::TrackerParams>(
       "Tracker (ObjectTracker)",
       "`config/object_tracker.yaml`, map `tracker:`; nodelet parameters `~tracker/<name>`; "

@@ -18,6 +18,14 @@
 /// one FATAL naming the file; the manager keeps running. min_object_probability and
 /// reject_non_objects are dynamic_reconfigure parameters in ~classifier (config/
 /// ObjectClassifier.cfg), applied from the next revolution.
+///
+/// Early objects (~early_objects, default false; docs/design.md "Early objects"): a second
+/// chain, on a thread of its own, takes PacketSource's velodyne_points/sectors and the
+/// revolution's velodyne_points (core::Pipeline::addSector / finishRevolution, segmentation
+/// parameters in ~segmentation/*, ~early/* for core::EarlyObjectsParams) and publishes on
+/// objects/early one DetectedObjectArray per object, stamped at the object's own last point:
+/// an object as soon as it is final, the others when the revolution's cloud closes the seam.
+/// Per revolution objects/early holds exactly the objects of `objects`. Lazy as the rest.
 #pragma once
 
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
@@ -56,10 +64,20 @@ class DetectorNodelet : public nodelet::Nodelet {
   virtual void startReconfigure(const ros::NodeHandle& /*pnh*/) {}
   /// Replaces the detector; takes effect between two revolutions, never during one.
   void replaceDetector(std::unique_ptr<core::ObjectDetector> detector);
+  /// The same with a second instance for the early-objects chain (used when it runs).
+  void replaceDetector(std::unique_ptr<core::ObjectDetector> detector,
+                       std::unique_ptr<core::ObjectDetector> early);
 
  private:
   void onInit() final;
   void foregroundCb(const ros::MessageEvent<const LabeledCloud>& event);  // zero copy
+  // Early objects: one sector of the open revolution, and the revolution's whole cloud.
+  void startEarly(const ros::NodeHandle& pnh);
+  void sectorCb(const boost::shared_ptr<const CloudXYZIRT>& sector);
+  void revolutionCb(const boost::shared_ptr<const CloudXYZIRT>& cloud);
+  // Publishes `object` alone on objects/early at `stamp`.
+  void publishEarly(const core::DetectedObject& object, const std::string& frame_id,
+                    const ros::Time& stamp);
 
   std::mutex detector_mutex_;  // pipeline_ between revolutions and reconfigure
   // detector -> classifier -> whole-object boxes; holds the objects between frames
@@ -77,6 +95,15 @@ class DetectorNodelet : public nodelet::Nodelet {
   std::unique_ptr<ros_conv::LazyOutputs> lazy_;
   ros::Publisher objects_pub_, points_pub_, rejected_pub_;
   ros::Subscriber sub_;
+  // Early objects (~early_objects).
+  bool early_objects_ = false;
+  std::mutex early_mutex_;  // early_pipeline_ between sectors and reconfigure
+  std::unique_ptr<core::Pipeline> early_pipeline_;  // its own chain, segmentation included
+  std::unique_ptr<ros_conv::StageThread> early_thread_;
+  std::unique_ptr<ros_conv::LazyOutputs> early_lazy_;
+  ros::Publisher early_pub_;
+  ros::Subscriber early_sector_sub_, early_cloud_sub_;
+  std::size_t early_mismatches_ = 0;
 };
 
 }  // namespace ros_conv

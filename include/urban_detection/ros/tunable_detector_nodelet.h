@@ -48,7 +48,8 @@ class TunableDetectorNodelet : public DetectorNodelet {
     const Params p = ros_conv::fromConfig(config, params_);
     const std::string error = checkFields(params_nh_, p);
     if (!error.empty()) return error;
-    replaceDetector(std::make_unique<typename Traits::Detector>(p));
+    replaceDetector(std::make_unique<typename Traits::Detector>(p),
+                    std::make_unique<typename Traits::Detector>(p));  // the early chain's
     params_ = p;
     return "";
   }

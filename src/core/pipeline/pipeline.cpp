@@ -2,7 +2,10 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <chrono>
+#include <limits>
+#include <map>
 #include <stdexcept>
 #include <utility>
 
@@ -50,7 +53,8 @@ std::string validateStages(const PipelineParams& p) {
   for (const std::string& e :
        {nested("segmentation", p.segmentation), nested("hierarchical_grid", p.hierarchical_grid),
         nested("kdtree", p.kdtree), nested("classifier", p.classifier),
-        nested("box_fitting", p.box_fitting), nested("tracker", p.tracker)}) {
+        nested("box_fitting", p.box_fitting), nested("tracker", p.tracker),
+        nested("early", p.early)}) {
     if (!e.empty()) return e;
   }
   return "";
@@ -107,7 +111,174 @@ Pipeline::Pipeline(const PipelineParams& params, std::unique_ptr<ObjectDetector>
   result_.timings.reserve(8);
 }
 
+struct Pipeline::EarlyState {
+  explicit EarlyState(const PipelineParams& p) : segmenter(p.segmentation), completion(p.early) {}
+  bool active = false;
+  bool joined_late = false;
+  std::uint32_t revolution = 0;
+  CloudXYZIRT cloud;  // the revolution so far
+  GridSegmenter segmenter;
+  SectorCompletion completion;
+  std::vector<SegmentClass> labels;
+  LabeledCloud foreground;
+  std::vector<DetectedObject> objects, candidates, rejected;
+  std::vector<std::uint8_t> final;
+  std::vector<std::uint32_t> key;
+  // Sorted point indices of every object finished so far -> the object given (kept), or an
+  // empty object (rejected: nothing given).
+  std::map<std::vector<std::uint32_t>, DetectedObject> finished;
+  std::map<std::vector<std::uint32_t>, bool> given;  // kept objects given early
+  std::uint32_t next_id = 1;
+  EarlySectorResult result;
+};
+
+namespace {
+
+void sortedIndices(const DetectedObject& o, std::vector<std::uint32_t>* key) {
+  key->assign(o.indices.begin(), o.indices.end());
+  std::sort(key->begin(), key->end());
+}
+
+float lastPointTime(const CloudXYZIRT& cloud, const DetectedObject& o) {
+  float t = -std::numeric_limits<float>::infinity();
+  for (const std::uint32_t i : o.indices) {
+    if (i < cloud.size()) t = std::max(t, cloud[i].time);
+  }
+  return t;
+}
+
+bool sameObject(const DetectedObject& a, const DetectedObject& b) {
+  return a.category == b.category && a.class_confidence == b.class_confidence &&
+         a.obb_center == b.obb_center && a.obb_size == b.obb_size &&
+         a.obb_yaw_rad == b.obb_yaw_rad && a.min_pt == b.min_pt && a.max_pt == b.max_pt &&
+         a.centroid == b.centroid;
+}
+
+}  // namespace
+
 Pipeline::~Pipeline() = default;
+
+const EarlySectorResult& Pipeline::addSector(std::uint32_t revolution, const PointXYZIRT* points,
+                                             std::size_t count) {
+  if (!early_) early_ = std::make_unique<EarlyState>(params_);
+  EarlyState& e = *early_;
+  EarlySectorResult& out = e.result;
+  out.objects.clear();
+  out.last_point_time_s.clear();
+  out.timings.clear();
+  out.rejected = out.pending = out.pending_hough = 0;
+  if (!e.active || revolution != e.revolution) {
+    e.active = true;
+    e.revolution = revolution;
+    e.cloud.clear();
+    e.finished.clear();
+    e.given.clear();
+    e.next_id = 1;
+    // A revolution joined after its start (the first sectors missed: its first point is later
+    // than this sector's span) has no seam to measure from; its objects all come at the seam.
+    e.joined_late = count > 1 && points[0].time > points[count - 1].time - points[0].time;
+  }
+  if (e.joined_late) return out;
+  e.cloud.header.seq = revolution;
+  e.cloud.insert(e.cloud.end(), points, points + count);
+  e.cloud.width = static_cast<std::uint32_t>(e.cloud.size());
+  e.cloud.height = 1;
+  const StageClock segmentation("segmentation");
+  e.segmenter.segment(e.cloud, &e.labels);
+  segmentation.stop(&out.timings);
+  const StageClock foreground("foreground_extraction");
+  extractForeground(e.cloud, e.labels, &e.foreground);
+  foreground.stop(&out.timings);
+  const StageClock detection("detection");
+  detector_->detect(e.foreground, &e.objects);
+  e.completion.updateSweep(e.cloud);
+  e.completion.finalObjects(e.cloud, e.segmenter, e.objects, &e.final);
+  out.pending_hough = e.completion.lastHough();
+  out.swept_deg = e.completion.sweptRad() * 180.0 / 3.14159265358979323846;
+  e.candidates.clear();
+  for (std::size_t k = 0; k < e.objects.size(); ++k) {
+    if (!e.final[k]) {
+      ++out.pending;
+      continue;
+    }
+    sortedIndices(e.objects[k], &e.key);
+    if (e.finished.count(e.key) != 0) continue;
+    e.candidates.push_back(std::move(e.objects[k]));
+  }
+  detection.stop(&out.timings);
+  if (e.candidates.empty()) return out;
+  e.rejected.clear();
+  if (classifier_->params().enabled) {
+    const StageClock classification("classification");
+    classifier_->apply(e.foreground, &e.candidates, &e.rejected);
+    classification.stop(&out.timings);
+  }
+  if (box_fitter_->params().enabled) {
+    const StageClock boxes("box_fitting");
+    box_fitter_->fit(e.foreground, &e.candidates);
+    boxes.stop(&out.timings);
+  }
+  for (const DetectedObject& r : e.rejected) {
+    sortedIndices(r, &e.key);
+    e.finished.emplace(e.key, DetectedObject());
+    ++out.rejected;
+  }
+  for (DetectedObject& o : e.candidates) {
+    o.id = e.next_id++;
+    sortedIndices(o, &e.key);
+    e.finished.emplace(e.key, o);
+    e.given.emplace(e.key, false);
+    out.last_point_time_s.push_back(lastPointTime(e.cloud, o));
+    out.objects.push_back(std::move(o));
+  }
+  return out;
+}
+
+const PipelineResult& Pipeline::finishRevolution(const CloudXYZIRT& cloud,
+                                                 const DetectionsObserver& observer) {
+  process(cloud, observer);
+  matchEarly(cloud);
+  return result_;
+}
+
+const PipelineResult& Pipeline::finishRevolution(const CloudXYZIRT& cloud,
+                                                 const Eigen::Isometry3d& world_T_sensor,
+                                                 double stamp_s,
+                                                 const DetectionsObserver& observer) {
+  process(cloud, world_T_sensor, stamp_s, observer);
+  matchEarly(cloud);
+  return result_;
+}
+
+void Pipeline::matchEarly(const CloudXYZIRT& cloud) {
+  result_.given_early.assign(result_.objects.size(), 0);
+  result_.last_point_time_s.resize(result_.objects.size());
+  result_.early_mismatches = 0;
+  for (std::size_t k = 0; k < result_.objects.size(); ++k) {
+    result_.last_point_time_s[k] = lastPointTime(cloud, result_.objects[k]);
+  }
+  if (!early_ || !early_->active) return;
+  EarlyState& e = *early_;
+  e.active = false;
+  // The early points must be the first points of this cloud (same revolution).
+  bool same = cloud.header.seq == e.revolution && e.cloud.size() <= cloud.size();
+  for (std::size_t i = 0; same && i < e.cloud.size(); ++i) {
+    const PointXYZIRT &a = e.cloud[i], &b = cloud[i];
+    same = (a.x == b.x || (a.x != a.x && b.x != b.x)) &&
+           (a.y == b.y || (a.y != a.y && b.y != b.y)) &&
+           (a.z == b.z || (a.z != a.z && b.z != b.z)) && a.time == b.time;
+  }
+  for (std::size_t k = 0; k < result_.objects.size(); ++k) {
+    sortedIndices(result_.objects[k], &e.key);
+    const auto f = e.finished.find(e.key);
+    if (f == e.finished.end() || f->second.indices.empty()) continue;
+    if (same && sameObject(f->second, result_.objects[k])) {
+      result_.given_early[k] = 1;
+      e.given[e.key] = true;
+    }
+  }
+  for (const auto& g : e.given) result_.early_mismatches += g.second ? 0 : 1;
+}
 
 void Pipeline::setDetector(std::unique_ptr<ObjectDetector> detector) {
   if (!detector) throw std::invalid_argument("Pipeline: no detector");

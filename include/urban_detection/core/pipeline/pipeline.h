@@ -32,6 +32,7 @@
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/detection/object_detector.h"
+#include "urban_detection/core/pipeline/early_objects.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/tracking/tracker.h"
 
@@ -48,6 +49,7 @@ struct PipelineParams {
   ObjectClassifierParams classifier;
   BoxFittingParams box_fitting;
   TrackerParams tracker;
+  EarlyObjectsParams early;  // addSector() only (the early-objects mode)
 };
 
 /// PipelineParams' field table (core/common/param_fields.h): the stages' tables nested under
@@ -64,6 +66,7 @@ struct ParamFields<PipelineParams> {
     forEachField(p.classifier, "classifier", f);
     forEachField(p.box_fitting, "box_fitting", f);
     forEachField(p.tracker, "tracker", f);
+    forEachField(p.early, "early", f);
   }
 };
 
@@ -88,11 +91,27 @@ struct PipelineResult {
   ObjectClassifierStats classification;        // the classifier's counts of this revolution
   std::vector<StageTiming> timings;            // the stages that ran, in order
   const std::vector<Track>* tracks = nullptr;  // the tracker's tracks (params.tracking), else null
+  // finishRevolution() only (early-objects mode), per entry of `objects`: 1 when addSector()
+  // already gave it (same points, class and box), and the time field of its last point [s].
+  std::vector<std::uint8_t> given_early;
+  std::vector<float> last_point_time_s;
+  std::size_t early_mismatches = 0;  // objects given early that the revolution does not hold
 
   /// The time of the stage `name` (0 when it did not run), and of all stages together [ms].
   double wallMs(const std::string& name) const;
   double totalWallMs() const;
   double totalCpuMs() const;
+};
+
+/// The objects one sector finished (Pipeline::addSector).
+struct EarlySectorResult {
+  std::vector<DetectedObject> objects;   // final objects, classified, with fitted boxes
+  std::vector<float> last_point_time_s;  // per object: the time field of its last point [s]
+  std::size_t rejected = 0;              // final objects the classifier rejected (not given)
+  std::size_t pending = 0;               // objects found but not final yet ...
+  std::size_t pending_hough = 0;         // ... of which closed but held by the Hough rule
+  double swept_deg = 0.0;                // [deg] of the revolution swept so far (0: unknown)
+  std::vector<StageTiming> timings;      // the stages of this sector
 };
 
 /// Called with the detector's objects before the classifier changes them (scoring the
@@ -126,6 +145,23 @@ class Pipeline {
   const PipelineResult& detect(const LabeledCloud& foreground,
                                const DetectionsObserver& observer = nullptr);
 
+  /// Early objects (early_objects.h): the next `count` points of the revolution `revolution`
+  /// (its cloud's header.seq; a new number starts a revolution), in time order. Runs the chain
+  /// on the revolution's points so far and returns the objects that are final now and were
+  /// not given before (valid until the next call). Ids count on over the revolution. A
+  /// revolution whose first sector starts later than that sector's own span (its start was
+  /// missed) gives nothing early.
+  const EarlySectorResult& addSector(std::uint32_t revolution, const PointXYZIRT* points,
+                                     std::size_t count);
+  /// At the seam: process() of the whole revolution (whose first points must be those given
+  /// to addSector(); otherwise nothing counts as given early), with given_early and
+  /// last_point_time_s per object and early_mismatches set. Ends the revolution.
+  const PipelineResult& finishRevolution(const CloudXYZIRT& cloud,
+                                         const DetectionsObserver& observer = nullptr);
+  const PipelineResult& finishRevolution(const CloudXYZIRT& cloud,
+                                         const Eigen::Isometry3d& world_T_sensor, double stamp_s,
+                                         const DetectionsObserver& observer = nullptr);
+
   const PipelineParams& params() const { return params_; }
   const PipelineResult& result() const { return result_; }
   ObjectDetector& detector() { return *detector_; }
@@ -140,6 +176,12 @@ class Pipeline {
 
  private:
   void detectInto(const LabeledCloud& foreground, const DetectionsObserver& observer);
+  void matchEarly(const CloudXYZIRT& cloud);
+
+  // Early objects: the revolution so far, its own segmenter (the classic one may be streaming),
+  // and the sorted point indices of the objects given (kept) or finished (rejected).
+  struct EarlyState;
+  std::unique_ptr<EarlyState> early_;
 
   PipelineParams params_;
   std::unique_ptr<GridSegmenter> segmenter_;
