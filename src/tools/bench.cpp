@@ -47,7 +47,9 @@
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/evaluation/bench_sources.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/evaluation/tracker_bench.h"
 #include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
@@ -60,124 +62,20 @@
 #include "urban_detection/ros/object_markers.h"
 
 #include "tool_common.h"
-#include "tracker_bench.h"
 
 namespace core = urban_detection::core;
 using urban_detection::CloudXYZIRT;
 using Clock = std::chrono::steady_clock;
 
+using urban_detection::core::msSince;
+using urban_detection::core::StageTimer;
+using urban_detection::core::threadCpuMs;
 using urban_detection::tools::jsonEscape;
 using urban_detection::tools::jsonNumber;
 using urban_detection::tools::median;
 using urban_detection::tools::percentile;
 
 namespace {
-
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-double threadCpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-// Wall and thread-CPU time of one stage. On a machine shared with other jobs the wall time
-// includes time the thread waited for the core; the CPU time does not.
-class StageTimer {
- public:
-  StageTimer() : wall_(Clock::now()), cpu_(threadCpuMs()) {}
-  void stop(const std::string& name, std::map<std::string, std::vector<double>>* wall,
-            std::map<std::string, std::vector<double>>* cpu, double* wall_total = nullptr,
-            double* cpu_total = nullptr) const {
-    const double w = msSince(wall_), c = threadCpuMs() - cpu_;
-    (*wall)[name].push_back(w);
-    (*cpu)[name].push_back(c);
-    if (wall_total) *wall_total += w;
-    if (cpu_total) *cpu_total += c;
-  }
-
- private:
-  Clock::time_point wall_;
-  double cpu_;
-};
-
-// A source of revolutions: clouds from files, or packets decoded into clouds.
-class Source {
- public:
-  virtual ~Source() = default;
-  /// Next revolution into `cloud`; `decode_ms` / `decode_cpu_ms` are the wall / thread-CPU
-  /// decode time (negative: no packets). Returns false at the end.
-  virtual bool next(CloudXYZIRT* cloud, double* decode_ms, double* decode_cpu_ms) = 0;
-  virtual void rewind() = 0;
-  virtual std::string describe() const = 0;
-};
-
-class FileSource : public Source {
- public:
-  FileSource(const std::string& dir, std::vector<std::string> files, bool pcd)
-      : dir_(dir), files_(std::move(files)), pcd_(pcd) {}
-  bool next(CloudXYZIRT* cloud, double* decode_ms, double* decode_cpu_ms) override {
-    while (pos_ < files_.size()) {
-      std::string err;
-      const std::string& f = files_[pos_++];
-      const bool ok = pcd_ ? core::readPcdXyzi(f, cloud, &err) : core::readKittiBin(f, cloud, &err);
-      if (ok) {
-        *decode_ms = -1.0;
-        *decode_cpu_ms = -1.0;
-        return true;
-      }
-      std::fprintf(stderr, "warning: skipping %s: %s\n", f.c_str(), err.c_str());
-    }
-    return false;
-  }
-  void rewind() override { pos_ = 0; }
-  std::string describe() const override {
-    return dir_ + " (" + std::to_string(files_.size()) +
-           (pcd_ ? " PCD sweeps)" : " KITTI .bin scans)");
-  }
-
- private:
-  std::string dir_;
-  std::vector<std::string> files_;
-  bool pcd_;
-  std::size_t pos_ = 0;
-};
-
-class PcapSource : public Source {
- public:
-  PcapSource(const std::string& path, const core::Calibration& calib)
-      : path_(path), reader_(path), decoder_(calib, core::DecoderParams()) {}
-  bool next(CloudXYZIRT* cloud, double* decode_ms, double* decode_cpu_ms) override {
-    // A revolution's packets are read first (not timed) and then decoded in one timed block:
-    // timing every packet would add two clock reads per packet (the thread-CPU clock is a
-    // system call) to the figure. Revolutions are cut as everywhere else
-    // (core::PcapRevolutionReader).
-    cloud->clear();
-    if (reader_.next(&revolution_) != core::PcapRevolutionReader::Result::kRevolution) {
-      return false;
-    }
-    const double rev_start_s = revolution_[0].stamp_s;
-    const auto t0 = Clock::now();
-    const double c0 = threadCpuMs();
-    for (const core::PcapPacket& p : revolution_) {
-      decoder_.decode(p.data.data(), p.data.size(), p.stamp_s - rev_start_s, cloud, &stats_);
-    }
-    *decode_cpu_ms = threadCpuMs() - c0;
-    *decode_ms = msSince(t0);
-    return true;
-  }
-  void rewind() override { reader_.rewind(); }
-  std::string describe() const override { return "packets of " + path_; }
-
- private:
-  std::string path_;
-  core::PcapRevolutionReader reader_;
-  core::PacketDecoder decoder_;
-  std::vector<core::PcapPacket> revolution_;  // the current revolution's packets (reused)
-  core::DecodeStats stats_;
-};
 
 void usage() {
   std::fprintf(stderr,
@@ -238,24 +136,24 @@ int main(int argc, char** argv) {
   core::PipelineParams params;
   if (!urban_detection::tools::loadConfigs(configs, &params)) return 2;
 
-  std::vector<std::unique_ptr<Source>> sources;
+  std::vector<std::unique_ptr<core::RevolutionSource> > sources;
   for (const auto& d : pcd_dirs) {
     auto files = core::listFiles(d, ".pcd");
     if (files.empty())
       std::fprintf(stderr, "warning: no .pcd files in %s\n", d.c_str());
     else
-      sources.emplace_back(new FileSource(d, files, true));
+      sources.emplace_back(new core::FileRevolutionSource(d, files, true));
   }
   for (const auto& d : bin_dirs) {
     auto files = core::listFiles(d, ".bin");
     if (files.empty())
       std::fprintf(stderr, "warning: no .bin files in %s\n", d.c_str());
     else
-      sources.emplace_back(new FileSource(d, files, false));
+      sources.emplace_back(new core::FileRevolutionSource(d, files, false));
   }
   try {
     if (!pcap.empty()) {
-      sources.emplace_back(new PcapSource(pcap, core::loadCalibration(calib_path)));
+      sources.emplace_back(new core::PcapRevolutionSource(pcap, core::loadCalibration(calib_path)));
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
@@ -293,7 +191,7 @@ int main(int argc, char** argv) {
   const bool classifier = params.classifier.enabled;
   core::HoughWallRefiner hough(params.segmentation.hough);
 
-  std::map<std::string, std::vector<double>> stage, cpu_stage;  // wall and thread-CPU ms
+  std::map<std::string, std::vector<double> > stage, cpu_stage;  // wall and thread-CPU ms
   std::vector<double> pipeline, pipeline_cpu;
   double points_sum = 0, fg_sum = 0, hier_obj_sum = 0, kd_obj_sum = 0, rejected_sum = 0;
   CloudXYZIRT cloud;
@@ -408,13 +306,13 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: no frame could be read\n");
     return 1;
   }
-  // Box fitting and the tracker on a synthetic street of 100 objects (tracker_bench.h).
-  urban_detection::tools::benchTracker(100, 300,
-                                       [&](const char* name, const std::function<void()>& call) {
-                                         StageTimer t;
-                                         call();
-                                         t.stop(name, &stage, &cpu_stage);
-                                       });
+  // Box fitting and the tracker on a synthetic street of 100 objects
+  // (core/evaluation/tracker_bench.h).
+  core::benchTracker(100, 300, [&](const char* name, const std::function<void()>& call) {
+    StageTimer t;
+    call();
+    t.stop(name, &stage, &cpu_stage);
+  });
 
   struct rusage ru {};
   getrusage(RUSAGE_SELF, &ru);

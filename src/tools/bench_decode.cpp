@@ -17,12 +17,11 @@
 #include <string>
 #include <vector>
 
-#include "synthetic_scene.h"
 #include "tool_common.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/simulation/synthetic_scene.h"
 
 namespace uc = urban_detection::core;
-namespace ut = urban_detection::tools;
 
 using urban_detection::tools::percentile;
 
@@ -45,22 +44,22 @@ std::string kittiScanPath() {
 // state.range(0): 0 = synthetic street (every return valid), 1 = range pattern of a real KITTI
 // scan (with its no-return slots).
 void BM_DecodeRevolution600Rpm(benchmark::State& state) {
-  const uc::Calibration cal = ut::findCalibration(g_calibration_path);
+  const uc::Calibration cal = uc::findCalibration(g_calibration_path);
   const uc::PacketEncoder encoder(cal);
   std::vector<uc::RawPacket> packets;
   std::string label = cal.source;
   if (state.range(0) == 0) {
-    ut::SceneParams scene;
+    uc::SyntheticSceneParams scene;
     scene.rpm = 600.0;
-    packets = ut::scanScene(encoder, scene, kPacketsPerRevolution);
+    packets = uc::scanScene(encoder, scene, kPacketsPerRevolution);
     label += ", synthetic street";
   } else {
-    const std::vector<float> xyz = ut::readKittiBin(kittiScanPath());
+    const std::vector<float> xyz = uc::readKittiBinXyz(kittiScanPath());
     if (xyz.empty()) {
       state.SkipWithError(("KITTI scan not found: " + kittiScanPath()).c_str());
       return;
     }
-    packets = ut::packetsFromScan(encoder, xyz, 600.0, kPacketsPerRevolution);
+    packets = uc::packetsFromScan(encoder, xyz, 600.0, kPacketsPerRevolution);
     label += ", range pattern of " + kittiScanPath();
   }
   uc::PacketDecoder decoder(cal, uc::DecoderParams{});

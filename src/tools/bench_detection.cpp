@@ -36,9 +36,12 @@
 #include "tool_common.h"
 #include "urban_detection/core/detection/hierarchical_grid_detector.h"
 #include "urban_detection/core/detection/kdtree_detector.h"
+#include "urban_detection/core/evaluation/bench_sources.h"
+#include "urban_detection/core/evaluation/output_digest.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 
 using namespace urban_detection;
+using urban_detection::core::threadCpuMs;
 
 namespace {
 
@@ -67,14 +70,6 @@ void BM_KdTree(benchmark::State& state) {
   runAll(&det, state);
 }
 
-// CPU time of this thread: on a shared machine wall time also counts the time other
-// processes hold the core; the work of one revolution on one core is the CPU time.
-double threadCpuMs() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
 struct Distribution {
   double median_ms = 0, p95_ms = 0, mean_ms = 0, objects = 0;
 };
@@ -98,51 +93,6 @@ Distribution measure(core::ObjectDetector* det, int passes) {
   for (const double v : ms) d.mean_ms += v / ms.size();
   d.objects = n_obj / ms.size();
   return d;
-}
-
-// FNV-1a over the bytes of every output field, frame by frame.
-class Digest {
- public:
-  template <typename T>
-  void add(const T& v) {
-    const unsigned char* b = reinterpret_cast<const unsigned char*>(&v);
-    for (std::size_t i = 0; i < sizeof(T); ++i) h_ = (h_ ^ b[i]) * 1099511628211ull;
-  }
-  void add(const Eigen::Vector3f& v) {
-    for (int i = 0; i < 3; ++i) add(v[i]);
-  }
-  std::uint64_t value() const { return h_; }
-
- private:
-  std::uint64_t h_ = 14695981039346656037ull;
-};
-
-std::uint64_t digestOf(core::ObjectDetector* det, std::FILE* dump = nullptr) {
-  Digest d;
-  std::vector<core::DetectedObject> objects;
-  for (std::size_t frame = 0; frame < g_frames.size(); ++frame) {
-    det->detect(g_frames[frame], &objects);
-    d.add(static_cast<std::uint64_t>(objects.size()));
-    for (const core::DetectedObject& o : objects) {
-      d.add(o.id);
-      d.add(static_cast<std::uint64_t>(o.indices.size()));
-      for (const std::uint32_t i : o.indices) d.add(i);
-      d.add(o.centroid);
-      d.add(o.min_pt);
-      d.add(o.max_pt);
-      d.add(o.obb_center);
-      d.add(o.obb_size);
-      d.add(o.obb_yaw_rad);
-      if (!dump) continue;
-      std::fprintf(dump, "%zu %u %zu", frame, o.id, o.indices.size());
-      for (const Eigen::Vector3f* v :
-           {&o.centroid, &o.min_pt, &o.max_pt, &o.obb_center, &o.obb_size}) {
-        std::fprintf(dump, " %.9g %.9g %.9g", (*v)[0], (*v)[1], (*v)[2]);
-      }
-      std::fprintf(dump, " %.9g\n", o.obb_yaw_rad);
-    }
-  }
-  return d.value();
 }
 
 void printStats() {
@@ -233,11 +183,12 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "cannot write %s\n", dump_path.c_str());
       return 1;
     }
-    std::printf("digest hierarchical_grid %016" PRIx64 "\n", digestOf(&grid, dump));
+    std::printf("digest hierarchical_grid %016" PRIx64 "\n",
+                core::detectionsDigest(&grid, g_frames, dump));
     if (dump) std::fclose(dump);
     if (kd_passes > 0) {
       core::KdTreeDetector kd;
-      std::printf("digest kdtree %016" PRIx64 "\n", digestOf(&kd));
+      std::printf("digest kdtree %016" PRIx64 "\n", core::detectionsDigest(&kd, g_frames));
     }
     return 0;
   }

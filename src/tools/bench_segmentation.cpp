@@ -23,21 +23,16 @@
 
 #include <benchmark/benchmark.h>
 
+#include "urban_detection/core/evaluation/bench_sources.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/sensor/kitti_io.h"
 
 namespace {
 
 namespace core = urban_detection::core;
+using core::threadCpuMs;
 std::vector<urban_detection::CloudXYZIRT> g_frames;
 std::vector<char> g_pollution(std::size_t{16} << 20);
-
-// CPU time of this thread [ms]: on a shared machine wall time also counts waiting for a core.
-double threadCpuMs() {
-  timespec t;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;

@@ -1,15 +1,7 @@
-// The tracker's timing case of urban_detection_bench: a synthetic street of `objects` objects
-// (parked cars on both sides, cars driving both ways, pedestrians), seen from a sensor driving
-// at 8 m/s, for `revolutions` revolutions at 10 Hz. Each object is the points of its faces that
-// face the sensor (three scan rows, a point every 0.1 m, 3 cm of noise); 5 % of the detections
-// are missed. The box fitting of the objects (BoxFitter, default parameters) and the tracker
-// update are timed through `time(stage, call)` as "box_fitting_100_objects" and
-// "tracker_100_objects". Not a tool itself (only src/tools/*.cpp are executables).
-#pragma once
+#include "urban_detection/core/evaluation/tracker_bench.h"
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <random>
 #include <vector>
 
@@ -20,12 +12,10 @@
 #include "urban_detection/core/tracking/tracker.h"
 
 namespace urban_detection {
-namespace tools {
+namespace core {
 
-inline void benchTracker(
-    int objects, int revolutions,
-    const std::function<void(const char*, const std::function<void()>&)>& time) {
-  namespace core = urban_detection::core;
+void benchTracker(int objects, int revolutions,
+                  const std::function<void(const char*, const std::function<void()>&)>& time) {
   std::mt19937 rng(28);
   std::normal_distribution<double> noise(0.0, 0.03);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -55,9 +45,9 @@ inline void benchTracker(
     t.yaw = t.v.squaredNorm() > 0 ? std::atan2(t.v.y(), t.v.x()) : 0.0;
     truth.push_back(t);
   }
-  core::Tracker tracker;
-  core::BoxFitter fitter;
-  std::vector<core::DetectedObject> dets;
+  Tracker tracker;
+  BoxFitter fitter;
+  std::vector<DetectedObject> dets;
   LabeledCloud foreground;
   for (int r = 0; r < revolutions; ++r) {
     const double t_s = 0.1 * r;
@@ -76,7 +66,7 @@ inline void benchTracker(
                                          centre - 0.5 * t.size.x() * ax + 0.5 * t.size.y() * ay,
                                          centre - 0.5 * t.size.x() * ax - 0.5 * t.size.y() * ay,
                                          centre + 0.5 * t.size.x() * ax - 0.5 * t.size.y() * ay};
-      core::DetectedObject o;
+      DetectedObject o;
       for (int e = 0; e < 4; ++e) {
         const Eigen::Vector2d a = corner[e], b = corner[(e + 1) % 4];
         const Eigen::Vector2d mid = 0.5 * (a + b), normal = mid - centre;
@@ -102,8 +92,7 @@ inline void benchTracker(
       o.centroid = o.obb_center;
       o.obb_size = t.size.cast<float>();
       o.obb_yaw_rad = static_cast<float>(t.yaw);
-      o.category =
-          t.size.x() > 1.0 ? core::ObjectCategory::kVehicle : core::ObjectCategory::kPedestrian;
+      o.category = t.size.x() > 1.0 ? ObjectCategory::kVehicle : ObjectCategory::kPedestrian;
       o.class_confidence = 0.8f;
       dets.push_back(o);
     }
@@ -112,5 +101,5 @@ inline void benchTracker(
   }
 }
 
-}  // namespace tools
+}  // namespace core
 }  // namespace urban_detection

@@ -1,9 +1,4 @@
-/// \file synthetic_scene.h
-/// A small analytic scene for the decode benchmark and the demo: a closed street of 120 m x 24 m
-/// (ground plane and four walls) with one car-sized box, scanned by the packet encoder at a
-/// given spin rate. Every beam hits something within 70 m, so a revolution carries all
-/// 384 returns per packet.
-#pragma once
+#include "urban_detection/core/simulation/synthetic_scene.h"
 
 #include <algorithm>
 #include <array>
@@ -12,25 +7,11 @@
 #include <cstdlib>
 #include <fstream>
 #include <limits>
-#include <string>
-#include <vector>
-
-#include "urban_detection/core/sensor/calibration.h"
-#include "urban_detection/core/sensor/hdl64e_packet.h"
 
 namespace urban_detection {
-namespace tools {
+namespace core {
 
-struct SceneParams {
-  double sensor_height_m = 1.8;                                    // [m] above the ground
-  double street_half_length_m = 60.0, street_half_width_m = 12.0;  // [m] walls
-  double box_min[3] = {6.0, 2.0, -1.8};                            // [m] car-sized box
-  double box_max[3] = {10.5, 3.8, -0.3};
-  double rpm = 600.0;  // [1/min]
-};
-
-/// Distance along a ray to the first surface of the scene (infinity if none).
-inline double castRay(const SceneParams& s, const float o[3], const float d[3]) {
+double castRay(const SyntheticSceneParams& s, const float o[3], const float d[3]) {
   double best = std::numeric_limits<double>::infinity();
   auto plane = [&](int axis, double value) {
     if (std::fabs(d[axis]) < 1e-9) return;
@@ -58,20 +39,18 @@ inline double castRay(const SceneParams& s, const float o[3], const float d[3]) 
   return t0 > 0 ? t0 : best;
 }
 
-/// Encodes `packets` consecutive packets of the scene starting at azimuth `start_deg`.
-inline std::vector<core::RawPacket> scanScene(const core::PacketEncoder& encoder,
-                                              const SceneParams& s, int packets,
-                                              double start_deg = 0.0) {
-  std::vector<core::RawPacket> out;
+std::vector<RawPacket> scanScene(const PacketEncoder& encoder, const SyntheticSceneParams& s,
+                                 int packets, double start_deg) {
+  std::vector<RawPacket> out;
   out.reserve(packets);
-  const double deg_per_firing = s.rpm / 60.0 * 360.0 * core::kFiringPeriodS;
-  std::array<core::Firing, 6> firings;
+  const double deg_per_firing = s.rpm / 60.0 * 360.0 * kFiringPeriodS;
+  std::array<Firing, 6> firings;
   long firing_index = 0;
   for (int p = 0; p < packets; ++p) {
-    for (core::Firing& f : firings) {
+    for (Firing& f : firings) {
       const double deg = std::fmod(start_deg + deg_per_firing * firing_index++, 360.0);
       f.azimuth = static_cast<std::uint16_t>(static_cast<int>(std::lround(deg * 100.0)) % 36000);
-      for (int l = 0; l < core::kNumLasers; ++l) {
+      for (int l = 0; l < kNumLasers; ++l) {
         float o[3], d[3];
         encoder.ray(l, f.azimuth, o, d);
         const double t = castRay(s, o, d);
@@ -82,15 +61,13 @@ inline std::vector<core::RawPacket> scanScene(const core::PacketEncoder& encoder
       }
     }
     const std::uint32_t stamp_us =
-        static_cast<std::uint32_t>(p * 6 * core::kFiringPeriodS * 1e6) % 3600000000u;
+        static_cast<std::uint32_t>(p * 6 * kFiringPeriodS * 1e6) % 3600000000u;
     out.push_back(encoder.encode(firings.data(), stamp_us));
   }
   return out;
 }
 
-/// Reads a KITTI velodyne .bin scan (float32 x, y, z, reflectance per point) into xyz triples;
-/// empty if the file cannot be read.
-inline std::vector<float> readKittiBin(const std::string& path) {
+std::vector<float> readKittiBinXyz(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::vector<float> xyzr;
   if (!in) return {};
@@ -109,16 +86,12 @@ inline std::vector<float> readKittiBin(const std::string& path) {
   return xyz;
 }
 
-/// Packets of one revolution whose range pattern is taken from a real scan: each point goes to
-/// the laser of nearest elevation (within 0.3 deg) and to the firing of its azimuth; slots that
-/// receive no point stay "no return", as sky and dark surfaces do in a real recording.
-inline std::vector<core::RawPacket> packetsFromScan(const core::PacketEncoder& encoder,
-                                                    const std::vector<float>& xyz, double rpm,
-                                                    int packets) {
-  const core::Calibration& cal = encoder.calibration();
+std::vector<RawPacket> packetsFromScan(const PacketEncoder& encoder, const std::vector<float>& xyz,
+                                       double rpm, int packets) {
+  const Calibration& cal = encoder.calibration();
   const int firings_per_rev = packets * 6;
-  const double deg_per_firing = rpm / 60.0 * 360.0 * core::kFiringPeriodS;
-  std::vector<core::Firing> firings(firings_per_rev);
+  const double deg_per_firing = rpm / 60.0 * 360.0 * kFiringPeriodS;
+  std::vector<Firing> firings(firings_per_rev);
   for (int f = 0; f < firings_per_rev; ++f) {
     const double deg = std::fmod(deg_per_firing * f, 360.0);
     firings[f].azimuth =
@@ -130,7 +103,7 @@ inline std::vector<core::RawPacket> packetsFromScan(const core::PacketEncoder& e
     const double elevation = std::atan2(z, std::hypot(x, y));
     int laser = -1;
     double best = max_gap_rad;
-    for (int l = 0; l < core::kNumLasers; ++l) {
+    for (int l = 0; l < kNumLasers; ++l) {
       const double gap = std::fabs(cal.lasers[l].vert_correction_rad - elevation);
       if (gap < best) best = gap, laser = l;
     }
@@ -141,7 +114,7 @@ inline std::vector<core::RawPacket> packetsFromScan(const core::PacketEncoder& e
     if (slot == 0 || raw_d < slot) slot = raw_d;  // keep the nearest echo
     firings[f].intensity[laser] = 100;
   }
-  std::vector<core::RawPacket> out;
+  std::vector<RawPacket> out;
   out.reserve(packets);
   for (int p = 0; p < packets; ++p) {
     out.push_back(encoder.encode(&firings[6 * p], static_cast<std::uint32_t>(p * 288)));
@@ -149,20 +122,18 @@ inline std::vector<core::RawPacket> packetsFromScan(const core::PacketEncoder& e
   return out;
 }
 
-/// The calibration named on the command line, else the SZTAKI one from $UD_SHARED_DATA or
-/// ../shared/data, else the nominal geometry.
-inline core::Calibration findCalibration(const std::string& path) {
-  if (!path.empty()) return core::loadCalibration(path);
+Calibration findCalibration(const std::string& path) {
+  if (!path.empty()) return loadCalibration(path);
   std::vector<std::string> candidates;
   if (const char* env = std::getenv("UD_SHARED_DATA")) {
     candidates.push_back(std::string(env) + "/calibration/64e_s2.1-sztaki.yaml");
   }
   candidates.push_back("../shared/data/calibration/64e_s2.1-sztaki.yaml");
   for (const std::string& c : candidates) {
-    if (std::ifstream(c).good()) return core::loadCalibration(c);
+    if (std::ifstream(c).good()) return loadCalibration(c);
   }
-  return core::Calibration::nominalHdl64eS2();
+  return Calibration::nominalHdl64eS2();
 }
 
-}  // namespace tools
+}  // namespace core
 }  // namespace urban_detection
