@@ -20,11 +20,14 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "urban_detection/core/common/object_class.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
+#include "urban_detection/core/evaluation/report.h"
+#include "urban_detection/core/evaluation/segmentation_eval.h"
 #include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/sensor/calibration.h"
@@ -35,156 +38,30 @@
 
 namespace fs = std::filesystem;
 namespace core = urban_detection::core;
-namespace sk = urban_detection::core::semantic_kitti;
-using core::ObjectClass;
+using core::SegCounts;
+using core::SegGroup;
 using core::SegmentClass;
+using core::SegShare;
 
 namespace {
 
-// What a point of either dataset is, for these figures.
-enum class Group : std::uint8_t {
-  kIgnore,  // unlabeled / outlier
-  kGround,  // SemanticKITTI road, sidewalk, parking, other-ground, terrain, lane-marking;
-            // simulated road, curb, sidewalk, terrain
-  kWall,    // building + fence; simulated facades
-  kCar,
-  kPerson,
-  kCyclist,       // bicyclist + motorcyclist; simulated cyclists with their bicycle
-  kOtherVehicle,  // truck, other-vehicle, bicycle, motorcycle; simulated vans
-  kVegPole,       // vegetation, trunk, pole, traffic sign (for information)
-  kStreetObject,  // simulated bins and benches (short street objects)
-  kOther,
-};
-
-Group semanticKittiGroup(std::uint32_t label) {
-  const std::uint16_t cls = core::semanticKittiStaticClass(label);
-  if (cls == sk::kUnlabeled || cls == sk::kOutlier) return Group::kIgnore;
-  if (core::isSemanticKittiGround(cls)) return Group::kGround;
-  switch (cls) {
-    case sk::kBuilding:
-    case sk::kFence:
-      return Group::kWall;
-    case sk::kCar:
-      return Group::kCar;
-    case sk::kPerson:
-      return Group::kPerson;
-    case sk::kBicyclist:
-    case sk::kMotorcyclist:
-      return Group::kCyclist;
-    case sk::kTruck:
-    case sk::kOtherVehicle:
-    case sk::kBicycle:
-    case sk::kMotorcycle:
-      return Group::kOtherVehicle;
-    case sk::kVegetation:
-    case sk::kTrunk:
-    case sk::kPole:
-    case sk::kTrafficSign:
-      return Group::kVegPole;
-    default:
-      return Group::kOther;
-  }
-}
-
-Group simulatedGroup(std::uint8_t c) {
-  switch (static_cast<ObjectClass>(c)) {
-    case ObjectClass::kGround:
-    case ObjectClass::kTerrain:
-      return Group::kGround;
-    case ObjectClass::kWall:
-      return Group::kWall;
-    case ObjectClass::kCar:
-      return Group::kCar;
-    case ObjectClass::kVan:
-      return Group::kOtherVehicle;
-    case ObjectClass::kPedestrian:
-      return Group::kPerson;
-    case ObjectClass::kCyclist:
-      return Group::kCyclist;
-    case ObjectClass::kVegetation:
-    case ObjectClass::kTrunk:
-    case ObjectClass::kPole:
-    case ObjectClass::kSign:
-      return Group::kVegPole;
-    case ObjectClass::kBin:
-    case ObjectClass::kBench:
-      return Group::kStreetObject;
-    default:
-      return Group::kIgnore;
-  }
-}
-
-// Points of one group, and how many of them the segmenter put in the foreground (short).
-struct Share {
-  long total = 0, fg = 0;
-};
-
-struct Counts {
-  long ground_tp = 0, ground_fp = 0, ground_fn = 0;
-  Share group[static_cast<int>(Group::kOther) + 1];
-  long confusion[5][5] = {};  // [ground, wall, car, person+cyclist, other][SegmentClass]
-  double ms_total = 0.0;
-  int frames = 0;
-  const Share& of(Group g) const { return group[static_cast<int>(g)]; }
-};
-
-double ratio(long a, long b) {
-  return b > 0 ? static_cast<double>(a) / static_cast<double>(b) : 0.0;
-}
-
-void accumulate(const std::vector<Group>& gt, const std::vector<SegmentClass>& pred, Counts* c) {
-  for (std::size_t i = 0; i < gt.size(); ++i) {
-    const Group g = gt[i];
-    if (g == Group::kIgnore) continue;
-    const bool is_ground = g == Group::kGround;
-    const bool pred_ground = pred[i] == SegmentClass::kGround;
-    c->ground_tp += is_ground && pred_ground;
-    c->ground_fp += !is_ground && pred_ground;
-    c->ground_fn += is_ground && !pred_ground;
-    const int row = is_ground                                       ? 0
-                    : g == Group::kWall                             ? 1
-                    : g == Group::kCar                              ? 2
-                    : (g == Group::kPerson || g == Group::kCyclist) ? 3
-                                                                    : 4;
-    ++c->confusion[row][static_cast<int>(pred[i]) % 5];
-    Share& s = c->group[static_cast<int>(g)];
-    ++s.total;
-    s.fg += pred[i] == SegmentClass::kShort;
-  }
-}
-
-double groundPrecision(const Counts& c) {
-  return ratio(c.ground_tp, c.ground_tp + c.ground_fp);
-}
-double groundRecall(const Counts& c) {
-  return ratio(c.ground_tp, c.ground_tp + c.ground_fn);
-}
-double groundF1(const Counts& c) {
-  const double p = groundPrecision(c), r = groundRecall(c);
-  return p + r > 0 ? 2 * p * r / (p + r) : 0.0;
-}
-double notFg(const Share& s) {
-  return ratio(s.total - s.fg, s.total);
-}
-double fg(const Share& s) {
-  return ratio(s.fg, s.total);
-}
-
-void print(const char* name, const Counts& c) {
-  const Share& wall = c.of(Group::kWall);
-  const Share& car = c.of(Group::kCar);
-  const Share& person = c.of(Group::kPerson);
-  const Share& cyclist = c.of(Group::kCyclist);
-  const Share& vehicle = c.of(Group::kOtherVehicle);
+void print(const char* name, const SegCounts& c) {
+  const SegShare& wall = c.of(SegGroup::kWall);
+  const SegShare& car = c.of(SegGroup::kCar);
+  const SegShare& person = c.of(SegGroup::kPerson);
+  const SegShare& cyclist = c.of(SegGroup::kCyclist);
+  const SegShare& vehicle = c.of(SegGroup::kOtherVehicle);
   std::printf(
       "| %-9s | %6.4f | %6.4f | %6.4f | %6.4f (%ld) | %6.4f (%ld) | %6.4f (%ld) | %6.4f (%ld) "
       "| %6.4f (%ld) | %6.4f | %6.2f |\n",
-      name, groundPrecision(c), groundRecall(c), groundF1(c), notFg(wall), wall.total, fg(car),
-      car.total, fg(person), person.total, fg(cyclist), cyclist.total, fg(vehicle), vehicle.total,
-      fg(c.of(Group::kVegPole)), c.frames > 0 ? c.ms_total / c.frames : 0.0);
+      name, core::groundPrecision(c), core::groundRecall(c), core::groundF1(c),
+      core::notForeground(wall), wall.total, core::foreground(car), car.total,
+      core::foreground(person), person.total, core::foreground(cyclist), cyclist.total,
+      core::foreground(vehicle), vehicle.total, core::foreground(c.of(SegGroup::kVegPole)),
+      c.frames > 0 ? c.ms_total / c.frames : 0.0);
 }
 
-void printTable(const Counts& on, const Counts& off) {
+void printTable(const SegCounts& on, const SegCounts& off) {
   std::printf(
       "| hough     | gnd P  | gnd R  | gnd F1 | wall not-fg (n)  | car fg (n)       | "
       "person fg (n)    | cyclist fg (n)   | other veh fg (n) | veg/pole fg | ms/scan |\n");
@@ -192,41 +69,7 @@ void printTable(const Counts& on, const Counts& off) {
   print("off", off);
 }
 
-// The figures as JSON (keys: dataset, path, frames, hough_on / hough_off with ground_precision,
-// ground_recall, ground_f1, wall_not_foreground, car_foreground, person_foreground,
-// cyclist_foreground, other_vehicle_foreground, street_object_foreground and point counts).
-bool writeJson(const std::string& path, const std::string& dataset, const std::string& source,
-               const Counts& on, const Counts& off) {
-  FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) return false;
-  std::fprintf(f, "{\n  \"dataset\": \"%s\",\n  \"path\": \"%s\",\n  \"frames\": %d",
-               dataset.c_str(), urban_detection::tools::jsonEscape(source).c_str(), on.frames);
-  const std::pair<const char*, Group> shares[] = {{"car", Group::kCar},
-                                                  {"person", Group::kPerson},
-                                                  {"cyclist", Group::kCyclist},
-                                                  {"other_vehicle", Group::kOtherVehicle},
-                                                  {"street_object", Group::kStreetObject},
-                                                  {"veg_pole", Group::kVegPole}};
-  for (int k = 0; k < 2; ++k) {
-    const Counts& c = k == 0 ? on : off;
-    std::fprintf(f,
-                 ",\n  \"%s\": {\"ground_precision\": %.6f, \"ground_recall\": %.6f, "
-                 "\"ground_f1\": %.6f, \"ground_points\": %ld, \"wall_not_foreground\": %.6f, "
-                 "\"wall_points\": %ld",
-                 k == 0 ? "hough_on" : "hough_off", groundPrecision(c), groundRecall(c),
-                 groundF1(c), c.ground_tp + c.ground_fn, notFg(c.of(Group::kWall)),
-                 c.of(Group::kWall).total);
-    for (const auto& s : shares) {
-      std::fprintf(f, ", \"%s_foreground\": %.6f, \"%s_points\": %ld", s.first, fg(c.of(s.second)),
-                   s.first, c.of(s.second).total);
-    }
-    std::fprintf(f, ", \"ms_per_frame\": %.4f}", c.frames > 0 ? c.ms_total / c.frames : 0.0);
-  }
-  std::fprintf(f, "\n}\n");
-  return std::fclose(f) == 0;
-}
-
-void printConfusion(const char* name, const Counts& c) {
+void printConfusion(const char* name, const SegCounts& c) {
   static const char* groups[5] = {"ground", "building+fence", "car", "person+cyclist", "other"};
   std::printf("confusion (hough %s): rows = SemanticKITTI group, columns = predicted share\n",
               name);
@@ -235,273 +78,61 @@ void printConfusion(const char* name, const Counts& c) {
     long n = 0;
     for (int k = 0; k < 5; ++k) n += c.confusion[g][k];
     std::printf("  %-15s", groups[g]);
-    for (int k = 0; k < 5; ++k) std::printf(" %8.4f", ratio(c.confusion[g][k], n));
+    for (int k = 0; k < 5; ++k) std::printf(" %8.4f", core::segRatio(c.confusion[g][k], n));
     std::printf("  (%ld)\n", n);
   }
 }
 
-// Cell classes around the sensor: '.' ground, 'T' tall, 's' short, ',' clutter, 'S' sensor.
+// Cell classes around the sensor (core::cellClassesAscii).
 void printAscii(const core::GridSegmenter& seg, double half_m) {
-  const core::SimpleGrid& g = seg.grid();
-  const int half = static_cast<int>(half_m / g.params().cell_size_m);
-  const int r0 = g.rows() / 2, c0 = g.cols() / 2;
-  std::printf("cells of the last scan, +x right, +y up, hough %s\n",
-              seg.params().hough.enabled ? "on" : "off");
-  for (int r = r0 + half; r >= r0 - half; --r) {
-    for (int c = c0 - half; c <= c0 + half; ++c) {
-      char ch = ' ';
-      if (r == r0 && c == c0) {
-        ch = 'S';
-      } else if (r >= 0 && r < g.rows() && c >= 0 && c < g.cols()) {
-        switch (seg.cellClasses()[static_cast<std::size_t>(r) * g.cols() + c]) {
-          case SegmentClass::kGround:
-            ch = '.';
-            break;
-          case SegmentClass::kTall:
-            ch = 'T';
-            break;
-          case SegmentClass::kShort:
-            ch = 's';
-            break;
-          case SegmentClass::kClutter:
-            ch = ',';
-            break;
-          default:
-            break;
-        }
-      }
-      std::putchar(ch);
-    }
-    std::putchar('\n');
-  }
+  std::fputs(core::cellClassesAscii(seg, half_m).c_str(), stdout);
 }
 
+// --set name=value: a number or switch (non-zero: on) of GridSegmenterParams' field table,
+// nested fields with a dot ("hough.votes").
 bool setParam(core::GridSegmenterParams* p, const std::string& kv) {
   const auto eq = kv.find('=');
   if (eq == std::string::npos) return false;
-  const std::string k = kv.substr(0, eq);
+  std::string k = kv.substr(0, eq);
+  std::replace(k.begin(), k.end(), '.', '/');
   const double v = std::atof(kv.c_str() + eq + 1);
-  std::map<std::string, double*> d = {
-      {"sensor_height_m", &p->sensor_height_m},
-      {"cell_size_m", &p->cell_size_m},
-      {"max_range_m", &p->max_range_m},
-      {"ground_max_range_m", &p->ground_max_range_m},
-      {"ground_tolerance_m", &p->ground_tolerance_m},
-      {"ground_max_step_m", &p->ground_max_step_m},
-      {"seed_radius_m", &p->seed_radius_m},
-      {"ground_max_gap_m", &p->ground_max_gap_m},
-      {"seed_max_abs_height_m", &p->seed_max_abs_height_m},
-      {"terrain_max_offset_m", &p->terrain_max_offset_m},
-      {"fov_top_elevation_deg", &p->fov_top_elevation_deg},
-      {"tall_min_height_m", &p->tall_min_height_m},
-      {"tall_min_range_m", &p->tall_min_range_m},
-      {"vehicle_max_height_m", &p->vehicle_max_height_m},
-      {"vehicle_max_length_m", &p->vehicle_max_length_m},
-      {"vehicle_max_width_m", &p->vehicle_max_width_m},
-      {"hough.max_range_m", &p->hough.max_range_m},
-      {"hough.min_line_length_m", &p->hough.min_line_length_m},
-      {"hough.max_line_gap_m", &p->hough.max_line_gap_m},
-      {"hough.theta_resolution_deg", &p->hough.theta_resolution_deg},
-      {"hough.min_tall_fraction", &p->hough.min_tall_fraction},
-      {"hough.min_mixed_wall_length_m", &p->hough.min_mixed_wall_length_m}};
-  std::map<std::string, int*> di = {
-      {"min_points_per_cell", &p->min_points_per_cell},
-      {"terrain_fill_iterations", &p->terrain_fill_iterations},
-      {"hough.votes", &p->hough.votes},
-      {"hough.line_half_width_cells", &p->hough.line_half_width_cells}};
-  if (k == "hough.extend_lines") {
-    p->hough.extend_lines = v != 0.0;
-    return true;
-  }
-  if (k == "ground_in_sparse_cells") {
-    p->ground_in_sparse_cells = v != 0.0;
-    return true;
-  }
-  if (k == "curb_cells_ground") {
-    p->curb_cells_ground = v != 0.0;
-    return true;
-  }
-  if (d.count(k)) {
-    *d[k] = v;
-    return true;
-  }
-  if (di.count(k)) {
-    *di[k] = static_cast<int>(v);
-    return true;
-  }
-  return false;
+  bool found = false;
+  core::forEachField(*p, [&](const core::FieldInfo& info, auto& field) {
+    using T = std::decay_t<decltype(field)>;
+    if (info.name != k) return;
+    if constexpr (std::is_same_v<T, bool>) {
+      field = v != 0.0;
+      found = true;
+    } else if constexpr (std::is_same_v<T, int>) {
+      field = static_cast<int>(v);
+      found = true;
+    } else if constexpr (std::is_same_v<T, double>) {
+      field = v;
+      found = true;
+    }
+  });
+  return found;
 }
 
 // KITTI object frames: share of the points of labelled objects (inside their 3-D boxes, above
 // the ground band, rules of eval_datasets.h) that end up in the foreground, per class.
 void evalKittiObject(const std::string& dir, const core::GridSegmenterParams& params,
                      double ascii_half_m) {
-  const std::vector<std::string> bins = core::listFiles(dir + "/velodyne", ".bin");
-  if (bins.empty()) {
+  core::KittiObjectSegmentation r;
+  if (!core::evaluateKittiObjectSegmentation(dir, params, &r)) {
     std::printf("\nKITTI object: no frames in %s/velodyne (skipped)\n", dir.c_str());
     return;
   }
-  std::map<std::string, std::array<long, 3>> per_class;  // points, fg with Hough, fg without
-  core::GridSegmenterParams p_on = params, p_off = params;
-  p_on.hough.enabled = true;
-  p_off.hough.enabled = false;
-  core::GridSegmenter seg_on(p_on), seg_off(p_off);
-  int frames = 0;
-  for (const std::string& bin : bins) {
-    const std::string stem = fs::path(bin).stem().string();
-    urban_detection::CloudXYZIRT cloud;
-    std::vector<core::KittiLabel> labels;
-    core::KittiCalibration calib;
-    std::string err;
-    if (!core::readKittiBin(bin, &cloud, &err) ||
-        !core::readKittiLabels(dir + "/label_2/" + stem + ".txt", &labels, &err) ||
-        !core::readKittiCalibration(dir + "/calib/" + stem + ".txt", &calib, &err)) {
-      std::fprintf(stderr, "skipping KITTI object %s: %s\n", stem.c_str(), err.c_str());
-      continue;
-    }
-    core::KittiGroundTruthParams gp;
-    int w = gp.image_width_px, h = gp.image_height_px;
-    core::readPngSize(dir + "/image_2/" + stem + ".png", &w, &h);
-    core::EvalFrame gt;
-    core::buildKittiGroundTruth(cloud, labels, calib, gp, w, h, &gt);
-    std::vector<SegmentClass> on, off;
-    seg_on.segment(cloud, &on);
-    seg_off.segment(cloud, &off);
-    ++frames;
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      const std::int32_t o = gt.object_of_point[i];
-      if (o < 0 || gt.objects[o].ignored) continue;
-      if (!gt.role.empty() && gt.role[i] != core::PointRole::kScored) continue;
-      auto& c = per_class[gt.objects[o].label];
-      ++c[0];
-      c[1] += on[i] == SegmentClass::kShort;
-      c[2] += off[i] == SegmentClass::kShort;
-    }
-  }
-  if (ascii_half_m > 0.0 && frames > 0) printAscii(seg_on, ascii_half_m);
+  if (ascii_half_m > 0.0 && r.frames > 0) printAscii(*r.segmenter_on, ascii_half_m);
   std::printf(
       "\nKITTI object %s, %d frames: object points (in boxes, above the ground band) in "
       "the foreground\n| class | points | fg hough on | fg hough off |\n",
-      dir.c_str(), frames);
-  for (const auto& kv : per_class) {
+      dir.c_str(), r.frames);
+  for (const auto& kv : r.per_class) {
     std::printf("| %-14s | %6ld | %6.4f | %6.4f |\n", kv.first.c_str(), kv.second[0],
-                ratio(kv.second[1], kv.second[0]), ratio(kv.second[2], kv.second[0]));
+                core::segRatio(kv.second[1], kv.second[0]),
+                core::segRatio(kv.second[2], kv.second[0]));
   }
-}
-
-// Segments every frame with Hough on and off and accumulates both against the frame's groups.
-class Evaluator {
- public:
-  explicit Evaluator(const core::GridSegmenterParams& params)
-      : seg_on_(withHough(params, true)), seg_off_(withHough(params, false)) {}
-
-  // `dump` (when not empty) is the path prefix of per-point "x y z group class" text files.
-  void frame(const urban_detection::CloudXYZIRT& cloud, const std::vector<Group>& groups,
-             const std::string& dump) {
-    for (int k = 0; k < 2; ++k) {
-      core::GridSegmenter& seg = k == 0 ? seg_on_ : seg_off_;
-      Counts& c = k == 0 ? on_ : off_;
-      const auto t0 = std::chrono::steady_clock::now();
-      seg.segment(cloud, &labels_);
-      c.ms_total +=
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      ++c.frames;
-      accumulate(groups, labels_, &c);
-      if (!dump.empty()) {
-        FILE* f = std::fopen((dump + (k == 0 ? "_on" : "_off") + ".txt").c_str(), "w");
-        for (std::size_t i = 0; f && i < cloud.size(); ++i) {
-          std::fprintf(f, "%.3f %.3f %.3f %d %d\n", cloud[i].x, cloud[i].y, cloud[i].z,
-                       static_cast<int>(groups[i]), static_cast<int>(labels_[i]));
-        }
-        if (f) std::fclose(f);
-      }
-    }
-  }
-  void printAsciiOfLast(double half_m) const {
-    printAscii(seg_on_, half_m);
-    printAscii(seg_off_, half_m);
-  }
-  const Counts& on() const { return on_; }
-  const Counts& off() const { return off_; }
-
- private:
-  static core::GridSegmenterParams withHough(core::GridSegmenterParams p, bool on) {
-    p.hough.enabled = on;
-    return p;
-  }
-  core::GridSegmenter seg_on_, seg_off_;
-  Counts on_, off_;
-  std::vector<SegmentClass> labels_;
-};
-
-// SemanticKITTI scans DIR/velodyne/*.bin with DIR/labels/*.label; false when none was read.
-bool evalSemanticKitti(const std::string& dir, const std::string& dump_dir, Evaluator* ev) {
-  std::vector<std::string> scans;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir + "/velodyne", ec)) {
-    if (e.path().extension() == ".bin") scans.push_back(e.path().stem().string());
-  }
-  std::sort(scans.begin(), scans.end());
-  urban_detection::CloudXYZIRT cloud;
-  std::vector<std::uint32_t> labels;
-  std::vector<Group> groups;
-  for (const std::string& s : scans) {
-    std::string err;
-    if (!core::readKittiBin(dir + "/velodyne/" + s + ".bin", &cloud, &err) ||
-        !core::readSemanticKittiLabels(dir + "/labels/" + s + ".label", &labels, &err)) {
-      std::fprintf(stderr, "skipping %s: %s\n", s.c_str(), err.c_str());
-      continue;
-    }
-    if (labels.size() != cloud.size()) {
-      std::fprintf(stderr, "skipping %s: %zu labels for %zu points\n", s.c_str(), labels.size(),
-                   cloud.size());
-      continue;
-    }
-    groups.resize(labels.size());
-    std::transform(labels.begin(), labels.end(), groups.begin(), semanticKittiGroup);
-    ev->frame(cloud, groups, dump_dir.empty() ? "" : dump_dir + "/" + s);
-  }
-  return ev->on().frames > 0;
-}
-
-// A simulated drive: the revolutions of PCAP against the per-point classes of GTFILE (matched
-// by stamp). Returns 0, or 1 with a message when the files cannot be read or hold no frame.
-int evalSimulated(const std::string& gt_path, const std::string& pcap_path,
-                  const std::string& calibration_path, long max_frames, const std::string& dump_dir,
-                  Evaluator* ev) {
-  try {
-    core::SimulatedDriveReader reader(pcap_path, gt_path, core::loadCalibration(calibration_path));
-    urban_detection::CloudXYZIRT cloud;
-    core::GroundTruthFrame gt;
-    std::vector<Group> groups;
-    std::string message;
-    long skipped = 0;
-    while (max_frames < 0 || ev->on().frames < max_frames) {
-      const auto r = reader.next(&cloud, &gt, &message);
-      if (r == core::SimulatedDriveReader::Result::kEnd) break;
-      if (r == core::SimulatedDriveReader::Result::kSkipped) {
-        ++skipped;
-        continue;
-      }
-      groups.resize(gt.classes.size());
-      std::transform(gt.classes.begin(), gt.classes.end(), groups.begin(), simulatedGroup);
-      ev->frame(cloud, groups,
-                dump_dir.empty() ? "" : dump_dir + "/rev" + std::to_string(gt.revolution));
-    }
-    if (!message.empty()) std::fprintf(stderr, "warning: %s\n", message.c_str());
-    if (skipped > 0) {
-      std::fprintf(stderr, "%ld revolutions without a ground-truth frame skipped\n", skipped);
-    }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  }
-  if (ev->on().frames == 0) {
-    std::fprintf(stderr, "error: no revolution of %s matched a frame of %s\n", pcap_path.c_str(),
-                 gt_path.c_str());
-    return 1;
-  }
-  return 0;
 }
 
 void usage(const char* argv0, FILE* out) {
@@ -606,12 +237,14 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  Evaluator ev(params);
+  core::SegmentationEvaluator ev(params);
   std::string dataset, source;
   if (!sim_gt.empty()) {
-    if (const int rc =
-            evalSimulated(sim_gt, sim_pcap, calibration_path, max_frames, dump_dir, &ev)) {
-      return rc;
+    std::string error;
+    if (!core::evaluateSimulatedSegmentation(sim_gt, sim_pcap, calibration_path, max_frames,
+                                             dump_dir, &ev, &error)) {
+      std::fprintf(stderr, "error: %s\n", error.c_str());
+      return 1;
     }
     dataset = "sim";
     source = sim_pcap;
@@ -620,7 +253,7 @@ int main(int argc, char** argv) {
         "cyclist = rider with bicycle, other vehicle = van)\n",
         sim_pcap.c_str(), ev.on().frames);
   } else {
-    if (!evalSemanticKitti(dir, dump_dir, &ev)) {
+    if (!core::evaluateSemanticKittiSegmentation(dir, dump_dir, &ev)) {
       std::fprintf(stderr, "no SemanticKITTI scans in %s/velodyne (data absent?)\n", dir.c_str());
       return 1;
     }
@@ -629,18 +262,23 @@ int main(int argc, char** argv) {
     std::printf("SemanticKITTI %s, %d scans (points with label unlabeled/outlier ignored)\n",
                 dir.c_str(), ev.on().frames);
   }
-  if (ascii_half_m > 0.0) ev.printAsciiOfLast(ascii_half_m);
+  if (ascii_half_m > 0.0) {
+    printAscii(ev.segmenterOn(), ascii_half_m);
+    printAscii(ev.segmenterOff(), ascii_half_m);
+  }
   printTable(ev.on(), ev.off());
   if (dataset == "sim") {
     std::printf("bins and benches in the foreground: hough on %.4f, off %.4f (%ld points)\n",
-                fg(ev.on().of(Group::kStreetObject)), fg(ev.off().of(Group::kStreetObject)),
-                ev.on().of(Group::kStreetObject).total);
+                core::foreground(ev.on().of(SegGroup::kStreetObject)),
+                core::foreground(ev.off().of(SegGroup::kStreetObject)),
+                ev.on().of(SegGroup::kStreetObject).total);
   }
   if (verbose) {
     printConfusion("on", ev.on());
     printConfusion("off", ev.off());
   }
-  if (!json_path.empty() && !writeJson(json_path, dataset, source, ev.on(), ev.off())) {
+  if (!json_path.empty() &&
+      !core::writeSegmentationJson(json_path, dataset, source, ev.on(), ev.off())) {
     std::fprintf(stderr, "error: cannot write %s\n", json_path.c_str());
     return 1;
   }
