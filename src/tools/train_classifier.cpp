@@ -43,309 +43,26 @@
 #include "urban_detection/core/classification/object_classifier.h"
 #include "urban_detection/core/classification/object_features.h"
 #include "urban_detection/core/evaluation/augmentation.h"
+#include "urban_detection/core/evaluation/datasets.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/evaluation/evaluation.h"
+#include "urban_detection/core/evaluation/report.h"
+#include "urban_detection/core/evaluation/training.h"
 #include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/sensor/calibration.h"
 
-#include "datasets.h"
 #include "tool_common.h"
-#include "tracking_eval.h"
 
 namespace core = urban_detection::core;
+using core::DecisionRule;
+using core::FragmentRule;
+using core::jsonNumber;
+using core::TrainingDetections;
+using core::TrainingFrame;
+using core::TrainingScore;
 using urban_detection::tools::jsonEscape;
-using urban_detection::tools::jsonNumber;
 
 namespace {
-
-using Probabilities = std::array<float, core::kNumObjectCategories>;
-
-// One detector's output on one frame, with the features and labels of its detections.
-struct DetectorFrame {
-  std::vector<core::DetectedObject> objects;
-  std::vector<core::ObjectFeatureVector> features;
-  std::vector<core::ObjectCategory> labels;  // training label (kUnknown: not trained on)
-  std::vector<Probabilities> held_out;       // leave-one-sequence-out probabilities
-};
-
-struct FrameData {
-  std::string id, group;
-  bool augmented = false;     // made by augmentSequence (or simulated): trained on, never scored
-  bool always_train = false;  // simulated: in the training set of every fold
-  core::EvalFrame gt;
-  std::vector<float> gt_range;  // per GT object, its horizontal distance [m]
-  std::vector<DetectorFrame> detectors;
-};
-
-enum class FragmentRule { kReject, kSkip };
-
-core::ObjectCategory trainingLabel(const core::FrameMatch& m, std::size_t d,
-                                   const core::EvalFrame& gt, const std::string& content,
-                                   FragmentRule fragments) {
-  switch (m.verdict[d]) {
-    case core::DetectionVerdict::kTrue:
-      return core::categoryOfClassName(gt.objects[m.matched_gt[d]].label);
-    case core::DetectionVerdict::kIgnored:
-      return content == "other-object" ? core::ObjectCategory::kOtherObject
-                                       : core::ObjectCategory::kUnknown;
-    case core::DetectionVerdict::kFalse:
-    default:
-      if (content.compare(0, 8, "part_of_") == 0 && fragments == FragmentRule::kSkip) {
-        return core::ObjectCategory::kUnknown;
-      }
-      return core::ObjectCategory::kNonObject;
-  }
-}
-
-// The rows and labels of detector 0 over the frames whose group is in `groups`.
-void trainingSet(const std::vector<FrameData>& frames, const std::set<std::string>& groups,
-                 std::vector<core::ObjectFeatureVector>* x, std::vector<core::ObjectCategory>* y) {
-  x->clear();
-  y->clear();
-  for (const FrameData& f : frames) {
-    if (!f.always_train && !groups.count(f.group)) continue;
-    const DetectorFrame& d = f.detectors[0];
-    for (std::size_t i = 0; i < d.objects.size(); ++i) {
-      if (d.labels[i] == core::ObjectCategory::kUnknown) continue;
-      x->push_back(d.features[i]);
-      y->push_back(d.labels[i]);
-    }
-  }
-}
-
-// Score and breakdown of a set of frames.
-struct Scored {
-  core::DetectionScore score;       // under --min-points
-  core::DetectionScore all;         // every object (N = 1)
-  core::RecallBreakdown breakdown;  // per class, points, range
-};
-
-// Scores the frames of `groups` for detector k, classified by `decision` (null: the detector
-// alone, every detection kept) with the probabilities `probs(frame, detection)`. Adds per
-// group to `by_group` when not null.
-// Per frame and detection, the class a later stage gave (kUnknown: the decision's own).
-using ClassOverride = std::map<std::size_t, std::vector<core::ObjectCategory>>;
-
-template <class ProbFn>
-Scored score(const std::vector<FrameData>& frames, const std::set<std::string>& groups,
-             std::size_t k, const core::ClassDecision* decision, ProbFn probs,
-             const core::EvaluationParams& ep, std::map<std::string, Scored>* by_group,
-             const ClassOverride* override_class = nullptr) {
-  core::DetectionEvaluator eval(ep);
-  core::EvaluationParams ep_all = ep;
-  ep_all.min_points = 1;
-  core::DetectionEvaluator eval_all(ep_all);
-  Scored out;
-  std::vector<core::DetectedObject> kept;
-  core::FrameMatch m;
-  for (std::size_t fi = 0; fi < frames.size(); ++fi) {
-    const FrameData& f = frames[fi];
-    if (f.augmented || !groups.count(f.group)) continue;
-    const DetectorFrame& d = f.detectors[k];
-    kept.clear();
-    for (std::size_t i = 0; i < d.objects.size(); ++i) {
-      if (!decision) {
-        kept.push_back(d.objects[i]);
-        continue;
-      }
-      float confidence = 0.0f;
-      core::ObjectCategory c = core::decideClass(probs(fi, i), *decision, true, &confidence);
-      if (override_class) {
-        const auto it = override_class->find(fi);
-        if (it != override_class->end() && i < it->second.size() &&
-            it->second[i] != core::ObjectCategory::kUnknown) {
-          c = it->second[i];
-        }
-      }
-      if (c == core::ObjectCategory::kNonObject) continue;
-      kept.push_back(d.objects[i]);
-      kept.back().category = c;
-    }
-    eval_all.evaluate(f.gt, kept, &m);
-    const core::DetectionScore all = m.score;
-    eval.evaluate(f.gt, kept, &m);
-    core::RecallBreakdown b;
-    b.addFrame(f.gt, m, kept, f.gt_range, ep.min_points);
-    out.breakdown += b;
-    if (by_group) {
-      Scored& g = (*by_group)[f.group];
-      g.score += m.score;
-      g.all += all;
-      g.breakdown += b;
-    }
-  }
-  out.score = eval.total();
-  out.all = eval_all.total();
-  return out;
-}
-
-// What the decision is chosen for: the pooled F and, as much, the mean recall of the classes
-// present (vehicle, pedestrian, cyclist): missing a person costs more than keeping a bush.
-double objective(const Scored& s) {
-  double sum = 0.0;
-  int n = 0;
-  for (int c = 0; c < 3; ++c) {
-    if (s.breakdown.by_class[c].total == 0) continue;
-    sum += s.breakdown.by_class[c].recall();
-    ++n;
-  }
-  const double f = s.score.fRate();
-  return n == 0 ? f : 0.5 * f + 0.5 * sum / n;
-}
-
-// Thresholds tried when choosing a decision.
-std::vector<double> thresholdGrid() {
-  std::vector<double> t;
-  for (int k = 5; k <= 95; k += 5) t.push_back(k / 100.0);
-  return t;
-}
-
-// A forest trained on the hierarchical-grid detections of the frames of `groups`.
-core::ObjectClassifierModel trainOn(const std::vector<FrameData>& frames,
-                                    const std::set<std::string>& groups,
-                                    const core::ClassifierTrainingParams& params,
-                                    const core::ObjectFeatureParams& fp) {
-  std::vector<core::ObjectFeatureVector> x;
-  std::vector<core::ObjectCategory> y;
-  trainingSet(frames, groups, &x, &y);
-  return core::ObjectClassifierModel::train(x, y, params, fp);
-}
-
-// Time as evidence: a sequence's scans in order through the tracker in the world frame of
-// poses.txt, every detection with its class (non-objects included, with P(non_object)). A
-// confirmed track whose accumulated class (class_evidence.h) is an object class makes its
-// detection an object of that class. Returns the classes per frame (kUnknown: the scan's own
-// decision stands). Keeping small tracks that move and dropping detections of tracks whose
-// evidence says non-object were measured and are not used (docs/classification.md).
-struct TemporalStats {
-  std::size_t kept = 0;       // rejected by their scan, kept by their track's class
-  std::size_t reclassed = 0;  // kept by their scan, class taken from their track
-};
-
-template <class ProbFn>
-void temporalClasses(const std::vector<FrameData>& frames, const std::string& group, std::size_t k,
-                     const core::ClassDecision& decision, ProbFn probs,
-                     const std::vector<Eigen::Isometry3d>& poses,
-                     const core::TrackerParams& tracker_params, ClassOverride* out,
-                     TemporalStats* stats) {
-  core::Tracker tracker(tracker_params);
-  std::vector<core::DetectedObject> objects;
-  for (std::size_t fi = 0; fi < frames.size(); ++fi) {
-    const FrameData& f = frames[fi];
-    if (f.augmented || f.group != group) continue;
-    const std::size_t slash = f.id.find('/');
-    const std::size_t scan = std::strtoul(f.id.c_str() + (slash + 1), nullptr, 10);
-    if (scan >= poses.size()) continue;
-    objects = f.detectors[k].objects;
-    std::vector<core::ObjectCategory> own(objects.size());
-    for (std::size_t i = 0; i < objects.size(); ++i) {
-      float confidence = 0.0f;
-      own[i] = core::decideClass(probs(fi, i), decision, true, &confidence);
-      objects[i].category = own[i];
-      objects[i].class_confidence = confidence;
-    }
-    tracker.update(objects, poses[scan], 0.1 * static_cast<double>(scan));
-    std::vector<core::ObjectCategory>& cls = (*out)[fi];
-    cls.assign(objects.size(), core::ObjectCategory::kUnknown);
-    for (const core::Track& t : tracker.tracks()) {
-      if (t.detection < 0 || static_cast<std::size_t>(t.detection) >= objects.size() ||
-          t.state == core::TrackState::kTentative ||
-          t.category == core::ObjectCategory::kNonObject ||
-          t.category == core::ObjectCategory::kUnknown) {
-        continue;
-      }
-      const std::size_t i = static_cast<std::size_t>(t.detection);
-      cls[i] = t.category;
-      ++(own[i] == core::ObjectCategory::kNonObject ? stats->kept : stats->reclassed);
-    }
-  }
-}
-
-enum class DecisionRule { kObject, kClass };
-
-// The decision maximising objective() on `groups` (detector 0) under `probs`: the object
-// threshold alone (kObject) or, after it, each class threshold and the uncertain band in turn
-// (coordinate ascent, kClass).
-template <class ProbFn>
-core::ClassDecision bestDecision(const std::vector<FrameData>& frames,
-                                 const std::set<std::string>& groups, ProbFn probs,
-                                 const core::EvaluationParams& ep, DecisionRule rule,
-                                 double uncertain_band) {
-  core::ClassDecision best;
-  double best_j = -1.0;
-  auto consider = [&](const core::ClassDecision& d) {
-    const double j = objective(score(frames, groups, 0, &d, probs, ep, nullptr));
-    if (j > best_j + 1e-12) {
-      best_j = j;
-      best = d;
-    }
-  };
-  for (const double t : thresholdGrid()) {
-    core::ClassDecision d;
-    d.object_threshold = t;
-    consider(d);
-  }
-  if (rule == DecisionRule::kObject) {
-    best.uncertain_threshold = std::max(0.0, best.object_threshold - uncertain_band);
-    return best;
-  }
-  for (int round = 0; round < 2; ++round) {
-    for (std::size_t c = 0; c < 3; ++c) {
-      const core::ClassDecision base = best;
-      for (const double t : thresholdGrid()) {
-        if (t >= base.object_threshold) break;
-        core::ClassDecision d = base;
-        d.class_thresholds[c] = t;
-        consider(d);
-      }
-    }
-    const core::ClassDecision base = best;
-    for (const double t : thresholdGrid()) {
-      if (t >= base.object_threshold) break;
-      core::ClassDecision d = base;
-      d.uncertain_threshold = t;
-      consider(d);
-    }
-  }
-  return best;
-}
-
-// Decision for a model trained on `groups`: inner 3-fold cross-validation over the groups.
-core::ClassDecision innerDecision(std::vector<FrameData>* frames,
-                                  const std::vector<std::string>& groups,
-                                  const core::ClassifierTrainingParams& params,
-                                  const core::ObjectFeatureParams& fp,
-                                  const core::EvaluationParams& ep, DecisionRule rule,
-                                  double uncertain_band) {
-  const int folds = std::min<int>(3, static_cast<int>(groups.size()));
-  if (folds < 2) {
-    core::ClassDecision d;
-    d.object_threshold = params.object_threshold;
-    return d;
-  }
-  std::map<std::pair<std::size_t, std::size_t>, Probabilities> oof;
-  for (int k = 0; k < folds; ++k) {
-    std::set<std::string> train, test;
-    for (std::size_t g = 0; g < groups.size(); ++g) {
-      (static_cast<int>(g) % folds == k ? test : train).insert(groups[g]);
-    }
-    const core::ObjectClassifierModel m = trainOn(*frames, train, params, fp);
-    for (std::size_t fi = 0; fi < frames->size(); ++fi) {
-      const FrameData& f = (*frames)[fi];
-      if (f.augmented || !test.count(f.group)) continue;
-      std::vector<Probabilities> p;
-      m.predict(f.detectors[0].features, &p);
-      for (std::size_t i = 0; i < p.size(); ++i) oof[{fi, i}] = p[i];
-    }
-  }
-  const std::set<std::string> all(groups.begin(), groups.end());
-  return bestDecision(
-      *frames, all,
-      [&](std::size_t fi, std::size_t i) {
-        return oof[{fi, i}];
-      },
-      ep, rule, uncertain_band);
-}
 
 std::string scoreRow(const core::DetectionScore& s) {
   char b[160];
@@ -543,22 +260,18 @@ int main(int argc, char** argv) {
     params.detector = detector;
     pipelines.emplace_back(new core::Pipeline(params));
   }
-  // Segmentation, foreground and the hierarchical grid's objects of `cloud`.
-  auto detectScan = [&](const urban_detection::CloudXYZIRT& cloud) -> const core::PipelineResult& {
-    return pipelines[0]->process(cloud);
-  };
   core::ObjectFeatureExtractor extractor(fp);
 
   core::SemanticKittiGroundTruthParams gtp;
   gtp.min_points = 1;  // small objects are trained on; the scoring applies --min-points
-  urban_detection::tools::SemanticKittiDataset dataset(skitti_dir, gtp);
+  core::SemanticKittiDataset dataset(skitti_dir, gtp);
   if (dataset.size() == 0) {
     std::fprintf(stderr, "error: no labelled scans in %s\n", skitti_dir.c_str());
     return 1;
   }
 
   // 1-2. Pipeline, features, labels.
-  std::vector<FrameData> frames;
+  std::vector<TrainingFrame> frames;
   const bool augmenting = augment.person_copies > 0 || augment.vehicle_copies > 0;
   std::map<std::string, std::vector<core::LabelledScan>> scans_of_group;  // for augmentation
   std::FILE* csv = nullptr;
@@ -573,54 +286,33 @@ int main(int argc, char** argv) {
       std::fprintf(csv, ",%s", core::featureName(k));
     std::fprintf(csv, "\n");
   }
-  urban_detection::tools::Frame f;
-  core::DetectionEvaluator evaluator;
+  core::Frame f;
   std::size_t read = 0;
   for (;;) {
     if (max_frames >= 0 && read >= static_cast<std::size_t>(max_frames)) break;
     std::string err;
     const auto status = dataset.next(&f, &err);
-    if (status == urban_detection::tools::Dataset::Status::kEnd) break;
+    if (status == core::Dataset::Status::kEnd) break;
     ++read;
-    if (status == urban_detection::tools::Dataset::Status::kSkipped) {
+    if (status == core::Dataset::Status::kSkipped) {
       std::fprintf(stderr, "warning: skipping a scan: %s\n", err.c_str());
       continue;
     }
-    const urban_detection::LabeledCloud& foreground = detectScan(f.cloud).foreground;
-    FrameData fd;
-    fd.id = f.id;
-    fd.group = urban_detection::tools::frameGroup(f.id, dataset.name());
-    fd.detectors.resize(pipelines.size());
-    for (std::size_t k = 0; k < pipelines.size(); ++k) {
-      DetectorFrame& d = fd.detectors[k];
-      d.objects = (k == 0 ? pipelines[0]->result() : pipelines[k]->detect(foreground)).objects;
-      core::FrameMatch m;
-      evaluator.evaluate(f.gt, d.objects, &m);
-      extractor.computeAll(foreground, d.objects, &d.features);
+    TrainingFrame fd =
+        core::labelledTrainingFrame(f, dataset, core::frameGroup(f.id, dataset.name()), pipelines,
+                                    pipelines.size(), &extractor, fragments);
+    for (std::size_t k = 0; k < fd.detectors.size() && csv; ++k) {
+      const TrainingDetections& d = fd.detectors[k];
       for (std::size_t i = 0; i < d.objects.size(); ++i) {
-        const std::string content =
-            urban_detection::tools::detectionContent(f, dataset, d.objects[i]);
-        d.labels.push_back(trainingLabel(m, i, f.gt, content, fragments));
-        if (csv) {
-          std::fprintf(csv, "%s,%s,%s,%s,%s,%s", fd.group.c_str(), f.id.c_str(),
-                       pipelines[k]->detector().name().c_str(), core::toString(d.labels.back()),
-                       core::toString(m.verdict[i]), content.c_str());
-          for (const float v : d.features[i]) std::fprintf(csv, ",%.6g", v);
-          std::fprintf(csv, "\n");
-        }
+        std::fprintf(csv, "%s,%s,%s,%s,%s,%s", fd.group.c_str(), f.id.c_str(),
+                     pipelines[k]->detector().name().c_str(), core::toString(d.labels[i]),
+                     core::toString(d.verdicts[i]), d.contents[i].c_str());
+        for (const float v : d.features[i]) std::fprintf(csv, ",%.6g", v);
+        std::fprintf(csv, "\n");
       }
     }
     fd.gt_range = core::gtObjectRanges(f.gt, f.cloud);
-    if (augmenting) {
-      core::LabelledScan scan;
-      scan.cloud = f.cloud;
-      scan.labels.resize(f.cloud.size());
-      for (std::size_t i = 0; i < scan.labels.size(); ++i) {
-        const std::int32_t g = f.gt.object_of_point[i];
-        scan.labels[i] = f.point_class[i] | (g >= 0 ? f.gt.objects[g].id << 16 : 0u);
-      }
-      scans_of_group[fd.group].push_back(std::move(scan));
-    }
+    if (augmenting) scans_of_group[fd.group].push_back(core::labelledScanOf(f));
     fd.gt = std::move(f.gt);
     frames.push_back(std::move(fd));
   }
@@ -636,31 +328,12 @@ int main(int argc, char** argv) {
         augment.seed + static_cast<std::uint32_t>(std::hash<std::string>{}(kv.first) & 0xFFFF);
     const std::vector<core::LabelledScan> made = core::augmentSequence(scans, ap);
     for (std::size_t a = 0; a < made.size(); ++a) {
-      urban_detection::tools::Frame af;
+      core::Frame af;
       af.id = kv.first + "/augmented_" + std::to_string(a);
       af.cloud = made[a].cloud;
       core::buildSemanticKittiGroundTruth(made[a].labels, gtp, &af.gt);
-      const core::PipelineResult& scan = detectScan(af.cloud);
-      const urban_detection::LabeledCloud& foreground = scan.foreground;
-      FrameData fd;
-      fd.id = af.id;
-      fd.group = kv.first;
-      fd.augmented = true;
-      fd.detectors.resize(pipelines.size());
-      DetectorFrame& d = fd.detectors[0];  // the forest learns from the hierarchical grid
-      d.objects = scan.objects;
-      core::FrameMatch m;
-      evaluator.evaluate(af.gt, d.objects, &m);
-      extractor.computeAll(foreground, d.objects, &d.features);
-      for (std::size_t i = 0; i < d.objects.size(); ++i) {
-        // Only the pasted objects are new; the rest of the scan is already in the table.
-        const bool pasted = m.verdict[i] == core::DetectionVerdict::kTrue &&
-                            af.gt.objects[m.matched_gt[i]].id >= core::kPastedInstanceBase;
-        d.labels.push_back(pasted ? core::categoryOfClassName(af.gt.objects[m.matched_gt[i]].label)
-                                  : core::ObjectCategory::kUnknown);
-        augmented_rows += pasted;
-      }
-      frames.push_back(std::move(fd));
+      frames.push_back(core::augmentedTrainingFrame(af.id, kv.first, af.cloud, af.gt, pipelines,
+                                                    &extractor, &augmented_rows));
     }
   }
   // Simulated revolutions: trained on in every fold, never scored.
@@ -673,33 +346,19 @@ int main(int argc, char** argv) {
     try {
       core::SimulatedGroundTruthParams sgp;
       sgp.min_points = 1;
-      urban_detection::tools::SimulatedDriveDataset sim(sim_gt, sim_pcap, core::loadCalibration(""),
-                                                        0.0, sgp);
-      urban_detection::tools::Frame sf;
+      core::SimulatedDriveDataset sim(sim_gt, sim_pcap, core::loadCalibration(""), 0.0, sgp);
+      core::Frame sf;
       for (long n = 0; n < sim_frames; ++n) {
         std::string err;
         const auto status = sim.next(&sf, &err);
-        if (status == urban_detection::tools::Dataset::Status::kEnd) break;
-        if (status == urban_detection::tools::Dataset::Status::kSkipped) continue;
-        const core::PipelineResult& scan = detectScan(sf.cloud);
-        const urban_detection::LabeledCloud& foreground = scan.foreground;
-        FrameData fd;
+        if (status == core::Dataset::Status::kEnd) break;
+        if (status == core::Dataset::Status::kSkipped) continue;
+        TrainingFrame fd =
+            core::labelledTrainingFrame(sf, sim, "sim", pipelines, 1, &extractor, fragments);
         fd.id = "sim/" + sf.id;
-        fd.group = "sim";
         fd.augmented = true;
         fd.always_train = true;
-        fd.detectors.resize(pipelines.size());
-        DetectorFrame& d = fd.detectors[0];
-        d.objects = scan.objects;
-        core::FrameMatch m;
-        evaluator.evaluate(sf.gt, d.objects, &m);
-        extractor.computeAll(foreground, d.objects, &d.features);
-        for (std::size_t i = 0; i < d.objects.size(); ++i) {
-          const std::string content =
-              urban_detection::tools::detectionContent(sf, sim, d.objects[i]);
-          d.labels.push_back(trainingLabel(m, i, sf.gt, content, fragments));
-          sim_rows += d.labels.back() != core::ObjectCategory::kUnknown;
-        }
+        for (const auto l : fd.detectors[0].labels) sim_rows += l != core::ObjectCategory::kUnknown;
         frames.push_back(std::move(fd));
       }
     } catch (const std::exception& e) {
@@ -708,20 +367,9 @@ int main(int argc, char** argv) {
     }
     std::printf("simulated drive: %zu training rows\n", sim_rows);
   }
-  std::vector<std::string> groups;
-  for (const FrameData& fd : frames) {
-    if (!fd.augmented && (groups.empty() || groups.back() != fd.group)) groups.push_back(fd.group);
-  }
-  std::array<std::size_t, core::kNumObjectCategories> label_count{};
+  const std::vector<std::string> groups = core::scoredGroups(frames);
   std::size_t unlabelled = 0;
-  for (const FrameData& fd : frames) {
-    for (const auto l : fd.detectors[0].labels) {
-      if (l == core::ObjectCategory::kUnknown)
-        ++unlabelled;
-      else
-        ++label_count[static_cast<int>(l)];
-    }
-  }
+  const core::LabelCounts label_count = core::trainingLabelCounts(frames, &unlabelled);
   std::printf("%zu scans, %zu sequences; training rows (hierarchical grid):", frames.size(),
               groups.size());
   for (int c = 0; c < core::kNumObjectCategories; ++c) {
@@ -736,40 +384,17 @@ int main(int argc, char** argv) {
   shipped_decision.object_threshold = tp.object_threshold;
   if (loso && groups.size() >= 2) {
     // 3. Leave one sequence out.
-    std::map<std::string, core::ClassDecision> fold_decision;
-    for (const std::string& held : groups) {
-      std::vector<std::string> train_groups;
-      for (const std::string& g : groups) {
-        if (g != held) train_groups.push_back(g);
-      }
-      core::ClassifierTrainingParams fold_tp = tp;
-      core::ClassDecision d;
-      d.object_threshold = tp.object_threshold;
-      if (auto_threshold)
-        d = innerDecision(&frames, train_groups, tp, fp, ep, rule, uncertain_band);
-      fold_decision[held] = d;
-      const core::ObjectClassifierModel m = trainOn(
-          frames, std::set<std::string>(train_groups.begin(), train_groups.end()), fold_tp, fp);
-      for (FrameData& fd : frames) {
-        if (fd.augmented || fd.group != held) continue;
-        for (DetectorFrame& dk : fd.detectors) m.predict(dk.features, &dk.held_out);
-      }
-    }
-    auto held_out = [&](std::size_t k) {
-      return [&frames, k](std::size_t fi, std::size_t i) {
-        return frames[fi].detectors[k].held_out[i];
-      };
-    };
+    std::map<std::string, core::ClassDecision> fold_decision = core::leaveOneSequenceOut(
+        &frames, groups, tp, fp, ep, auto_threshold, rule, uncertain_band);
+    auto held_out = [&](std::size_t k) { return core::heldOutProbabilities(frames, k); };
     // Each sequence scored with its own fold's decision.
-    std::vector<std::map<std::string, Scored>> off(pipelines.size()), on(pipelines.size());
-    std::vector<Scored> off_total(pipelines.size()), on_total(pipelines.size());
+    std::vector<std::map<std::string, TrainingScore>> off(pipelines.size()), on(pipelines.size());
+    std::vector<TrainingScore> off_total(pipelines.size()), on_total(pipelines.size());
     for (std::size_t k = 0; k < pipelines.size(); ++k) {
-      off_total[k] = score(frames, all_groups, k, nullptr, held_out(k), ep, &off[k]);
+      off_total[k] = core::scoreFrames(frames, all_groups, k, nullptr, held_out(k), ep, &off[k]);
       for (const std::string& g : groups) {
-        const Scored sg = score(frames, {g}, k, &fold_decision[g], held_out(k), ep, &on[k]);
-        on_total[k].score += sg.score;
-        on_total[k].all += sg.all;
-        on_total[k].breakdown += sg.breakdown;
+        on_total[k].add(
+            core::scoreFrames(frames, {g}, k, &fold_decision[g], held_out(k), ep, &on[k]));
       }
     }
     std::printf(
@@ -780,22 +405,6 @@ int main(int argc, char** argv) {
         tp.class_balance, min_points);
     std::printf("%-8s %-18s %-22s | %-43s | %-43s\n", "seq", "detector", "object/veh/ped/cyc/unc",
                 "classifier off: NO MO FO P R F", "classifier on: NO MO FO P R F");
-    auto decisionText = [](const core::ClassDecision& d) {
-      char b[64];
-      std::snprintf(b, sizeof b, "%.2f/%.2f/%.2f/%.2f/%.2f", d.object_threshold,
-                    d.class_thresholds[0], d.class_thresholds[1], d.class_thresholds[2],
-                    d.uncertain_threshold);
-      return std::string(b);
-    };
-    auto decisionJson = [](const core::ClassDecision& d) {
-      std::ostringstream o;
-      o << "{\"object\": " << jsonNumber(d.object_threshold)
-        << ", \"vehicle\": " << jsonNumber(d.class_thresholds[0])
-        << ", \"pedestrian\": " << jsonNumber(d.class_thresholds[1])
-        << ", \"cyclist\": " << jsonNumber(d.class_thresholds[2])
-        << ", \"uncertain\": " << jsonNumber(d.uncertain_threshold) << "}";
-      return o.str();
-    };
     json << "{\n  \"dataset\": \"semantic_kitti\",\n  \"path\": \"" << jsonEscape(skitti_dir)
          << "\",\n  \"scans\": " << frames.size()
          << ",\n  \"intensity_features\": " << (tp.use_intensity ? "true" : "false")
@@ -808,10 +417,11 @@ int main(int argc, char** argv) {
       bool first = true;
       for (const std::string& g : groups) {
         std::printf("%-8s %-18s %-22s | %s | %s\n", g.c_str(),
-                    pipelines[k]->detector().name().c_str(), decisionText(fold_decision[g]).c_str(),
-                    scoreRow(off[k][g].score).c_str(), scoreRow(on[k][g].score).c_str());
+                    pipelines[k]->detector().name().c_str(),
+                    core::decisionText(fold_decision[g]).c_str(), scoreRow(off[k][g].score).c_str(),
+                    scoreRow(on[k][g].score).c_str());
         json << (first ? "" : ", ") << "\"" << g
-             << "\": {\"decision\": " << decisionJson(fold_decision[g])
+             << "\": {\"decision\": " << core::decisionJson(fold_decision[g])
              << ", \"off\": " << scoreJson(off[k][g].score)
              << ", \"on\": " << scoreJson(on[k][g].score) << "}";
         first = false;
@@ -832,32 +442,15 @@ int main(int argc, char** argv) {
     }
     json << "\n  },\n";
     // Time as evidence (hierarchical grid): each held-out sequence in scan order with its poses.
-    ClassOverride over_time;
-    TemporalStats temporal_stats;
-    bool temporal_ok = true;
+    core::ClassOverride over_time;
+    core::TemporalStats temporal_stats;
+    const bool temporal_ok = core::temporalEvidence(frames, groups, skitti_dir, fold_decision,
+                                                    &over_time, &temporal_stats);
+    TrainingScore on_time;
+    std::map<std::string, TrainingScore> on_time_by_group;
     for (const std::string& g : groups) {
-      const std::string seq_dir = std::filesystem::is_directory(skitti_dir + "/velodyne")
-                                      ? skitti_dir
-                                      : skitti_dir + "/sequences/" + g;
-      std::vector<Eigen::Isometry3d> poses;
-      bool nominal = false;
-      std::string error;
-      if (!urban_detection::tools::readSemanticKittiPoses(seq_dir, &poses, &nominal, &error)) {
-        std::fprintf(stderr, "warning: no time evidence for %s: %s\n", g.c_str(), error.c_str());
-        temporal_ok = false;
-        continue;
-      }
-      temporalClasses(frames, g, 0, fold_decision[g], held_out(0), poses, core::TrackerParams(),
-                      &over_time, &temporal_stats);
-    }
-    Scored on_time;
-    std::map<std::string, Scored> on_time_by_group;
-    for (const std::string& g : groups) {
-      const Scored sg =
-          score(frames, {g}, 0, &fold_decision[g], held_out(0), ep, &on_time_by_group, &over_time);
-      on_time.score += sg.score;
-      on_time.all += sg.all;
-      on_time.breakdown += sg.breakdown;
+      on_time.add(core::scoreFrames(frames, {g}, 0, &fold_decision[g], held_out(0), ep,
+                                    &on_time_by_group, &over_time));
     }
     std::printf("%-8s %-18s %-22s | %-43s | %s\n", "+ time",
                 pipelines[0]->detector().name().c_str(),
@@ -894,19 +487,7 @@ int main(int argc, char** argv) {
                 on_time.breakdown.table("  ").c_str());
     // Pooled confusion matrix of the held-out predictions (hierarchical grid, each fold's
     // decision).
-    std::array<std::array<std::size_t, core::kNumObjectCategories>, core::kNumObjectCategories>
-        confusion{};
-    for (const FrameData& fd : frames) {
-      if (fd.augmented) continue;
-      const DetectorFrame& d = fd.detectors[0];
-      for (std::size_t i = 0; i < d.objects.size(); ++i) {
-        if (d.labels[i] == core::ObjectCategory::kUnknown) continue;
-        float confidence = 0.0f;
-        const int pred = static_cast<int>(
-            core::decideClass(d.held_out[i], fold_decision[fd.group], true, &confidence));
-        ++confusion[static_cast<int>(d.labels[i])][pred];
-      }
-    }
+    const core::CategoryConfusion confusion = core::heldOutConfusion(frames, fold_decision);
     std::printf("\nheld-out confusion (rows: label, columns: prediction), hierarchical grid\n%14s",
                 "");
     for (int c = 0; c < core::kNumObjectCategories; ++c) {
@@ -927,7 +508,8 @@ int main(int argc, char** argv) {
     json << "],\n";
     // 4. The shipped decision: chosen on the pooled held-out predictions.
     if (auto_threshold) {
-      shipped_decision = bestDecision(frames, all_groups, held_out(0), ep, rule, uncertain_band);
+      shipped_decision =
+          core::bestDecision(frames, all_groups, held_out(0), ep, rule, uncertain_band);
     }
   } else if (auto_threshold) {
     std::printf("no leave-one-sequence-out run: threshold 0.5\n");
@@ -951,7 +533,7 @@ int main(int argc, char** argv) {
     final_tp.description = desc.str();
     final_tp.training_groups = groups;
     try {
-      const core::ObjectClassifierModel m = trainOn(frames, all_groups, final_tp, fp);
+      const core::ObjectClassifierModel m = core::trainOn(frames, all_groups, final_tp, fp);
       m.save(out_path);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "error: %s\n", e.what());
