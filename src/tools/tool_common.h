@@ -3,11 +3,9 @@
 // plot helpers live in the core (core/evaluation/datasets.h, report.h).
 #pragma once
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <string>
 #include <vector>
 
