@@ -49,7 +49,7 @@ void BM_DecodeRevolution600Rpm(benchmark::State& state) {
   std::vector<uc::RawPacket> packets;
   std::string label = cal.source;
   if (state.range(0) == 0) {
-    uc::SceneParams scene;
+    uc::SyntheticSceneParams scene;
     scene.rpm = 600.0;
     packets = uc::scanScene(encoder, scene, kPacketsPerRevolution);
     label += ", synthetic street";

@@ -12,6 +12,7 @@
 // --whole-cloud grids every point instead of the foreground.
 #include "urban_detection/core/common/point_types.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>

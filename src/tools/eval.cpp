@@ -40,10 +40,6 @@
 #include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/sensor/kitti_io.h"
 
-#include <Eigen/Core>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "tool_common.h"
 
 namespace core = urban_detection::core;
@@ -52,11 +48,11 @@ namespace fs = std::filesystem;
 using core::Dataset;
 using core::detectionContent;
 using core::Frame;
-using core::jsonEscape;
 using core::jsonNumber;
 using core::KittiObjectDataset;
 using core::SemanticKittiDataset;
 using core::SimulatedDriveDataset;
+using urban_detection::tools::jsonEscape;
 
 namespace {
 

@@ -10,6 +10,7 @@
 // the density itself, the paper's literal reading; see distance_weight.h); prints and writes the
 // YAML `weight:` block of config/hierarchical_grid.yaml and a PNG of density, fit and resulting
 // weight.
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>

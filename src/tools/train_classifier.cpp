@@ -56,11 +56,11 @@
 namespace core = urban_detection::core;
 using core::DecisionRule;
 using core::FragmentRule;
-using core::jsonEscape;
 using core::jsonNumber;
 using core::TrainingDetections;
 using core::TrainingFrame;
 using core::TrainingScore;
+using urban_detection::tools::jsonEscape;
 
 namespace {
 

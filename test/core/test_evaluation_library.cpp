@@ -78,7 +78,7 @@ TEST(EvaluationReport, OrderStatisticsAndJson) {
   EXPECT_EQ(ud::jsonNumber(1.0 / 3.0), "0.333333");
   EXPECT_EQ(ud::jsonNumber(std::numeric_limits<double>::quiet_NaN()), "null");
   EXPECT_EQ(ud::jsonNumber(std::numeric_limits<double>::infinity()), "null");
-  EXPECT_EQ(ud::jsonEscape("a\"b\\c\nd"), "a\\\"b\\\\cd");
+  EXPECT_EQ(ud::jsonStringContent("a\"b\\c\nd"), "a\\\"b\\\\cd");
 }
 
 TEST(EvaluationReport, PlotNeedsARangeAndWritesAPng) {
@@ -228,7 +228,7 @@ TEST(DetectionDiagnostics, CausesOfMissesAndContentOfFalseDetections) {
 }
 
 TEST(SyntheticScene, RaysHitTheGroundTheWallsAndTheBox) {
-  const ud::SceneParams s;
+  const ud::SyntheticSceneParams s;
   const float origin[3] = {0.0f, 0.0f, 0.0f};
   const float down[3] = {0.0f, 0.0f, -1.0f};
   EXPECT_NEAR(ud::castRay(s, origin, down), s.sensor_height_m, 1e-9);
@@ -243,7 +243,7 @@ TEST(SyntheticScene, RaysHitTheGroundTheWallsAndTheBox) {
 TEST(SyntheticScene, EveryBeamOfARevolutionReturns) {
   const ud::Calibration cal = ud::Calibration::nominalHdl64eS2();
   const ud::PacketEncoder encoder(cal);
-  const std::vector<ud::RawPacket> packets = ud::scanScene(encoder, ud::SceneParams(), 20);
+  const std::vector<ud::RawPacket> packets = ud::scanScene(encoder, ud::SyntheticSceneParams(), 20);
   ASSERT_EQ(packets.size(), 20u);
   ud::PacketDecoder decoder(cal, ud::DecoderParams());
   urban_detection::CloudXYZIRT cloud;

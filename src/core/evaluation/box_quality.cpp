@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "urban_detection/core/detection/box_fitting.h"
+#include "urban_detection/core/evaluation/report.h"
 
 namespace urban_detection {
 namespace core {
@@ -11,13 +12,6 @@ namespace core {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 }  // namespace
 

@@ -63,7 +63,7 @@ std::string DetectorScoring::jsonMembers() const {
       << ", \"class_truth_to_given\": " << countsJson(class_pairs_) << ", \"by_sequence\": {";
   bool first_group = true;
   for (const auto& g : by_group_) {
-    out << (first_group ? "" : ", ") << "\"" << jsonEscape(g.first) << "\": {"
+    out << (first_group ? "" : ", ") << "\"" << jsonStringContent(g.first) << "\": {"
         << scoreJsonMembers(g.second) << "}";
     first_group = false;
   }
@@ -85,7 +85,7 @@ std::string countsJson(const std::map<std::string, std::size_t>& m) {
   o << "{";
   bool first = true;
   for (const auto& kv : m) {
-    o << (first ? "" : ", ") << "\"" << jsonEscape(kv.first) << "\": " << kv.second;
+    o << (first ? "" : ", ") << "\"" << jsonStringContent(kv.first) << "\": " << kv.second;
     first = false;
   }
   o << "}";

@@ -36,7 +36,7 @@ std::string jsonNumber(double v) {
 
 /// `s` as the inside of a JSON string: quotes and backslashes escaped, control characters
 /// dropped.
-std::string jsonEscape(const std::string& s) {
+std::string jsonStringContent(const std::string& s) {
   std::string o;
   for (char c : s) {
     if (c == '"' || c == '\\') o += '\\';

@@ -455,7 +455,7 @@ bool evaluateSemanticKittiTracking(const TrackingEvalParams& p, const std::strin
 
 std::string simTrackingJson(const SimTrackingResult& r, const std::string& pcap) {
   std::ostringstream out;
-  out << "{\n  \"dataset\": \"sim\",\n  \"pcap\": \"" << jsonEscape(pcap)
+  out << "{\n  \"dataset\": \"sim\",\n  \"pcap\": \"" << jsonStringContent(pcap)
       << "\",\n  \"revolutions\": " << r.frames << ",\n  \"tracker\": " << motJson(r.tracker)
       << ",\n  \"detector_alone\": " << motJson(r.detector)
       << ",\n  \"tracker_on_ground_truth_boxes\": " << motJson(r.oracle)
@@ -471,7 +471,7 @@ std::string simTrackingJson(const SimTrackingResult& r, const std::string& pcap)
 
 std::string kittiTrackingJson(const KittiTrackingEvalResult& r, const std::string& dir) {
   std::ostringstream out;
-  out << "{\n  \"dataset\": \"kitti_tracking\",\n  \"path\": \"" << jsonEscape(dir)
+  out << "{\n  \"dataset\": \"kitti_tracking\",\n  \"path\": \"" << jsonStringContent(dir)
       << "\",\n  \"sequences\": " << r.sequences << ",\n  \"tracker\": " << motJson(r.tracker)
       << "\n}\n";
   return out.str();
@@ -480,13 +480,13 @@ std::string kittiTrackingJson(const KittiTrackingEvalResult& r, const std::strin
 std::string semanticKittiTrackingJson(const SemanticKittiTrackingEvalResult& r,
                                       const std::string& dir, std::size_t min_gt_points) {
   std::ostringstream out;
-  out << "{\n  \"dataset\": \"semantic_kitti_tracking\",\n  \"path\": \"" << jsonEscape(dir)
+  out << "{\n  \"dataset\": \"semantic_kitti_tracking\",\n  \"path\": \"" << jsonStringContent(dir)
       << "\",\n  \"scans\": " << r.frames << ",\n  \"min_gt_points\": " << min_gt_points
       << ",\n  \"nominal_tr\": " << (r.nominal_tr ? "true" : "false")
       << ",\n  \"tracker\": " << motJson(r.tracker)
       << ",\n  \"detector_alone\": " << motJson(r.detector) << ",\n  \"by_sequence\": {";
   for (std::size_t k = 0; k < r.per_sequence.size(); ++k) {
-    out << (k ? ",\n    " : "\n    ") << "\"" << jsonEscape(r.per_sequence[k].first)
+    out << (k ? ",\n    " : "\n    ") << "\"" << jsonStringContent(r.per_sequence[k].first)
         << "\": " << motJson(r.per_sequence[k].second);
   }
   out << "\n  }\n}\n";

@@ -11,7 +11,7 @@
 namespace urban_detection {
 namespace core {
 
-double castRay(const SceneParams& s, const float o[3], const float d[3]) {
+double castRay(const SyntheticSceneParams& s, const float o[3], const float d[3]) {
   double best = std::numeric_limits<double>::infinity();
   auto plane = [&](int axis, double value) {
     if (std::fabs(d[axis]) < 1e-9) return;
@@ -39,8 +39,8 @@ double castRay(const SceneParams& s, const float o[3], const float d[3]) {
   return t0 > 0 ? t0 : best;
 }
 
-std::vector<RawPacket> scanScene(const PacketEncoder& encoder, const SceneParams& s, int packets,
-                                 double start_deg) {
+std::vector<RawPacket> scanScene(const PacketEncoder& encoder, const SyntheticSceneParams& s,
+                                 int packets, double start_deg) {
   std::vector<RawPacket> out;
   out.reserve(packets);
   const double deg_per_firing = s.rpm / 60.0 * 360.0 * kFiringPeriodS;

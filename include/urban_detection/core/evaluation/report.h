@@ -21,8 +21,8 @@ double median(std::vector<double> v);
 std::string jsonNumber(double v);
 
 /// `s` as the inside of a JSON string: quotes and backslashes escaped, control characters
-/// dropped.
-std::string jsonEscape(const std::string& s);
+/// dropped (the evaluation's reports; core/spark's jsonEscape writes them as \u00XX).
+std::string jsonStringContent(const std::string& s);
 
 /// One line (or dot set) of a plot.
 struct Series {

@@ -14,7 +14,7 @@
 namespace urban_detection {
 namespace core {
 
-struct SceneParams {
+struct SyntheticSceneParams {
   double sensor_height_m = 1.8;                                    // [m] above the ground
   double street_half_length_m = 60.0, street_half_width_m = 12.0;  // [m] walls
   double box_min[3] = {6.0, 2.0, -1.8};                            // [m] car-sized box
@@ -23,11 +23,11 @@ struct SceneParams {
 };
 
 /// Distance along a ray to the first surface of the scene (infinity if none).
-double castRay(const SceneParams& s, const float o[3], const float d[3]);
+double castRay(const SyntheticSceneParams& s, const float o[3], const float d[3]);
 
 /// Encodes `packets` consecutive packets of the scene starting at azimuth `start_deg`.
-std::vector<RawPacket> scanScene(const PacketEncoder& encoder, const SceneParams& s, int packets,
-                                 double start_deg = 0.0);
+std::vector<RawPacket> scanScene(const PacketEncoder& encoder, const SyntheticSceneParams& s,
+                                 int packets, double start_deg = 0.0);
 
 /// Reads a KITTI velodyne .bin scan (float32 x, y, z, reflectance per point) into xyz triples;
 /// empty if the file cannot be read.
