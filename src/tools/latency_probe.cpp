@@ -99,16 +99,11 @@ class Probe {
   // Each object's latency from its last point (see the file comment).
   void recordObjects(const std::string& topic, const ud::DetectedObjectArray& m,
                      double revolution_s, double cut_deg) {
-    const ros::Time now = ros::Time::now();
-    const ros::WallTime wall = ros::WallTime::now();
-    if (m.header.stamp.isZero() || m.objects.empty()) return;
+    double header_ms = 0.0;
     std::lock_guard<std::mutex> lock(mutex_);
-    if (start_.isZero() || (wall - start_).toSec() < warmup_s_) return;
-    TopicRecord& r = records_[topic];
-    if (r.latency_ms.empty()) r.first = wall;
-    r.last = wall;
-    const double header_ms =
-        1e-6 * (static_cast<double>(now.toNSec()) - static_cast<double>(m.header.stamp.toNSec()));
+    TopicRecord* record = objectsRecord(topic, m, &header_ms);
+    if (!record) return;
+    TopicRecord& r = *record;
     for (const auto& o : m.objects) {
       const double cx = o.aabb_pose.position.x, cy = o.aabb_pose.position.y;
       const double hx = 0.5 * o.aabb_dimensions.x, hy = 0.5 * o.aabb_dimensions.y;
@@ -125,17 +120,27 @@ class Probe {
 
   // Objects of a message stamped at their own last point: each one's latency is the message's.
   void recordStampedObjects(const std::string& topic, const ud::DetectedObjectArray& m) {
+    double ms = 0.0;
+    std::lock_guard<std::mutex> lock(mutex_);
+    TopicRecord* r = objectsRecord(topic, m, &ms);
+    if (!r) return;
+    for (std::size_t k = 0; k < m.objects.size(); ++k) r->latency_ms.push_back(ms);
+  }
+
+  // The record of `topic` for an objects message arriving now (its age from its stamp in
+  // *header_ms), or null when it is not recorded (warm-up, no stamp, no objects). Under mutex_.
+  TopicRecord* objectsRecord(const std::string& topic, const ud::DetectedObjectArray& m,
+                             double* header_ms) {
     const ros::Time now = ros::Time::now();
     const ros::WallTime wall = ros::WallTime::now();
-    if (m.header.stamp.isZero() || m.objects.empty()) return;
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (start_.isZero() || (wall - start_).toSec() < warmup_s_) return;
+    if (m.header.stamp.isZero() || m.objects.empty()) return nullptr;
+    if (start_.isZero() || (wall - start_).toSec() < warmup_s_) return nullptr;
     TopicRecord& r = records_[topic];
     if (r.latency_ms.empty()) r.first = wall;
     r.last = wall;
-    const double ms =
+    *header_ms =
         1e-6 * (static_cast<double>(now.toNSec()) - static_cast<double>(m.header.stamp.toNSec()));
-    for (std::size_t k = 0; k < m.objects.size(); ++k) r.latency_ms.push_back(ms);
+    return &r;
   }
 
   bool started() {

@@ -4,6 +4,7 @@
 // finds in real scans (KITTI raw, SemanticKITTI: clouds in laser order), on decoded packets of
 // the simulated drive (firing order) and on hand-made objects that reach the rare paths (rows
 // of many interleaved runs, equal azimuths, absurd elevation spans, missing points).
+#include "simulated_drive.h"
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <algorithm>
@@ -75,22 +76,10 @@ std::vector<Frame> realFrames() {
 
 // Revolutions of the simulated drive (config/demo_drive.yaml), decoded as PacketSource does.
 std::vector<Frame> simulatedFrames(int count) {
-  const core::SimulationConfig c =
-      core::loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
-  core::LidarSimulator sim(core::generateScene(c.scene, c.drive), c.scene, c.drive,
-                           core::Calibration::nominalHdl64eS2(), c.sensor);
-  core::PacketDecoder decoder(sim.calibration(), core::DecoderParams());
   std::vector<Frame> out;
-  core::SimRevolution rev;
-  for (int r = 0; r < count; ++r) {
-    sim.simulateNext(&rev);
-    CloudXYZIRT cloud;
-    for (std::size_t i = 0; i < rev.packets.size(); ++i) {
-      core::DecodeStats stats;
-      decoder.decode(rev.packets[i].data(), rev.packets[i].size(),
-                     rev.packet_stamps_s[i] - rev.stamp_s, &cloud, &stats);
-    }
-    out.push_back(detectFrame("simulated revolution " + std::to_string(r), cloud));
+  int r = 0;
+  for (const CloudXYZIRT& cloud : ud_test::simulatedRevolutions(count)) {
+    out.push_back(detectFrame("simulated revolution " + std::to_string(r++), cloud));
   }
   return out;
 }

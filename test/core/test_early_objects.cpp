@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "segmentation_scene.h"
+#include "simulated_drive.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/pipeline/pipeline.h"
@@ -241,33 +242,12 @@ TEST(EarlyObjects, ObjectGrowingIntoALaterSectorIsGivenWhole) {
   }
 }
 
-std::vector<CloudXYZIRT> simulatedRevolutions(int count) {
-  const SimulationConfig c =
-      loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
-  LidarSimulator sim(generateScene(c.scene, c.drive), c.scene, c.drive,
-                     Calibration::nominalHdl64eS2(), c.sensor);
-  PacketDecoder decoder(sim.calibration(), DecoderParams());
-  std::vector<CloudXYZIRT> out;
-  SimRevolution rev;
-  for (int r = 0; r < count; ++r) {
-    sim.simulateNext(&rev);
-    CloudXYZIRT cloud;
-    for (std::size_t i = 0; i < rev.packets.size(); ++i) {
-      DecodeStats stats;
-      decoder.decode(rev.packets[i].data(), rev.packets[i].size(),
-                     rev.packet_stamps_s[i] - rev.stamp_s, &cloud, &stats);
-    }
-    out.push_back(std::move(cloud));
-  }
-  return out;
-}
-
 TEST(EarlyObjects, SimulatedDriveGivesTheClassicObjects) {
   const PipelineParams p = shippedParams();
   Pipeline pipeline(p);
   std::size_t early = 0, total = 0;
   std::uint32_t seq = 100;
-  for (const CloudXYZIRT& cloud : simulatedRevolutions(12)) {
+  for (const CloudXYZIRT& cloud : ud_test::simulatedRevolutions(12)) {
     const EarlyRun run = runEarly(&pipeline, cloud, 10, seq);
     early += expectSameAsClassic(p, cloud, run, "revolution " + std::to_string(seq));
     for (const auto& s : run.per_sector) total += s.size();

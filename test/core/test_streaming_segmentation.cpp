@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "segmentation_scene.h"
+#include "simulated_drive.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
@@ -44,28 +45,6 @@ std::vector<CloudXYZIRT> realScans(std::size_t per_drive) {
     }
   }
   return frames;
-}
-
-// Revolutions of the simulated drive (config/demo_drive.yaml), decoded as PacketSource does.
-std::vector<CloudXYZIRT> simulatedRevolutions(int count) {
-  const core::SimulationConfig c =
-      core::loadSimulationConfig(std::string(UD_SOURCE_DIR) + "/config/demo_drive.yaml");
-  core::LidarSimulator sim(core::generateScene(c.scene, c.drive), c.scene, c.drive,
-                           core::Calibration::nominalHdl64eS2(), c.sensor);
-  core::PacketDecoder decoder(sim.calibration(), core::DecoderParams());
-  std::vector<CloudXYZIRT> out;
-  core::SimRevolution rev;
-  for (int r = 0; r < count; ++r) {
-    sim.simulateNext(&rev);
-    CloudXYZIRT cloud;
-    for (std::size_t i = 0; i < rev.packets.size(); ++i) {
-      core::DecodeStats stats;
-      decoder.decode(rev.packets[i].data(), rev.packets[i].size(),
-                     rev.packet_stamps_s[i] - rev.stamp_s, &cloud, &stats);
-    }
-    out.push_back(std::move(cloud));
-  }
-  return out;
 }
 
 // A street with invalid points (NaN, inf, far, absurdly high) sprinkled in.
@@ -181,7 +160,7 @@ TEST(StreamingSegmentation, SyntheticStreetsWithInvalidPointsEqualTheWholeCloud)
 }
 
 TEST(StreamingSegmentation, SimulatedDriveEqualsTheWholeCloud) {
-  checkStreamedEqualsWhole(simulatedRevolutions(4), 3);
+  checkStreamedEqualsWhole(ud_test::simulatedRevolutions(4), 3);
 }
 
 TEST(StreamingSegmentation, RealScansEqualTheWholeCloud) {

@@ -47,11 +47,18 @@ TOP_LEVEL = (('bag.launch', ['bag:=/tmp/x.bag']), ('demo.launch', []), ('live.la
 class LaunchParams(unittest.TestCase):
     def test_each_stage_gets_only_its_own_sections(self):
         p = params('live.launch', 'detector:=both')
-        self.assertEqual(sections(p, 'hierarchical_grid_detector') - {'thread_nice'},
+        self.assertEqual(sections(p, 'hierarchical_grid_detector') - {'thread_nice',
+                                                                      'early_objects'},
                          {'hierarchical_grid', 'classifier', 'box_fitting'})
-        self.assertEqual(sections(p, 'kdtree_detector') - {'thread_nice', 'thread_idle', 'best_effort',
-                                                           'queue_size'},
+        self.assertEqual(sections(p, 'kdtree_detector') - {'thread_nice', 'thread_idle',
+                                                           'best_effort', 'queue_size'},
                          {'kdtree', 'classifier', 'box_fitting'})
+        # The early-objects chain segments on its own: the segmentation's section, only then.
+        early = params('live.launch', 'early_objects:=true')
+        self.assertIs(early['/hierarchical_grid_detector/early_objects'], True)
+        self.assertEqual(sections(early, 'hierarchical_grid_detector') - {'thread_nice',
+                                                                          'early_objects'},
+                         {'hierarchical_grid', 'classifier', 'box_fitting', 'segmentation'})
         self.assertEqual(sections(p, 'object_markers'), {'markers'})
         self.assertEqual(sections(p, 'object_markers_kdtree'), {'markers'})
         self.assertLess(sum(1 for k in p if k.startswith('/hierarchical_grid_detector/')), 80)

@@ -56,14 +56,7 @@ std::string KittiObjectDataset::className(std::uint16_t c) const {
 SemanticKittiDataset::SemanticKittiDataset(const std::string& dir,
                                            const SemanticKittiGroundTruthParams& p)
     : params_(p) {
-  std::vector<std::string> seqs;
-  if (fs::is_directory(dir + "/velodyne")) {
-    seqs.push_back(dir);
-  } else {
-    for (const auto& s : listFiles(dir + "/sequences", "")) {
-      if (fs::is_directory(s + "/velodyne")) seqs.push_back(s);
-    }
-  }
+  const std::vector<std::string> seqs = semanticKittiSequences(dir);
   for (const auto& s : seqs) {
     for (const auto& b : listFiles(s + "/velodyne", ".bin")) {
       const std::string stem = fs::path(b).stem().string();

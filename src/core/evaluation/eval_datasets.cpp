@@ -42,6 +42,15 @@ std::vector<std::string> listFiles(const std::string& dir, const std::string& su
   return files;
 }
 
+std::vector<std::string> semanticKittiSequences(const std::string& dir) {
+  if (std::filesystem::is_directory(dir + "/velodyne")) return {dir};
+  std::vector<std::string> seqs;
+  for (const auto& s : listFiles(dir + "/sequences", "")) {
+    if (std::filesystem::is_directory(s + "/velodyne")) seqs.push_back(s);
+  }
+  return seqs;
+}
+
 // ------------------------------------------------------------------------------------------
 // KITTI object
 

@@ -320,14 +320,7 @@ bool evaluateKittiTracking(const TrackingEvalParams& p, const std::string& dir,
 
 bool evaluateSemanticKittiTracking(const TrackingEvalParams& p, const std::string& dir,
                                    SemanticKittiTrackingEvalResult* out, std::string* error) {
-  std::vector<std::string> seqs;
-  if (fs::is_directory(dir + "/velodyne")) {
-    seqs.push_back(dir);
-  } else {
-    for (const auto& s : listFiles(dir + "/sequences", "")) {
-      if (fs::is_directory(s + "/velodyne")) seqs.push_back(s);
-    }
-  }
+  const std::vector<std::string> seqs = semanticKittiSequences(dir);
   if (seqs.empty()) {
     *error = "no SemanticKITTI sequence (velodyne/) in " + dir;
     return false;

@@ -47,6 +47,10 @@ namespace core {
 /// Point clouds and SemanticKITTI labels are read with kitti_io.h.
 std::vector<std::string> listFiles(const std::string& dir, const std::string& suffix);
 
+/// The SemanticKITTI sequence folders `dir` names: `dir` itself when it holds `velodyne/`, else
+/// every `dir/sequences/NN` that does, sorted.
+std::vector<std::string> semanticKittiSequences(const std::string& dir);
+
 // ------------------------------------------------------------------------------------------
 // KITTI object benchmark
 
