@@ -120,10 +120,10 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
       }
       return;
     }
-    // Kept at their index and labelled unknown by the segmenter; counted here.
-    diagnostics_->count("non_finite_points", countNonFinite(*cloud), false);
     std::lock_guard<std::mutex> segment_lock(segment_mutex_);  // vs. reconfigure
     segmenter_->segment(*cloud, &labels_);
+    // Kept at their index and labelled unknown; counted by the segmenter while binning.
+    diagnostics_->count("non_finite_points", segmenter_->stats().points_non_finite, false);
     if (segmenter_->lastUsedStream()) {
       diagnostics_->count("revolutions binned as they arrived", 1, false);
       NODELET_INFO_ONCE("GridSegmentation: binning velodyne_points/sectors as revolutions arrive");

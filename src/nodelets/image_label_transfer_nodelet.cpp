@@ -20,7 +20,6 @@
 #include <opencv2/core/utility.hpp>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "urban_detection/core/spark/camera_model.h"
 #include "urban_detection/ros/cloud_serialization.h"
 #include "urban_detection/ros/image_label_transfer_ros.h"
 #include "urban_detection/ros/lazy_outputs.h"
@@ -42,22 +41,16 @@ class ImageLabelTransferNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    std::string error;
     try {
-      loadFields(pnh, &p_);
-      if (!core::loadCameraModel(p_.model, p_.fusion.mode != core::FusionMode::kLidar, &model_,
-                                 &error))
-        throw ParamError("in " + pnh.getNamespace() + ": " + error);
+      loadCameraStage(pnh, &p_, &model_);
     } catch (const ParamError& e) {
       refusal_ = RefusalDiagnostics::report(
           getNodeHandle(), pnh, getName(),
           "ImageLabelTransfer: " + std::string(e.what()) + "; the nodelet stays idle");
       return;
     }
-    p_.transfer.kept_classes = model_.kept_classes;
-    labeller_ = std::make_unique<core::CameraLabeller>(p_.fusion, p_.transfer, model_.names,
-                                                       model_.class_map);
     masks_ = std::make_unique<CameraMasks>(&model_.network);
+    labelling_ = std::make_unique<ObjectLabelling>(p_, model_, *masks_, tf_buffer_);
     if (p_.model.inference_threads > 0) cv::setNumThreads(p_.model.inference_threads);
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_);
     diagnostics_ =
@@ -117,25 +110,12 @@ class ImageLabelTransferNodelet : public nodelet::Nodelet {
                       refusal.c_str());
       return;
     }
-    std::shared_ptr<const CameraMasks::Mask> mask;
-    if (p_.fusion.mode != core::FusionMode::kLidar)
-      mask = masks_->newestWithin(objects->header.stamp, p_.max_mask_gap_s);
-    Eigen::Isometry3d camera_from_lidar;
-    std::string error;
-    if (mask && !lookupCameraFromCloud(tf_buffer_, mask->header, objects->header, p_.fixed_frame,
-                                       p_.tf_timeout_s, &camera_from_lidar, &error)) {
-      NODELET_WARN_THROTTLE(5.0, "ImageLabelTransfer: LiDAR classes kept: %s", error.c_str());
-      mask.reset();
-    }
-    diagnostics_->count(mask ? "revolutions_with_mask" : "revolutions_without_mask", 1, false);
     auto out = boost::make_shared<DetectedObjectArray>();
-    if (!mask) {
-      *out = *objects;  // LiDAR classes, unchanged
-    } else {
-      toClassLabels(*objects, &labels_);
-      labeller_->label(*points, camera_from_lidar, mask->camera, mask->scores, &labels_);
-      applyClassLabels(*objects, labels_, out.get());
-    }
+    std::string why_not;
+    const bool with_mask = labelling_->label(*objects, *points, out.get(), &why_not);
+    if (!why_not.empty())
+      NODELET_WARN_THROTTLE(5.0, "ImageLabelTransfer: LiDAR classes kept: %s", why_not.c_str());
+    diagnostics_->count(with_mask ? "revolutions_with_mask" : "revolutions_without_mask", 1, false);
     pub_.publish(boost::shared_ptr<const DetectedObjectArray>(out));
     diagnostics_->frame(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
@@ -144,9 +124,8 @@ class ImageLabelTransferNodelet : public nodelet::Nodelet {
 
   core::CameraStageParams p_;
   core::CameraModel model_;  // its network is used on the stage thread only
-  std::unique_ptr<core::CameraLabeller> labeller_;
   std::unique_ptr<CameraMasks> masks_;
-  std::vector<core::ObjectClassLabel> labels_;
+  std::unique_ptr<ObjectLabelling> labelling_;
   SeqGapCounter image_gaps_;
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;

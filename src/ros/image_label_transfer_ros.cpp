@@ -1,4 +1,5 @@
 #include "urban_detection/ros/image_label_transfer_ros.h"
+#include "urban_detection/ros/param_loading.h"
 
 #include <tf2_eigen/tf2_eigen.h>
 #include <algorithm>
@@ -143,6 +144,44 @@ bool CameraMasks::segment(const sensor_msgs::Image& image, std::string* error,
   }
   scores_.reduceTo(&mask->scores);
   history_.push(image.header.stamp.toSec(), std::move(mask));
+  return true;
+}
+
+void loadCameraStage(const ros::NodeHandle& pnh, core::CameraStageParams* params,
+                     core::CameraModel* model) {
+  loadFields(pnh, params);
+  std::string error;
+  if (!core::loadCameraModel(params->model, params->fusion.mode != core::FusionMode::kLidar, model,
+                             &error))
+    throw ParamError("in " + pnh.getNamespace() + ": " + error);
+  params->transfer.kept_classes = model->kept_classes;
+}
+
+ObjectLabelling::ObjectLabelling(const core::CameraStageParams& params,
+                                 const core::CameraModel& model, const CameraMasks& masks,
+                                 const tf2_ros::Buffer& tf)
+    : params_(params),
+      labeller_(params.fusion, params.transfer, model.names, model.class_map),
+      masks_(masks),
+      tf_(tf) {}
+
+bool ObjectLabelling::label(const DetectedObjectArray& objects, const LabeledCloud& points,
+                            DetectedObjectArray* out, std::string* why_not) {
+  why_not->clear();
+  std::shared_ptr<const CameraMasks::Mask> mask;
+  if (params_.fusion.mode != core::FusionMode::kLidar)
+    mask = masks_.newestWithin(objects.header.stamp, params_.max_mask_gap_s);
+  Eigen::Isometry3d camera_from_lidar;
+  if (mask && !lookupCameraFromCloud(tf_, mask->header, objects.header, params_.fixed_frame,
+                                     params_.tf_timeout_s, &camera_from_lidar, why_not))
+    mask.reset();
+  if (!mask) {
+    *out = objects;  // LiDAR classes, unchanged
+    return false;
+  }
+  toClassLabels(objects, &labels_);
+  labeller_.label(points, camera_from_lidar, mask->camera, mask->scores, &labels_);
+  applyClassLabels(objects, labels_, out);
   return true;
 }
 

@@ -8,8 +8,8 @@
 // so the object's last point was swept at the azimuth of its axis-aligned box corner swept
 // last (an upper bound on its points', so the figure is a lower bound by at most the box's
 // angular extent); recorded under "<topic> per object". A --stamped-objects topic (objects/early)
-// stamps every message at its objects' own last point, so there each object's latency is its
-// message's (recorded under "<topic> per object" too).
+// publishes one object per message stamped at the object's own last point, so there each
+// object's latency is its message's: the topic's own figures, no second record.
 // Also keeps the last /diagnostics status of every stage reporting a processing time, and writes
 // its timing, rate and skip figures under "stages" (where a latency figure comes from).
 #include <algorithm>
@@ -119,14 +119,6 @@ class Probe {
   }
 
   // Objects of a message stamped at their own last point: each one's latency is the message's.
-  void recordStampedObjects(const std::string& topic, const ud::DetectedObjectArray& m) {
-    double ms = 0.0;
-    std::lock_guard<std::mutex> lock(mutex_);
-    TopicRecord* r = objectsRecord(topic, m, &ms);
-    if (!r) return;
-    for (std::size_t k = 0; k < m.objects.size(); ++k) r->latency_ms.push_back(ms);
-  }
-
   // The record of `topic` for an objects message arriving now (its age from its stamp in
   // *header_ms), or null when it is not recorded (warm-up, no stamp, no objects). Under mutex_.
   TopicRecord* objectsRecord(const std::string& topic, const ud::DetectedObjectArray& m,
@@ -263,14 +255,11 @@ int main(int argc, char** argv) {
   }
   for (const std::string& t : stamped) {
     const std::string name = nh.resolveName(t);
-    const std::string per_object = name + " per object";
     topics.push_back(name);
-    topics.push_back(per_object);
     subs.push_back(nh.subscribe<ud::DetectedObjectArray>(
         t, 256,
-        [&probe, name, per_object](const ud::DetectedObjectArray::ConstPtr& m) {
+        [&probe, name](const ud::DetectedObjectArray::ConstPtr& m) {
           probe.record(name, m->header.stamp);
-          probe.recordStampedObjects(per_object, *m);
         },
         ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
   }

@@ -417,6 +417,7 @@ inline RefOutput segment(const CloudXYZIRT& cloud, const core::GridSegmenterPara
     const int c = point_cell[i];
     if (c < 0) {
       ++out.stats.points_unknown;
+      out.stats.points_non_finite += !isFinitePoint(cloud.points[i]);
       continue;
     }
     SegmentClass label = cls[c];

@@ -538,6 +538,7 @@ TEST(GridSegmenter, EmptyAndAllNaNClouds) {
   ASSERT_EQ(labels.size(), bad.size());
   EXPECT_EQ(countLabel(labels, SegmentClass::kUnknown), static_cast<int>(bad.size()));
   EXPECT_EQ(seg.stats().points_unknown, bad.size());
+  EXPECT_EQ(seg.stats().points_non_finite, 101u);  // the 1e30 points are finite, out of range
   LabeledCloud fg;
   core::extractForeground(bad, labels, &fg);
   EXPECT_TRUE(fg.empty());

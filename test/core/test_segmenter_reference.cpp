@@ -102,6 +102,7 @@ void expectSameAsReference(core::GridSegmenter* seg, const CloudXYZIRT& cloud,
                         << static_cast<int>(ref.labels[first]) << ")";
   const core::SegmentationStats& s = seg->stats();
   EXPECT_EQ(s.points_unknown, ref.stats.points_unknown) << what;
+  EXPECT_EQ(s.points_non_finite, ref.stats.points_non_finite) << what;
   EXPECT_EQ(s.points_clutter, ref.stats.points_clutter) << what;
   EXPECT_EQ(s.points_ground, ref.stats.points_ground) << what;
   EXPECT_EQ(s.points_tall, ref.stats.points_tall) << what;

@@ -101,6 +101,7 @@ void expectSameSegmentation(const core::GridSegmenter& a, const std::vector<core
   const core::SegmentationStats& sa = a.stats();
   const core::SegmentationStats& sb = b.stats();
   EXPECT_EQ(sa.points_unknown, sb.points_unknown) << what;
+  EXPECT_EQ(sa.points_non_finite, sb.points_non_finite) << what;
   EXPECT_EQ(sa.points_clutter, sb.points_clutter) << what;
   EXPECT_EQ(sa.points_ground, sb.points_ground) << what;
   EXPECT_EQ(sa.points_tall, sb.points_tall) << what;

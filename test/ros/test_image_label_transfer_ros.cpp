@@ -208,5 +208,40 @@ TEST(LookupCameraFromCloud, StaticAndMovingPlatform) {
   EXPECT_NE(error.find("camera <- LiDAR"), std::string::npos);
 }
 
+// Without a mask within max_mask_gap_s (none segmented yet, or lidar mode) the objects keep their
+// LiDAR classes and every object is passed on, vetoes aside.
+TEST(ObjectLabelling, LidarClassesWithoutAMask) {
+  DetectedObjectArray in;
+  in.header.frame_id = "velodyne";
+  in.header.stamp = ros::Time(50.0);
+  in.detector = "hierarchical_grid";
+  for (std::uint32_t id = 1; id <= 2; ++id) {
+    DetectedObject o;
+    o.id = id;
+    o.class_label = id == 1 ? "vehicle" : "pedestrian";
+    o.class_confidence = 0.7f;
+    in.objects.push_back(o);
+  }
+  LabeledCloud points;
+  points.push_back(LabeledPoint());
+  core::CameraModel model;
+  ros_conv::CameraMasks masks(&model.network);
+  tf2_ros::Buffer tf;
+  for (core::FusionMode mode :
+       {core::FusionMode::kLidar, core::FusionMode::kCamera, core::FusionMode::kFused}) {
+    core::CameraStageParams p;
+    p.fusion.mode = mode;
+    ros_conv::ObjectLabelling labelling(p, model, masks, tf);
+    DetectedObjectArray out;
+    std::string why_not = "stale";
+    EXPECT_FALSE(labelling.label(in, points, &out, &why_not));
+    EXPECT_TRUE(why_not.empty());
+    EXPECT_EQ(out.header.frame_id, "velodyne");
+    ASSERT_EQ(out.objects.size(), 2u);
+    EXPECT_EQ(out.objects[1].class_label, "pedestrian");
+    EXPECT_FLOAT_EQ(out.objects[0].class_confidence, 0.7f);
+  }
+}
+
 }  // namespace
 }  // namespace urban_detection

@@ -2,8 +2,11 @@
 /// ROS glue of the image -> object label transfer (core/spark/camera_labeller.h):
 /// sensor_msgs/Image and CameraInfo to OpenCV / core types, the camera <- LiDAR transform, and
 /// the objects' classes to and from DetectedObjectArray, the segmented images waiting for the
-/// objects (CameraMasks). No ROS master needed.
+/// objects (CameraMasks), and the objects' labelling from them (ObjectLabelling). No ROS master
+/// needed.
 #pragma once
+
+#include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
@@ -17,6 +20,7 @@
 
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/core/spark/camera_labeller.h"
+#include "urban_detection/core/spark/camera_model.h"
 #include "urban_detection/core/spark/mask_history.h"
 
 namespace urban_detection {
@@ -83,6 +87,34 @@ class CameraMasks {
   cv::Mat scratch_, bgr_;
   core::SegmentationScores scores_;
   core::MaskHistory<Mask> history_{4};
+};
+
+/// Reads the camera stage's parameters under `pnh` (config/image_label_transfer.yaml) and loads
+/// its model (the network unless `fusion` is lidar); throws ParamError naming the parameter at
+/// fault. The one ROS path to core::loadCameraModel().
+void loadCameraStage(const ros::NodeHandle& pnh, core::CameraStageParams* params,
+                     core::CameraModel* model);
+
+/// The objects half of the stage: a revolution's objects take the newest mask within
+/// `max_mask_gap_s` of their stamp, projected with tf (camera <- LiDAR) and labelled by
+/// core::CameraLabeller under the fusion mode; without a mask or a transform (or in lidar mode)
+/// they keep their LiDAR classes.
+class ObjectLabelling {
+ public:
+  /// `model` (its names, class map and kept classes), `masks` and `tf` must outlive this.
+  ObjectLabelling(const core::CameraStageParams& params, const core::CameraModel& model,
+                  const CameraMasks& masks, const tf2_ros::Buffer& tf);
+  /// objects/classified of `objects` and their points (label = object id). Returns whether a
+  /// mask was used; `why_not` says why a mask found was not (no camera <- LiDAR transform).
+  bool label(const DetectedObjectArray& objects, const LabeledCloud& points,
+             DetectedObjectArray* out, std::string* why_not);
+
+ private:
+  core::CameraStageParams params_;
+  core::CameraLabeller labeller_;
+  const CameraMasks& masks_;
+  const tf2_ros::Buffer& tf_;
+  std::vector<core::ObjectClassLabel> labels_;
 };
 
 }  // namespace ros_conv

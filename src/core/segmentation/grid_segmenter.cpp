@@ -271,6 +271,7 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
   if (!overhang_slots_.empty()) resolveOverhangs(cloud, out, counts);
   counts[0] = static_cast<std::uint32_t>(n) - counts[1] - counts[2] - counts[3] - counts[4];
   stats_.points_unknown = counts[static_cast<int>(SegmentClass::kUnknown)];
+  stats_.points_non_finite = static_cast<std::uint32_t>(grid_.nonFinitePoints());
   stats_.points_clutter = counts[static_cast<int>(SegmentClass::kClutter)];
   stats_.points_ground = counts[static_cast<int>(SegmentClass::kGround)];
   stats_.points_tall = counts[static_cast<int>(SegmentClass::kTall)];

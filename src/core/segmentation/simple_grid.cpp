@@ -149,6 +149,7 @@ void SimpleGrid::begin(float z_offset_m, float max_abs_height_m, std::size_t exp
   z_offset_m_ = z_offset_m;
   max_abs_height_m_ = max_abs_height_m;
   run_ = Run();
+  non_finite_ = 0;
 }
 
 void SimpleGrid::finish() {
@@ -201,6 +202,7 @@ void SimpleGrid::append(const PointXYZIRT* points, std::size_t count) {
   std::int32_t run_cell = run_.cell, run_slot = run_.slot;
   std::uint32_t run_count = run_.count;
   float run_min = run_.min, run_max = run_.max, run_sum = run_.sum;
+  std::size_t non_finite = 0;  // among the points without a cell (only they can be)
   auto flush = [&]() {
     if (run_cell == kNoCell) return;
     GridCell& cell = occ_stats[run_slot];
@@ -239,6 +241,7 @@ void SimpleGrid::append(const PointXYZIRT* points, std::size_t count) {
     const std::int32_t c = cc[j - chunk_begin];
     if (c == kNoCell) {
       ps[j] = 0;
+      non_finite += !isFinitePoint(pts[j]);
       return;
     }
     const float z = pz[j];
@@ -401,6 +404,7 @@ void SimpleGrid::append(const PointXYZIRT* points, std::size_t count) {
   }
   num_occupied_ = static_cast<std::size_t>(num_occ);
   run_ = Run{run_cell, run_slot, run_count, run_min, run_max, run_sum};
+  non_finite_ += non_finite;
 }
 
 }  // namespace core

@@ -76,14 +76,6 @@ inline bool isFinitePoint(const PointT& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
 }
 
-/// The number of points of `cloud` with a NaN or infinite coordinate.
-template <typename PointT>
-inline std::size_t countNonFinite(const pcl::PointCloud<PointT>& cloud) {
-  std::size_t n = 0;
-  for (const PointT& p : cloud.points) n += !isFinitePoint(p);
-  return n;
-}
-
 }  // namespace urban_detection
 
 POINT_CLOUD_REGISTER_POINT_STRUCT(urban_detection::PointXYZIRT,

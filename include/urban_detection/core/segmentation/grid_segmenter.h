@@ -211,6 +211,8 @@ std::string validate(const GridSegmenterParams& p);
 struct SegmentationStats {
   std::uint32_t points_unknown = 0, points_clutter = 0, points_ground = 0, points_tall = 0,
                 points_short = 0;
+  /// Of the unknown points, those with a NaN or infinite coordinate.
+  std::uint32_t points_non_finite = 0;
   std::uint32_t cells_occupied = 0, cells_ground_reached = 0;
   HoughWallStats hough;
 };

@@ -112,6 +112,9 @@ class SimpleGrid {
   void finish();
   /// Points binned since begin().
   std::size_t appended() const { return point_slot_.size(); }
+  /// Points binned since begin() with a NaN or infinite coordinate (counted while binning,
+  /// so a revolution binned as it arrives needs no pass of its own at its end).
+  std::size_t nonFinitePoints() const { return non_finite_; }
 
   const SimpleGridParams& params() const { return params_; }
   int rows() const { return side_; }  ///< cells along y
@@ -189,6 +192,7 @@ class SimpleGrid {
   std::vector<std::int32_t> occupied_;    // per slot: cell index
   std::vector<GridCell> occupied_cells_;  // per slot: statistics
   std::size_t num_occupied_ = 0;
+  std::size_t non_finite_ = 0;           // see nonFinitePoints()
   PointTable<std::int32_t> point_slot_;  // per point: 1 + slot, 0 = no cell
   PointTable<float> point_z_;
   // Between begin() and finish(): the height offset and bound, and the run of points in one
