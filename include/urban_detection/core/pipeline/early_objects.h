@@ -114,6 +114,15 @@ class SectorCompletion {
   std::uint8_t groupState(const GridSegmenter& segmenter, std::int32_t seed);
   // Memoised per call: 1 the cell's Hough component is closed and holds no run, 2 not.
   std::uint8_t houghState(const GridSegmenter& segmenter, std::int32_t seed);
+  // Whether the vehicle group of `seed` surely fails the vehicle test whatever the rest of the
+  // revolution adds (its closed part is already too long or wide, or touches a higher tall
+  // cell): then none of its cells changes class. Memoised per call.
+  bool groupDoomed(const GridSegmenter& segmenter, std::int32_t seed);
+  // Rows or columns (the larger extent) spanned by component_'s supporting cells (tall,
+  // wall-supporting short, or flippable) dilated by `w`; 0 when none.
+  std::size_t supportExtent(const GridSegmenter& segmenter, int w) const;
+  // The least extent of supporting pixels a relabelling Hough run has (see the .cpp).
+  static double minSupportExtent(const HoughWallRefinerParams& hp, double cell_m, int w);
 
   EarlyObjectsParams params_;
   bool sweep_valid_ = false;
@@ -123,6 +132,9 @@ class SectorCompletion {
   std::vector<float> scratch_az_;
   // Per cell: the states of the current call (0 unknown), reset on touched_ only.
   std::vector<std::uint8_t> group_state_, hough_state_;
+  std::vector<std::uint8_t> doomed_state_;  // 1 doomed, 2 not (reset on doomed_touched_)
+  std::vector<std::int32_t> doomed_touched_;
+  float dir_c_[8] = {}, dir_s_[8] = {};
   std::vector<std::int32_t> cells_;  // scratch: one object's cells
   int rmin_ = 0, rmax_ = 0, cmin_ = 0, cmax_ = 0;
   std::vector<std::int32_t> touched_;
