@@ -437,10 +437,11 @@ int main(int argc, char** argv) {
   std::printf("  classifier %s: %.1f hierarchical objects rejected per revolution\n",
               classifier ? "on" : "off", rejected_sum / frames);
   if (early_pipe) {
-    std::printf("  early objects (%ld sectors): %zu of %zu objects given before the seam (%.1f %%), "
-                "%zu mismatches\n",
-                early_sectors, early_given, early_total,
-                early_total ? 100.0 * early_given / early_total : 0.0, early_mismatches);
+    std::printf(
+        "  early objects (%ld sectors): %zu of %zu objects given before the seam (%.1f %%), "
+        "%zu mismatches\n",
+        early_sectors, early_given, early_total,
+        early_total ? 100.0 * early_given / early_total : 0.0, early_mismatches);
   }
   char speedup_text[64] = "not measured (--no-kdtree)";
   if (run_kdtree) std::snprintf(speedup_text, sizeof(speedup_text), "%.1fx", speedup);

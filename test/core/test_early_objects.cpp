@@ -255,8 +255,7 @@ std::uint32_t pointIn(const CloudXYZIRT& cloud, const test::Box& b) {
   for (std::uint32_t i = 0; i < cloud.size(); ++i) {
     const PointXYZIRT& q = cloud[i];
     const float z = q.z + 1.73f;  // the scenes' sensor height
-    if (q.x >= b.x0 && q.x <= b.x1 && q.y >= b.y0 && q.y <= b.y1 && z >= b.z0 + 0.3f &&
-        z <= b.z1) {
+    if (q.x >= b.x0 && q.x <= b.x1 && q.y >= b.y0 && q.y <= b.y1 && z >= b.z0 + 0.3f && z <= b.z1) {
       return i;
     }
   }

@@ -193,7 +193,8 @@ std::uint8_t SectorCompletion::houghState(const GridSegmenter& segmenter, std::i
   std::uint8_t state = 2;
   if (closed && len < min_len) {
     state = 1;
-  } else if (closed && static_cast<double>(supportExtent(segmenter, w)) < minSupportExtent(hp, cell_m, w)) {
+  } else if (closed &&
+             static_cast<double>(supportExtent(segmenter, w)) < minSupportExtent(hp, cell_m, w)) {
     state = 1;
   }
   for (const std::int32_t c : component_) {
@@ -262,7 +263,8 @@ bool SectorCompletion::groupDoomed(const GridSegmenter& segmenter, std::int32_t 
   const float vehicle_h = static_cast<float>(sp.vehicle_max_height_m);
   // Surely tall and not a candidate: tall by its statistics whatever the class rules, above
   // the candidates' bound.
-  const float higher_h = static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_height_m));
+  const float higher_h =
+      static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_height_m));
   const float higher_range =
       static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_range_m));
   auto ground = [&](std::int32_t c) {
