@@ -417,16 +417,22 @@ void SectorCompletion::finalObjects(const CloudXYZIRT& cloud, const GridSegmente
       ++last_open_;
       continue;
     }
-    // Hough: cells in the window (widened by the half width) must not be on a possible run.
+    // Hough: cells in the window (widened by the half width) must not be on a possible run,
+    // neither the object's own nor those within the detector's reach (a neighbour made tall
+    // may join or split it).
     if (hp.enabled) {
-      for (const std::int32_t c : cells_) {
-        const int r = grid.rowOf(c), col = c - r * cols;
-        if (r < wr0 || r >= wr1 || col < wc0 || col >= wc1) continue;
-        const SegmentClass cls = segmenter.cellClasses()[c];
-        if (cls != SegmentClass::kTall && cls != SegmentClass::kShort) continue;
-        if (houghState(segmenter, c) != 1) {
-          ok = false;
-          break;
+      for (std::size_t j = 0; ok && j < cells_.size(); ++j) {
+        const int r0 = grid.rowOf(cells_[j]), c0 = cells_[j] - r0 * cols;
+        for (int dr = -reach; ok && dr <= reach; ++dr) {
+          for (int dc = -reach; ok && dc <= reach; ++dc) {
+            const int r = r0 + dr, col = c0 + dc;
+            if (r < wr0 || r >= wr1 || col < wc0 || col >= wc1) continue;
+            if (r < 0 || r >= rows || col < 0 || col >= cols) continue;
+            const std::int32_t c = r * cols + col;
+            const SegmentClass cls = segmenter.cellClasses()[c];
+            if (cls != SegmentClass::kTall && cls != SegmentClass::kShort) continue;
+            if (houghState(segmenter, c) != 1) ok = false;
+          }
         }
       }
       if (!ok) {
