@@ -6,6 +6,7 @@
 //   urban_detection_bench [--pcd-dir DIR]... [--bin-dir DIR]... [--pcap FILE
 //                         [--calibration FILE]] [--config FILE]... [--repeat N]
 //                         [--max-frames N] [--label NAME] [--json FILE] [--no-kdtree]
+//                         [--early SECTORS]
 //
 // Inputs are streamed from disk (file reading is not timed); packets are decoded as they
 // come, cut into revolutions as the driver does, and the decode time of a revolution's
@@ -25,7 +26,11 @@
 // baseline is also timed with PCL's default sorted search (kdtree_detection_pcl_default: the
 // same clusters), so both speed-ups come from one run. --no-kdtree skips the baseline (on the
 // simulated drive's dense near-range blobs it takes seconds per revolution); the speed-ups are
-// then not measured (null in the JSON). A Debug build (no NDEBUG) refuses to run.
+// then not measured (null in the JSON). --early SECTORS also runs the early-objects chain
+// beside it (core::Pipeline::addSector over SECTORS equal parts of each revolution in sweep
+// order, then finishRevolution): "early_sectors" is the time of all its sectors of one
+// revolution, "early_seam" that of the seam, and it prints how many objects were given before
+// the seam. A Debug build (no NDEBUG) refuses to run.
 #include <sched.h>
 #include <sys/resource.h>
 #include <time.h>
@@ -82,6 +87,7 @@ void usage() {
                "usage: urban_detection_bench [--pcd-dir DIR]... [--bin-dir DIR]...\n"
                "         [--pcap FILE [--calibration FILE]] [--config FILE]... [--repeat N]\n"
                "         [--max-frames N] [--label NAME] [--json FILE] [--no-kdtree]\n"
+               "         [--early SECTORS]\n"
                "Run it pinned to one core (taskset -c 0) from a Release build.\n");
 }
 
@@ -100,6 +106,7 @@ int main(int argc, char** argv) {
   std::string pcap, calib_path, label = "bench", json_path;
   long repeat = 3, max_frames = -1;
   bool run_kdtree = true;
+  long early_sectors = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const urban_detection::tools::OptionArgs arg{argc, argv, &i};
@@ -123,6 +130,8 @@ int main(int argc, char** argv) {
       json_path = arg.value("--json");
     else if (a == "--no-kdtree")
       run_kdtree = false;
+    else if (a == "--early")
+      early_sectors = std::max(1L, arg.count("--early"));
     else if (a == "-h" || a == "--help") {
       usage();
       return 0;
@@ -167,12 +176,13 @@ int main(int argc, char** argv) {
 
   // The pipeline (hierarchical grid), and beside it: the baseline's chain after the
   // segmentation, PCL's default search, the segmenter without Hough.
-  std::unique_ptr<core::Pipeline> pipe, kd_pipe;
+  std::unique_ptr<core::Pipeline> pipe, kd_pipe, early_pipe;
   std::unique_ptr<core::GridSegmenter> segmenter_no_hough, segmenter_streamed;
   std::unique_ptr<core::KdTreeDetector> kdtree_pcl_default;
   try {
     params.detector = "hierarchical_grid";
     pipe.reset(new core::Pipeline(params));
+    if (early_sectors > 0) early_pipe.reset(new core::Pipeline(params));
     params.detector = "kdtree";
     kd_pipe.reset(new core::Pipeline(params));
     segmenter_streamed.reset(new core::GridSegmenter(params.segmentation));
@@ -204,6 +214,9 @@ int main(int argc, char** argv) {
   const urban_detection::ros_conv::ObjectMarkerParams marker_params;
   bool any_packets = false;
   std::size_t frames = 0;
+  std::size_t early_given = 0, early_total = 0, early_mismatches = 0;
+  std::uint32_t early_seq = 0;
+  CloudXYZIRT swept;
   // Every revolution of every source, as the sources give them (decoded from packets or read
   // from disk, not timed here).
   auto forEachFrame = [&](const std::function<void(double, double)>& run) {
@@ -264,7 +277,7 @@ int main(int argc, char** argv) {
     // (segmented again, not timed), and the Hough refinement alone (it runs inside segment();
     // timed here on the frame's cell classes before refinement and wall evidence, as segment()
     // passes them).
-    forEachFrame([&](double, double) {
+    forEachFrame([&](double decode_ms, double) {
       if (run_kdtree) {
         const urban_detection::LabeledCloud& foreground = pipe->process(cloud).foreground;
         const core::PipelineResult& kd = kd_pipe->detect(foreground);  // as the kd-tree nodelet
@@ -292,6 +305,42 @@ int main(int argc, char** argv) {
         StageTimer cut_t;
         segmenter_streamed->segment(cloud, &labels_streamed);
         cut_t.stop("segmentation_at_cut", &stage, &cpu_stage);
+      }
+      if (early_pipe) {
+        // Decoded packets come in time order; clouds read from disk are put in sweep order
+        // (counter-clockwise from behind the sensor, where KITTI's revolutions start).
+        swept = cloud;
+        swept.header.seq = ++early_seq;
+        if (decode_ms < 0.0) {
+          std::vector<std::pair<double, std::size_t> > order(cloud.size());
+          for (std::size_t i = 0; i < cloud.size(); ++i) {
+            double a = std::atan2(cloud[i].y, cloud[i].x) - M_PI;
+            a = std::fmod(a, 2.0 * M_PI);
+            if (!(a >= 0.0)) a = std::isfinite(a) ? a + 2.0 * M_PI : 0.0;
+            order[i] = {a, i};
+          }
+          std::stable_sort(order.begin(), order.end());
+          for (std::size_t i = 0; i < cloud.size(); ++i) {
+            swept.points[i] = cloud[order[i].second];
+            swept.points[i].time = static_cast<float>(0.1 * order[i].first / (2.0 * M_PI));
+          }
+        }
+        double wall = 0.0, cpu = 0.0;
+        const std::size_t n = swept.size();
+        for (long s = 0; s < early_sectors; ++s) {
+          const std::size_t a = n * s / early_sectors, b = n * (s + 1) / early_sectors;
+          const core::EarlySectorResult& e =
+              early_pipe->addSector(early_seq, swept.points.data() + a, b - a);
+          for (const core::StageTiming& t : e.timings) wall += t.wall_ms, cpu += t.cpu_ms;
+        }
+        stage["early_sectors"].push_back(wall);
+        cpu_stage["early_sectors"].push_back(cpu);
+        const core::PipelineResult& f = early_pipe->finishRevolution(swept);
+        stage["early_seam"].push_back(f.totalWallMs());
+        cpu_stage["early_seam"].push_back(f.totalCpuMs());
+        for (const std::uint8_t g : f.given_early) early_given += g;
+        early_total += f.objects.size();
+        early_mismatches += f.early_mismatches;
       }
       segmenter_no_hough->segment(cloud, &labels_no_hough);
       cells = segmenter_no_hough->cellClasses();
@@ -349,7 +398,9 @@ int main(int argc, char** argv) {
                          "box_fitting_100_objects",
                          "tracker_100_objects",
                          "kdtree_detection",
-                         "kdtree_detection_pcl_default"};
+                         "kdtree_detection_pcl_default",
+                         "early_sectors",
+                         "early_seam"};
   std::printf("%s: %zu revolutions (%ld pass%s over", label.c_str(), frames, repeat,
               repeat > 1 ? "es" : "");
   for (const auto& s : sources) std::printf(" [%s]", s->describe().c_str());
@@ -375,13 +426,23 @@ int main(int argc, char** argv) {
                 : std::string(name) == "kdtree_detection" ? "  (baseline, not in pipeline)"
                 : std::string(name) == "kdtree_detection_pcl_default"
                     ? "  (baseline with PCL's default sorted search)"
-                    : "");
+                : std::string(name) == "early_sectors"
+                    ? "  (early objects: all sectors of a revolution)"
+                : std::string(name) == "early_seam" ? "  (early objects: the seam)"
+                                                    : "");
   }
   std::printf("  %-28s %10.3f %10.3f %14.3f  (%s-> hierarchical objects)\n", "pipeline",
               pipeline_median, percentile(pipeline, 0.95), median(pipeline_cpu),
               any_packets ? "packets " : "cloud ");
   std::printf("  classifier %s: %.1f hierarchical objects rejected per revolution\n",
               classifier ? "on" : "off", rejected_sum / frames);
+  if (early_pipe) {
+    std::printf(
+        "  early objects (%ld sectors): %zu of %zu objects given before the seam (%.1f %%), "
+        "%zu mismatches\n",
+        early_sectors, early_given, early_total,
+        early_total ? 100.0 * early_given / early_total : 0.0, early_mismatches);
+  }
   char speedup_text[64] = "not measured (--no-kdtree)";
   if (run_kdtree) std::snprintf(speedup_text, sizeof(speedup_text), "%.1fx", speedup);
   if (std::isfinite(speedup_pcl_default)) {

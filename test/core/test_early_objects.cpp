@@ -242,6 +242,88 @@ TEST(EarlyObjects, ObjectGrowingIntoALaterSectorIsGivenWhole) {
   }
 }
 
+// The sector at which the object holding point `i` was given, or -1 (at the seam).
+int sectorGiven(const EarlyRun& run, std::uint32_t i) {
+  for (std::size_t s = 0; s < run.per_sector.size(); ++s) {
+    if (objectWith(run.per_sector[s], i) >= 0) return static_cast<int>(s);
+  }
+  return -1;
+}
+
+// A point of `cloud` inside the box.
+std::uint32_t pointIn(const CloudXYZIRT& cloud, const test::Box& b) {
+  for (std::uint32_t i = 0; i < cloud.size(); ++i) {
+    const PointXYZIRT& q = cloud[i];
+    const float z = q.z + 1.73f;  // the scenes' sensor height
+    if (q.x >= b.x0 && q.x <= b.x1 && q.y >= b.y0 && q.y <= b.y1 && z >= b.z0 + 0.3f && z <= b.z1) {
+      return i;
+    }
+  }
+  ADD_FAILURE() << "no point in the box";
+  return 0;
+}
+
+TEST(EarlyObjects, ObjectBesideAGroupLongerThanAVehicleIsGivenEarly) {
+  // A hedge 2.4 m high (its cells are tall but low enough to be a vehicle's) runs 60 m across
+  // the seam, outside the Hough window; a pedestrian stands 1.8 m in front of it early in the
+  // sweep. The hedge's vehicle group reaches the seam, so it is open until the revolution
+  // ends, but its swept part is already longer than any vehicle: the group is never made
+  // short, whatever comes, and the pedestrian is final once that part is swept.
+  const test::Box pedestrian{22.6f, 11.7f, 0.0f, 23.2f, 12.3f, 1.8f, 2};
+  const std::vector<test::Box> boxes = {{25.0f, -30.0f, 0.0f, 25.6f, 30.0f, 2.4f, 1}, pedestrian};
+  std::vector<int> tags;
+  const CloudXYZIRT raw = test::rayCast(1.73f, boxes, &tags, 64, 1800, 2.0f, -24.8f, 50.0f);
+  const CloudXYZIRT cloud = sweepOrder(raw, 0.0, 1.0);
+  const PipelineParams p;
+  Pipeline pipeline(p);
+  const EarlyRun run = runEarly(&pipeline, cloud, 16, 11);
+  expectSameAsClassic(p, cloud, run, "hedge scene");
+  const int s = sectorGiven(run, pointIn(cloud, pedestrian));
+  EXPECT_GE(s, 0) << "the pedestrian beside the hedge waited for the seam";
+  EXPECT_LE(s, 4) << "the pedestrian was given late";
+  // The hedge itself crosses the seam: at the seam only.
+  EXPECT_EQ(sectorGiven(run, pointIn(cloud, boxes[0])), -1);
+}
+
+TEST(EarlyObjects, ObjectBesideARowOfParkedCarsInTheHoughWindowIsGivenEarly) {
+  // Inside the Hough window a pedestrian stands 2 m beside a row of parked cars (short cells
+  // below the sensor: no wall support). Their component is longer than a Hough run, but no
+  // run over it can reach min_tall_fraction of wall support, so the pedestrian is final once
+  // the row is swept, long before the seam.
+  const test::Box pedestrian{7.4f, -10.3f, 0.0f, 8.0f, -9.7f, 1.8f, 9};
+  std::vector<test::Box> boxes = {pedestrian};
+  for (int k = 0; k < 7; ++k) {
+    const float y0 = -18.0f + 5.5f * static_cast<float>(k);
+    boxes.push_back({10.0f, y0, 0.0f, 11.8f, y0 + 4.5f, 1.5f, 10 + k});
+  }
+  std::vector<int> tags;
+  const CloudXYZIRT raw = test::rayCast(1.73f, boxes, &tags, 64, 1800, 2.0f, -24.8f, 50.0f);
+  const CloudXYZIRT cloud = sweepOrder(raw, -kPi / 2.0, 1.0);
+  const PipelineParams p;
+  Pipeline pipeline(p);
+  const EarlyRun run = runEarly(&pipeline, cloud, 16, 12);
+  expectSameAsClassic(p, cloud, run, "parked cars scene");
+  const int s = sectorGiven(run, pointIn(cloud, pedestrian));
+  EXPECT_GE(s, 0) << "the pedestrian beside the parked cars waited for the seam";
+  EXPECT_LE(s, 12) << "the pedestrian was given late";
+}
+
+TEST(EarlyObjects, ObjectBesideAFacadeInTheHoughWindowWaitsForTheSeam) {
+  // The same pedestrian beside a facade (tall cells along 30 m): a Hough run may relabel its
+  // cells, and which lines are found depends on the whole revolution.
+  const test::Box pedestrian{7.4f, -10.3f, 0.0f, 8.0f, -9.7f, 1.8f, 9};
+  const std::vector<test::Box> boxes = {pedestrian, {10.0f, -18.0f, 0.0f, 10.6f, 18.0f, 8.0f, 1}};
+  std::vector<int> tags;
+  const CloudXYZIRT raw = test::rayCast(1.73f, boxes, &tags, 64, 1800, 2.0f, -24.8f, 50.0f);
+  const CloudXYZIRT cloud = sweepOrder(raw, -kPi / 2.0, 1.0);
+  const PipelineParams p;
+  Pipeline pipeline(p);
+  const EarlyRun run = runEarly(&pipeline, cloud, 16, 13);
+  expectSameAsClassic(p, cloud, run, "facade scene");
+  EXPECT_EQ(sectorGiven(run, pointIn(cloud, pedestrian)), -1)
+      << "the pedestrian beside a facade was given before the seam";
+}
+
 TEST(EarlyObjects, SimulatedDriveGivesTheClassicObjects) {
   const PipelineParams p = shippedParams();
   Pipeline pipeline(p);

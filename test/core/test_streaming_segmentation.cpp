@@ -149,6 +149,42 @@ void checkStreamedEqualsWhole(std::vector<CloudXYZIRT> frames, unsigned seed,
   }
 }
 
+// The early-objects chain's use: segmentSoFar() after every batch (the stream stays open)
+// equals segment() of the points so far, and segment() of the whole cloud at the end equals
+// it too, frames back to back.
+void checkSoFarEqualsPrefix(std::vector<CloudXYZIRT> frames, unsigned seed) {
+  core::GridSegmenter streamed, whole;
+  std::vector<core::SegmentClass> ls, lw;
+  std::mt19937 rng(seed);
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    CloudXYZIRT& cloud = frames[f];
+    cloud.header.seq = static_cast<std::uint32_t>(f + 1);
+    std::size_t at = 0, batch = 0;
+    for (const std::size_t s : randomSplit(cloud.size(), rng() % 2000, &rng)) {
+      streamed.addPoints(cloud.header.seq, cloud.points.data() + at, s);
+      at += s;
+      if (s == 0 || ++batch % 3 != 0) continue;
+      CloudXYZIRT prefix;
+      prefix.header = cloud.header;
+      prefix.points.assign(cloud.points.begin(), cloud.points.begin() + at);
+      streamed.segmentSoFar(prefix, &ls);
+      EXPECT_TRUE(streamed.lastUsedStream()) << "frame " << f << " batch " << batch;
+      whole.segment(prefix, &lw);
+      expectSameSegmentation(streamed, ls, whole, lw,
+                             "frame " + std::to_string(f) + " after " + std::to_string(at));
+    }
+    streamed.segment(cloud, &ls);
+    EXPECT_EQ(streamed.lastUsedStream(), at > 0) << "frame " << f;
+    whole.segment(cloud, &lw);
+    expectSameSegmentation(streamed, ls, whole, lw, "frame " + std::to_string(f));
+  }
+}
+
+TEST(StreamingSegmentation, SegmentingSoFarThenAppendingEqualsThePrefixes) {
+  checkSoFarEqualsPrefix({syntheticStreet(11), syntheticStreet(12)}, 5);
+  checkSoFarEqualsPrefix(ud_test::simulatedRevolutions(2), 6);
+}
+
 TEST(StreamingSegmentation, SyntheticStreetsWithInvalidPointsEqualTheWholeCloud) {
   std::vector<CloudXYZIRT> frames;
   for (unsigned s = 0; s < 6; ++s) frames.push_back(syntheticStreet(s));

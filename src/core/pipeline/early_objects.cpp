@@ -42,7 +42,12 @@ std::string validate(const EarlyObjectsParams& p) {
   return checkFieldRanges(p);
 }
 
-SectorCompletion::SectorCompletion(const EarlyObjectsParams& params) : params_(params) {}
+SectorCompletion::SectorCompletion(const EarlyObjectsParams& params) : params_(params) {
+  for (int d = 0; d < 8; ++d) {
+    dir_c_[d] = static_cast<float>(std::cos(d * M_PI / 8.0));
+    dir_s_[d] = static_cast<float>(std::sin(d * M_PI / 8.0));
+  }
+}
 
 bool SectorCompletion::updateSweep(const CloudXYZIRT& cloud) {
   sweep_valid_ = false;
@@ -181,15 +186,167 @@ std::uint8_t SectorCompletion::houghState(const GridSegmenter& segmenter, std::i
   const int gap_cells = static_cast<int>(std::floor(hp.max_line_gap_m / cell_m));
   const int link = std::max(1, gap_cells + 1 + 2 * w);
   const bool closed = grow(segmenter, seed, link, true);
+  const double min_len = hp.min_line_length_m / cell_m;
   const double len = std::hypot(static_cast<double>(rmax_ - rmin_ + 2 * w),
                                 static_cast<double>(cmax_ - cmin_ + 2 * w)) +
                      1.0;
-  const std::uint8_t state = closed && len < hp.min_line_length_m / cell_m ? 1 : 2;
+  std::uint8_t state = 2;
+  if (closed && len < min_len) {
+    state = 1;
+  } else if (closed &&
+             static_cast<double>(supportExtent(segmenter, w)) < minSupportExtent(hp, cell_m, w)) {
+    state = 1;
+  }
   for (const std::int32_t c : component_) {
     if (group_state_[c] == 0 && hough_state_[c] == 0) touched_.push_back(c);
     hough_state_[c] = state;
   }
   return state;
+}
+
+// A run only relabels cells when, over at least min_line_length_m, min_tall_fraction f of its
+// occupied pixels are supporting (within the half width of a tall or wall-supporting cell).
+// Along its major axis a run of length >= min_line_length_m has n >= (min_len - 1) / sqrt(2) + 1
+// pixels, one per row (column); it begins and ends on occupied pixels, consecutive occupied
+// pixels are at most gap_cells + 1 apart, and at most floor((1 - f) n) of them are not
+// supporting. So its supporting pixels span at least n - floor((1 - f) n) (gap_cells + 1)
+// rows (columns), and they all lie in the supporting cells dilated by the half width. The
+// mixed-wall stretches begin and end on supporting pixels and are as long: they ask more.
+// Returns the least such span over the run lengths the window allows.
+double SectorCompletion::minSupportExtent(const HoughWallRefinerParams& hp, double cell_m, int w) {
+  const double min_len = hp.min_line_length_m / cell_m;
+  const int gap_cells = static_cast<int>(std::floor(hp.max_line_gap_m / cell_m));
+  const int n_min = static_cast<int>(std::ceil(std::max(0.0, min_len - 1.0) / std::sqrt(2.0))) + 1;
+  const int n_max = 2 * static_cast<int>(std::ceil(hp.max_range_m / cell_m)) + 2 * w + 1;
+  const double f = std::min(1.0, std::max(0.0, hp.min_tall_fraction));
+  double least = std::numeric_limits<double>::max();
+  for (int n = n_min; n <= std::max(n_min, n_max); ++n) {
+    const double off = std::floor((1.0 - f) * n + 1e-9);
+    least = std::min(least, n - off * (gap_cells + 1));
+  }
+  return least;
+}
+
+std::size_t SectorCompletion::supportExtent(const GridSegmenter& segmenter, int w) const {
+  const SimpleGrid& grid = segmenter.grid();
+  const std::vector<SegmentClass>& cls = segmenter.cellClasses();
+  const std::vector<std::uint8_t>& support = segmenter.wallSupport();
+  const int cols = grid.cols();
+  int rmin = std::numeric_limits<int>::max(), rmax = std::numeric_limits<int>::min();
+  int cmin = rmin, cmax = rmax;
+  for (const std::int32_t c : component_) {
+    const bool supporting = cls[c] == SegmentClass::kTall ||
+                            (static_cast<std::size_t>(c) < support.size() && support[c]) ||
+                            flippable(segmenter, c);
+    if (!supporting) continue;
+    const int r = grid.rowOf(c), col = c - r * cols;
+    rmin = std::min(rmin, r), rmax = std::max(rmax, r);
+    cmin = std::min(cmin, col), cmax = std::max(cmax, col);
+  }
+  if (rmax < rmin) return 0;
+  return static_cast<std::size_t>(std::max(rmax - rmin, cmax - cmin) + 2 * w + 1);
+}
+
+bool SectorCompletion::groupDoomed(const GridSegmenter& segmenter, std::int32_t seed) {
+  // The cells that are in the seed's vehicle group whatever the rest of the revolution
+  // brings: closed cells (their statistics and ground are final) that are short or candidate
+  // tall (top and z range within vehicle_max_height_m of the ground), 8-connected to the seed
+  // through such cells. The group of the whole revolution holds them all; its length and
+  // width only grow with more cells and "touches a higher tall cell" stays true, so when
+  // these cells already fail the vehicle test the group is never made short, and its cells
+  // keep the classes they have now (the group so far holds them too, and fails as well).
+  if (doomed_state_[seed] != 0) return doomed_state_[seed] == 1;
+  const GridSegmenterParams& sp = segmenter.params();
+  const SimpleGrid& grid = segmenter.grid();
+  const std::vector<SegmentClass>& cls = segmenter.cellClasses();
+  const int rows = grid.rows(), cols = grid.cols();
+  const float vehicle_h = static_cast<float>(sp.vehicle_max_height_m);
+  // Surely tall and not a candidate: tall by its statistics whatever the class rules, above
+  // the candidates' bound.
+  const float higher_h =
+      static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_height_m));
+  const float higher_range =
+      static_cast<float>(std::max(sp.vehicle_max_height_m, sp.tall_min_range_m));
+  auto ground = [&](std::int32_t c) {
+    return segmenter.cellHasGround(c) ? segmenter.cellGround(c) : 0.0f;
+  };
+  auto member = [&](std::int32_t c) {
+    if (!cellClosed(grid, c)) return false;
+    if (cls[c] == SegmentClass::kShort) return true;
+    if (cls[c] != SegmentClass::kTall) return false;
+    const GridCell& cell = grid.cell(c);
+    return cell.z_max - ground(c) <= vehicle_h && cell.zRange() <= vehicle_h;
+  };
+  auto higher = [&](std::int32_t c) {
+    if (cls[c] != SegmentClass::kTall || !cellClosed(grid, c)) return false;
+    const GridCell& cell = grid.cell(c);
+    return cell.z_max - ground(c) > higher_h || cell.zRange() > higher_range;
+  };
+  std::uint8_t state = 2;
+  const bool grown = sp.vehicle_max_height_m > 0.0 && member(seed);
+  if (grown) {
+    component_.clear();
+    stack_.clear();
+    for (const std::int32_t c : marked_) mark_[c] = 0;
+    marked_.clear();
+    stack_.push_back(seed);
+    mark_[seed] = 1;
+    marked_.push_back(seed);
+    bool touches_higher = false;
+    while (!stack_.empty()) {
+      const std::int32_t c = stack_.back();
+      stack_.pop_back();
+      component_.push_back(c);
+      const int r = grid.rowOf(c), col = c - r * cols;
+      for (int dr = -1; dr <= 1; ++dr) {
+        for (int dc = -1; dc <= 1; ++dc) {
+          const int rr = r + dr, cc = col + dc;
+          if ((dr == 0 && dc == 0) || rr < 0 || rr >= rows || cc < 0 || cc >= cols) continue;
+          const std::int32_t n = rr * cols + cc;
+          if (mark_[n]) continue;
+          if (member(n)) {
+            mark_[n] = 1;
+            marked_.push_back(n);
+            stack_.push_back(n);
+          } else if (higher(n)) {
+            touches_higher = true;
+          }
+        }
+      }
+    }
+    // The segmenter's extent: along 8 directions 22.5 deg apart, in cell units plus one.
+    float lo[8], hi[8];
+    std::fill(lo, lo + 8, std::numeric_limits<float>::max());
+    std::fill(hi, hi + 8, std::numeric_limits<float>::lowest());
+    for (const std::int32_t c : component_) {
+      const int r = grid.rowOf(c);
+      const float x = static_cast<float>(c - r * cols), y = static_cast<float>(r);
+      for (int d = 0; d < 8; ++d) {
+        const float v = x * dir_c_[d] + y * dir_s_[d];
+        lo[d] = std::min(lo[d], v);
+        hi[d] = std::max(hi[d], v);
+      }
+    }
+    float len = 0.0f, wid = std::numeric_limits<float>::max();
+    for (int d = 0; d < 8; ++d) {
+      len = std::max(len, hi[d] - lo[d] + 1.0f);
+      wid = std::min(wid, hi[d] - lo[d] + 1.0f);
+    }
+    const float max_len = static_cast<float>(sp.vehicle_max_length_m / sp.cell_size_m);
+    const float max_wid = static_cast<float>(sp.vehicle_max_width_m / sp.cell_size_m);
+    if (touches_higher || !(len <= max_len && wid <= max_wid)) state = 1;
+  }
+  // Every cell of this closed part has the same answer (the same part grows from each).
+  if (grown) {
+    for (const std::int32_t c : component_) {
+      if (doomed_state_[c] == 0) doomed_touched_.push_back(c);
+      doomed_state_[c] = state;
+    }
+  } else {
+    if (doomed_state_[seed] == 0) doomed_touched_.push_back(seed);
+    doomed_state_[seed] = state;
+  }
+  return state == 1;
 }
 
 void SectorCompletion::finalObjects(const CloudXYZIRT& cloud, const GridSegmenter& segmenter,
@@ -211,6 +368,12 @@ void SectorCompletion::finalObjects(const CloudXYZIRT& cloud, const GridSegmente
   }
   for (const std::int32_t c : touched_) group_state_[c] = hough_state_[c] = 0;
   touched_.clear();
+  if (doomed_state_.size() != grid.numCells()) {
+    doomed_state_.assign(grid.numCells(), 0);
+    doomed_touched_.clear();
+  }
+  for (const std::int32_t c : doomed_touched_) doomed_state_[c] = 0;
+  doomed_touched_.clear();
   const HoughWallRefinerParams& hp = segmenter.params().hough;
   const double cell_m = grid.params().cell_size_m;
   const int rows = grid.rows(), cols = grid.cols();
@@ -243,7 +406,10 @@ void SectorCompletion::finalObjects(const CloudXYZIRT& cloud, const GridSegmente
           const int rr = r + dr, cc = col + dc;
           if (rr < 0 || rr >= rows || cc < 0 || cc >= cols) continue;
           const std::int32_t n = rr * cols + cc;
-          if (flippable(segmenter, n) && groupState(segmenter, n) != 1) ok = false;
+          if (flippable(segmenter, n) && groupState(segmenter, n) != 1 &&
+              !groupDoomed(segmenter, n)) {
+            ok = false;
+          }
         }
       }
     }
@@ -251,16 +417,22 @@ void SectorCompletion::finalObjects(const CloudXYZIRT& cloud, const GridSegmente
       ++last_open_;
       continue;
     }
-    // Hough: cells in the window (widened by the half width) must not be on a possible run.
+    // Hough: cells in the window (widened by the half width) must not be on a possible run,
+    // neither the object's own nor those within the detector's reach (a neighbour made tall
+    // may join or split it).
     if (hp.enabled) {
-      for (const std::int32_t c : cells_) {
-        const int r = grid.rowOf(c), col = c - r * cols;
-        if (r < wr0 || r >= wr1 || col < wc0 || col >= wc1) continue;
-        const SegmentClass cls = segmenter.cellClasses()[c];
-        if (cls != SegmentClass::kTall && cls != SegmentClass::kShort) continue;
-        if (houghState(segmenter, c) != 1) {
-          ok = false;
-          break;
+      for (std::size_t j = 0; ok && j < cells_.size(); ++j) {
+        const int r0 = grid.rowOf(cells_[j]), c0 = cells_[j] - r0 * cols;
+        for (int dr = -reach; ok && dr <= reach; ++dr) {
+          for (int dc = -reach; ok && dc <= reach; ++dc) {
+            const int r = r0 + dr, col = c0 + dc;
+            if (r < wr0 || r >= wr1 || col < wc0 || col >= wc1) continue;
+            if (r < 0 || r >= rows || col < 0 || col >= cols) continue;
+            const std::int32_t c = r * cols + col;
+            const SegmentClass cls = segmenter.cellClasses()[c];
+            if (cls != SegmentClass::kTall && cls != SegmentClass::kShort) continue;
+            if (houghState(segmenter, c) != 1) ok = false;
+          }
         }
       }
       if (!ok) {

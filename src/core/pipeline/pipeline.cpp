@@ -174,6 +174,7 @@ const EarlySectorResult& Pipeline::addSector(std::uint32_t revolution, const Poi
     e.finished.clear();
     e.given.clear();
     e.next_id = 1;
+    e.segmenter.restartStream();
     // A revolution joined after its start (the first sectors missed: its first point is later
     // than this sector's span) has no seam to measure from; its objects all come at the seam.
     e.joined_late = count > 1 && points[0].time > points[count - 1].time - points[0].time;
@@ -184,7 +185,9 @@ const EarlySectorResult& Pipeline::addSector(std::uint32_t revolution, const Poi
   e.cloud.width = static_cast<std::uint32_t>(e.cloud.size());
   e.cloud.height = 1;
   const StageClock segmentation("segmentation");
-  e.segmenter.segment(e.cloud, &e.labels);
+  // Each sector's points are binned once; the grid so far is segmented at every sector.
+  e.segmenter.addPoints(revolution, points, count);
+  e.segmenter.segmentSoFar(e.cloud, &e.labels);
   segmentation.stop(&out.timings);
   const StageClock foreground("foreground_extraction");
   extractForeground(e.cloud, e.labels, &e.foreground);

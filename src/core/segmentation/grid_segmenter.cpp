@@ -116,6 +116,7 @@ void GridSegmenter::addPoints(std::uint32_t revolution, const PointXYZIRT* point
     grid_.begin(static_cast<float>(params_.sensor_height_m),
                 static_cast<float>(params_.max_abs_height_m), grid_.appended());
     streaming_ = true;
+    stream_segmented_ = false;
     stream_revolution_ = revolution;
     stream_checks_.clear();
     stream_batch_time_ = -std::numeric_limits<float>::infinity();
@@ -145,7 +146,9 @@ bool GridSegmenter::streamMatches(const CloudXYZIRT& cloud) const {
 void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels) {
   last_used_stream_ = streamMatches(cloud);
   if (last_used_stream_) {
-    // The scratch was reset when the stream began; only the points not added yet are left.
+    // The scratch was reset when the stream began (or holds a segmentSoFar()'s); only the
+    // points not added yet are left.
+    if (stream_segmented_) resetScratch();
     const std::size_t done = grid_.appended();
     grid_.append(cloud.points.data() + done, cloud.size() - done);
     grid_.finish();
@@ -155,6 +158,22 @@ void GridSegmenter::segment(const CloudXYZIRT& cloud, std::vector<SegmentClass>*
                 static_cast<float>(params_.max_abs_height_m));
   }
   streaming_ = false;
+  segmentBinned(cloud, labels);
+}
+
+void GridSegmenter::segmentSoFar(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels) {
+  if (!streamMatches(cloud) || grid_.appended() != cloud.size()) {
+    segment(cloud, labels);
+    return;
+  }
+  last_used_stream_ = true;
+  if (stream_segmented_) resetScratch();  // the previous segmentSoFar() of this stream
+  stream_segmented_ = true;
+  grid_.settle();
+  segmentBinned(cloud, labels);
+}
+
+void GridSegmenter::segmentBinned(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels) {
   stats_ = SegmentationStats();
   stats_.cells_occupied = static_cast<std::uint32_t>(grid_.occupiedCells().size());
 

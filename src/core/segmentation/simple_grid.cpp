@@ -150,9 +150,28 @@ void SimpleGrid::begin(float z_offset_m, float max_abs_height_m, std::size_t exp
   max_abs_height_m_ = max_abs_height_m;
   run_ = Run();
   non_finite_ = 0;
+  settled_ = false;
+}
+
+void SimpleGrid::settle() {
+  if (settled_ || run_.cell == kNoCell) return;
+  GridCell& cell = occupied_cells_[static_cast<std::size_t>(run_.slot)];
+  settled_cell_ = cell;
+  settled_ = true;
+  cell.count += run_.count;
+  cell.z_min = std::min(cell.z_min, run_.min);
+  cell.z_max = std::max(cell.z_max, run_.max);
+  cell.z_sum += run_.sum;
+}
+
+void SimpleGrid::unsettle() {
+  if (!settled_) return;
+  occupied_cells_[static_cast<std::size_t>(run_.slot)] = settled_cell_;
+  settled_ = false;
 }
 
 void SimpleGrid::finish() {
+  unsettle();
   if (run_.cell != kNoCell) {
     GridCell& cell = occupied_cells_[static_cast<std::size_t>(run_.slot)];
     cell.count += run_.count;
@@ -164,6 +183,7 @@ void SimpleGrid::finish() {
 }
 
 void SimpleGrid::append(const PointXYZIRT* points, std::size_t count) {
+  unsettle();
   const std::size_t base = point_slot_.size();
   const std::size_t n = count;
   const float z_offset_m = z_offset_m_, max_abs_height_m = max_abs_height_m_;

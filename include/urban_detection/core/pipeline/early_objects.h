@@ -17,17 +17,21 @@
 ///    range within max(vehicle_max_height_m, tall_min_height_m / tall_min_range_m)). Every
 ///    neighbour rule of the segmentation's cell classes stays inside it and its ring of
 ///    neighbours: the vehicle groups (8-connected over candidates and short cells, "touches a
-///    higher tall cell"), the curb rule. An object is final when all of it is closed.
+///    higher tall cell"), the curb rule. An object is final when all of it is closed, or
+///    when it cannot become a vehicle whatever is added (groupDoomed).
 ///  - The Hough refinement is global over the revolution (cv::HoughLinesP votes over the whole
 ///    window, in a random order seeded per call, and extend_lines walks a line across the
 ///    window), so a line found at the end may cross an early sector. A run only relabels cells
 ///    when it is at least hough/min_line_length_m long, and its occupied cells are linked
 ///    within link = floor(max_line_gap_m / cell) + 1 + 2 * line_half_width_cells cells
 ///    (Chebyshev; consecutive occupied pixels of a run are at most the gap apart, each within
-///    the half width of an occupied cell). So for a group reaching into the window (widened
-///    by the half width): its component over tall and short cells linked within `link` must
-///    be closed and too small to hold such a run (box diagonal plus the half width at both
-///    ends); otherwise the object waits for the seam.
+///    the half width of an occupied cell). So for every occupied cell in the window (widened
+///    by the half width) within the detector's reach of the object (a neighbour made tall
+///    may join or split it): its component over tall and short cells linked within `link`
+///    must be closed and either too small to hold such a run (box diagonal plus the half
+///    width at both ends) or without the wall support a relabelling run needs (its supporting
+///    cells span too few rows and columns, see minSupportExtent); otherwise the object waits
+///    for the seam.
 ///  - The ground growing is seeded near the sensor over the whole revolution; the margin keeps
 ///    an early cell's terrain away from later points, and Pipeline::finishRevolution() checks
 ///    every early object against the classic result (PipelineResult::early_mismatches).
@@ -114,6 +118,15 @@ class SectorCompletion {
   std::uint8_t groupState(const GridSegmenter& segmenter, std::int32_t seed);
   // Memoised per call: 1 the cell's Hough component is closed and holds no run, 2 not.
   std::uint8_t houghState(const GridSegmenter& segmenter, std::int32_t seed);
+  // Whether the vehicle group of `seed` surely fails the vehicle test whatever the rest of the
+  // revolution adds (its closed part is already too long or wide, or touches a higher tall
+  // cell): then none of its cells changes class. Memoised per call.
+  bool groupDoomed(const GridSegmenter& segmenter, std::int32_t seed);
+  // Rows or columns (the larger extent) spanned by component_'s supporting cells (tall,
+  // wall-supporting short, or flippable) dilated by `w`; 0 when none.
+  std::size_t supportExtent(const GridSegmenter& segmenter, int w) const;
+  // The least extent of supporting pixels a relabelling Hough run has (see the .cpp).
+  static double minSupportExtent(const HoughWallRefinerParams& hp, double cell_m, int w);
 
   EarlyObjectsParams params_;
   bool sweep_valid_ = false;
@@ -123,6 +136,9 @@ class SectorCompletion {
   std::vector<float> scratch_az_;
   // Per cell: the states of the current call (0 unknown), reset on touched_ only.
   std::vector<std::uint8_t> group_state_, hough_state_;
+  std::vector<std::uint8_t> doomed_state_;  // 1 doomed, 2 not (reset on doomed_touched_)
+  std::vector<std::int32_t> doomed_touched_;
+  float dir_c_[8] = {}, dir_s_[8] = {};
   std::vector<std::int32_t> cells_;  // scratch: one object's cells
   int rmin_ = 0, rmax_ = 0, cmin_ = 0, cmax_ = 0;
   std::vector<std::int32_t> touched_;

@@ -240,6 +240,13 @@ class GridSegmenter {
   /// the previous batch's first point's (batches begin at packets, in order) also starts over:
   /// the decoder gives a dropped partial revolution's seq again to the next one.
   void addPoints(std::uint32_t revolution, const PointXYZIRT* points, std::size_t count);
+  /// segment() of the points added by addPoints() so far (`cloud`: exactly those points),
+  /// leaving the stream open: later addPoints() of the same revolution go on binning, so a
+  /// revolution segmented after each of its sectors is binned once. Same labels as
+  /// segment(cloud); when `cloud` is not the stream so far, it is segment(cloud).
+  void segmentSoFar(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels);
+  /// Ends the stream: the next addPoints() starts a revolution over.
+  void restartStream() { streaming_ = false; }
   /// Whether the last segment() used the points added by addPoints() (false: it binned the
   /// whole cloud, none were added or they did not match).
   bool lastUsedStream() const { return last_used_stream_; }
@@ -269,6 +276,8 @@ class GridSegmenter {
   };
   // Clears the per-cell scratch the previous frame set (idempotent).
   void resetScratch();
+  // Everything after the binning (the grid is complete for `cloud`).
+  void segmentBinned(const CloudXYZIRT& cloud, std::vector<SegmentClass>* labels);
   // Whether the points added by addPoints() are the first points of `cloud`.
   bool streamMatches(const CloudXYZIRT& cloud) const;
   void growGround();
@@ -288,6 +297,7 @@ class GridSegmenter {
   std::vector<std::pair<std::size_t, PointXYZIRT>> stream_checks_;
   float stream_batch_time_ = 0.0f;  // [s] time of the last batch's first point
   bool last_used_stream_ = false;
+  bool stream_segmented_ = false;  // a segmentSoFar() of the stream set the scratch
   HoughWallRefiner hough_;
   SegmentationStats stats_;
   // Scratch, sized to the grid, reset only on the cells touched by the previous frame.

@@ -110,6 +110,10 @@ class SimpleGrid {
   void begin(float z_offset_m, float max_abs_height_m = 100.0f, std::size_t expected_points = 0);
   void append(const PointXYZIRT* points, std::size_t count);
   void finish();
+  /// finish() that leaves the grid open: the statistics then hold every point appended so
+  /// far, and append() may go on (the run left open is taken out of its cell again and
+  /// continues), so finish() at the end still gives build()'s floats.
+  void settle();
   /// Points binned since begin().
   std::size_t appended() const { return point_slot_.size(); }
   /// Points binned since begin() with a NaN or infinite coordinate (counted while binning,
@@ -204,6 +208,10 @@ class SimpleGrid {
     float min = 0.0f, max = 0.0f, sum = 0.0f;
   };
   Run run_;
+  // After settle(): the open run's cell as it was before the run was added to it.
+  bool settled_ = false;
+  GridCell settled_cell_;
+  void unsettle();
   std::vector<std::int32_t> chunk_cell_;  // scratch: cell indices of one chunk of points
   bool allow_avx2_ = true;
 };
