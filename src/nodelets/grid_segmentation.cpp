@@ -22,6 +22,7 @@
 #include "urban_detection/ros/cloud_serialization.h"
 
 #include "urban_detection/GridSegmentationConfig.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/param_loading.h"
@@ -123,7 +124,11 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
     // Kept at their index and labelled unknown by the segmenter; counted here.
     diagnostics_->count("non_finite_points", countNonFinite(*cloud), false);
     std::lock_guard<std::mutex> segment_lock(segment_mutex_);  // vs. reconfigure
-    segmenter_->segment(*cloud, &labels_);
+    // The foreground only when someone listens (core::segmentForeground, the chain's first two
+    // stages with this nodelet's streaming segmenter).
+    boost::shared_ptr<LabeledCloud> foreground;
+    if (foreground_pub_.getNumSubscribers() > 0) foreground = boost::make_shared<LabeledCloud>();
+    core::segmentForeground(*segmenter_, *cloud, &labels_, foreground.get());
     if (segmenter_->lastUsedStream()) {
       diagnostics_->count("revolutions binned as they arrived", 1, false);
       NODELET_INFO_ONCE("GridSegmentation: binning velodyne_points/sectors as revolutions arrive");
@@ -135,11 +140,7 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
       core::buildLabeledCloud(*cloud, labels_, labeled.get());
       labeled_pub_.publish(boost::shared_ptr<const LabeledCloud>(labeled));
     }
-    if (foreground_pub_.getNumSubscribers() > 0) {
-      auto foreground = boost::make_shared<LabeledCloud>();
-      core::extractForeground(*cloud, labels_, foreground.get());
-      foreground_pub_.publish(boost::shared_ptr<const LabeledCloud>(foreground));
-    }
+    if (foreground) foreground_pub_.publish(boost::shared_ptr<const LabeledCloud>(foreground));
     diagnostics_->frame((ros::WallTime::now() - start).toSec());
     diagnostics_->output();
   }
