@@ -114,9 +114,8 @@ void usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string kitti_dir, skitti_dir, sim_gt, sim_pcap, calibration_path, json_path,
-      detector_arg = "hierarchical";
-  double cut_angle_deg = 0.0;
+  core::TrackingEvalInput source;  // the dataset: one of them (KITTI object: no tracking)
+  std::string json_path, detector_arg = "hierarchical";
   std::vector<std::string> configs;
   long max_frames = -1;
   long min_points = 30;
@@ -124,25 +123,25 @@ int main(int argc, char** argv) {
   std::string png_dir, features_path, classifier_arg, detections_dir;
   core::PngView png_view;
   bool tracking = false;
-  std::string kitti_tracking_dir, tracker_config;
+  std::string tracker_config;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const urban_detection::tools::OptionArgs arg{argc, argv, &i};
     if (a == "--kitti-object")
-      kitti_dir = arg.value("--kitti-object");
+      source.kitti_object_dir = arg.value("--kitti-object");
     else if (a == "--semantic-kitti")
-      skitti_dir = arg.value("--semantic-kitti");
+      source.semantic_kitti_dir = arg.value("--semantic-kitti");
     else if (a == "--sim")
-      sim_gt = arg.value("--sim");
+      source.sim_gt = arg.value("--sim");
     else if (a == "--pcap")
-      sim_pcap = arg.value("--pcap");
+      source.sim_pcap = arg.value("--pcap");
     else if (a == "--calibration")
-      calibration_path = arg.value("--calibration");
+      source.calibration_path = arg.value("--calibration");
     else if (a == "--cut-angle") {
       const std::string v = arg.value("--cut-angle");
       char* end = nullptr;
-      cut_angle_deg = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end != '\0' || !std::isfinite(cut_angle_deg)) {
+      source.cut_angle_deg = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !std::isfinite(source.cut_angle_deg)) {
         std::fprintf(stderr, "error: --cut-angle needs a number of degrees, got '%s'\n", v.c_str());
         return 2;
       }
@@ -169,7 +168,7 @@ int main(int argc, char** argv) {
     else if (a == "--tracking")
       tracking = true;
     else if (a == "--kitti-tracking")
-      kitti_tracking_dir = arg.value("--kitti-tracking");
+      source.kitti_tracking_dir = arg.value("--kitti-tracking");
     else if (a == "--tracker-config")
       tracker_config = arg.value("--tracker-config");
     else if (a == "--png-view") {
@@ -191,19 +190,19 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if ((!kitti_dir.empty() + !skitti_dir.empty() + !sim_gt.empty() + !kitti_tracking_dir.empty()) !=
-          1 ||
-      (tracking && !kitti_dir.empty())) {
+  if ((!source.kitti_object_dir.empty() + !source.semantic_kitti_dir.empty() +
+       !source.sim_gt.empty() + !source.kitti_tracking_dir.empty()) != 1 ||
+      (tracking && !source.kitti_object_dir.empty())) {
     std::fprintf(stderr, "error: give exactly one dataset\n");
     usage();
     return 2;
   }
-  if (sim_gt.empty() != sim_pcap.empty()) {
+  if (source.sim_gt.empty() != source.sim_pcap.empty()) {
     std::fprintf(stderr, "error: --sim GTFILE and --pcap PCAP go together\n");
     usage();
     return 2;
   }
-  if (sim_gt.empty() && (!calibration_path.empty() || cut_angle_deg != 0.0)) {
+  if (source.sim_gt.empty() && (!source.calibration_path.empty() || source.cut_angle_deg != 0.0)) {
     std::fprintf(stderr, "error: --calibration and --cut-angle apply to --sim only\n");
     return 2;
   }
@@ -266,14 +265,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: --detector must be hierarchical, kdtree or both\n");
     return 2;
   }
-  core::EvalDatasetSource source;  // the dataset (one of them)
-  source.kitti_object_dir = kitti_dir;
-  source.semantic_kitti_dir = skitti_dir;
-  source.sim_gt = sim_gt;
-  source.sim_pcap = sim_pcap;
-  source.calibration_path = calibration_path;
-  source.cut_angle_deg = cut_angle_deg;
-  if (tracking || !kitti_tracking_dir.empty()) {
+  if (tracking || !source.kitti_tracking_dir.empty()) {
     core::TrackingEvalParams tp;
     tp.params = pipelines[0]->params();
     tp.min_gt_points = static_cast<std::size_t>(min_points);
@@ -284,11 +276,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "error: %s\n", tracker_error.c_str());
       return 2;
     }
-    core::TrackingEvalInput in;
-    static_cast<core::EvalDatasetSource&>(in) = source;
-    in.kitti_tracking_dir = kitti_tracking_dir;
     std::string text, json;
-    if (!core::runTrackingEvaluation(tp, in, &text, &json, &tracker_error)) {
+    if (!core::runTrackingEvaluation(tp, source, &text, &json, &tracker_error)) {
       std::fprintf(stderr, "error: %s\n", tracker_error.c_str());
       return 1;
     }
@@ -317,8 +306,8 @@ int main(int argc, char** argv) {
   std::vector<float> gt_range;
   std::map<std::string, std::size_t> fg_composition;   // foreground points by dataset class
   std::unique_ptr<core::KittiBoxQuality> box_quality;  // first detector's
-  if (!kitti_dir.empty())
-    box_quality.reset(new core::KittiBoxQuality(kitti_dir, params.box_fitting));
+  if (!source.kitti_object_dir.empty())
+    box_quality.reset(new core::KittiBoxQuality(source.kitti_object_dir, params.box_fitting));
   std::ostringstream rows;
   bool first_row = true;
   std::size_t failed = 0, frames = 0;
@@ -341,7 +330,8 @@ int main(int argc, char** argv) {
       ++failed;
       continue;
     }
-    if (classifier && !skitti_dir.empty()) {  // a scan of a sequence the model learned from?
+    if (classifier &&
+        !source.semantic_kitti_dir.empty()) {  // a scan of a sequence the model learned from?
       const auto& seqs = pipelines[0]->classifier().model().trainingGroups();
       trained_on +=
           std::find(seqs.begin(), seqs.end(), f.id.substr(0, f.id.find('/'))) != seqs.end();

@@ -61,8 +61,9 @@ TEST(ToolLibrary, FeatureCsvHasAHeaderAndOneRowPerDetection) {
   std::getline(in, row);
   EXPECT_FALSE(std::getline(in, rest));
   EXPECT_EQ(header, "frame,verdict," + std::string(core::featureName(0)) + "," +
-                        core::featureName(1) + header.substr(header.find(core::featureName(1)) +
-                                                             std::string(core::featureName(1)).size()));
+                        core::featureName(1) +
+                        header.substr(header.find(core::featureName(1)) +
+                                      std::string(core::featureName(1)).size()));
   EXPECT_EQ(std::count(header.begin(), header.end(), ','), 1 + core::kNumObjectFeatures);
   EXPECT_EQ(row.rfind("000001,true,1.5,0.1,0,", 0), 0u);
   EXPECT_EQ(std::count(row.begin(), row.end(), ','), 1 + core::kNumObjectFeatures);
@@ -353,8 +354,9 @@ TEST(ToolLibrary, KittiTruthOfDetectionsAndTheBoxOracle) {
   const cv::Mat mask = core::kittiBoxOracleMask(f, {"background", "Car"});
   ASSERT_EQ(mask.size(), f.image.size());
   const auto& b = f.labels[car].bbox;
-  EXPECT_EQ(mask.at<uchar>(static_cast<int>(0.5 * (b[1] + b[3])), static_cast<int>(0.5 * (b[0] + b[2]))),
-            1);
+  EXPECT_EQ(
+      mask.at<uchar>(static_cast<int>(0.5 * (b[1] + b[3])), static_cast<int>(0.5 * (b[0] + b[2]))),
+      1);
   EXPECT_EQ(cv::countNonZero(core::kittiBoxOracleMask(f, {"background"})), 0);
 }
 

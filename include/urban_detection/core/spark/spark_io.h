@@ -25,7 +25,8 @@ bool readSparkCloud(const std::string& path, CloudXYZIRT* cloud, std::vector<cv:
 /// Writes the points `indices` of `cloud` as a PCD x y z rgb (binary; ASCII when empty), each
 /// with its colour in `rgb` (BGR), grey where `rgb` has none. Returns false on failure.
 bool writeColouredCloud(const std::string& path, const CloudXYZIRT& cloud,
-                        const std::vector<cv::Vec3b>& rgb, const std::vector<std::uint32_t>& indices);
+                        const std::vector<cv::Vec3b>& rgb,
+                        const std::vector<std::uint32_t>& indices);
 
 /// The BGR colour of every class id 0..255: line n of `colours_file` ("r g b" or "r,g,b";
 /// malformed lines skipped) for class n, a fixed palette after it (or for all without a
@@ -46,8 +47,7 @@ std::string sparkClassName(const std::vector<std::string>& names, int id);
 /// option's value (called only for options that take one). Returns 1 when `option` is one of
 /// them (applied), 0 when it is not, -1 with `error` for a malformed value.
 int applyCameraModelOption(const std::string& option, const std::function<std::string()>& value,
-                           CameraStageParams* stage, std::string* colours_file,
-                           std::string* error);
+                           CameraStageParams* stage, std::string* colours_file, std::string* error);
 
 /// The non-empty items of a comma-separated list ("a,,b" -> {"a", "b"}).
 std::vector<std::string> splitCommaList(const std::string& s);
