@@ -22,6 +22,7 @@
 #include "urban_detection/ros/cloud_serialization.h"
 
 #include "urban_detection/GridSegmentationConfig.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/ros/lazy_outputs.h"
 #include "urban_detection/ros/param_loading.h"
@@ -121,7 +122,13 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
       return;
     }
     std::lock_guard<std::mutex> segment_lock(segment_mutex_);  // vs. reconfigure
-    segmenter_->segment(*cloud, &labels_);
+    // The foreground only when someone listens (core::segmentForeground, the chain's first two
+    // stages with this nodelet's streaming segmenter).
+    boost::shared_ptr<LabeledCloud> foreground;
+    if (foreground_pub_.getNumSubscribers() > 0) foreground = boost::make_shared<LabeledCloud>();
+    core::segmentForeground(*segmenter_, *cloud, &labels_, foreground.get());
+    // The detector waits for the foreground: published before the labelled cloud is built.
+    if (foreground) foreground_pub_.publish(boost::shared_ptr<const LabeledCloud>(foreground));
     // Kept at their index and labelled unknown; counted by the segmenter while binning.
     diagnostics_->count("non_finite_points", segmenter_->stats().points_non_finite, false);
     if (segmenter_->lastUsedStream()) {
@@ -134,11 +141,6 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
       auto labeled = boost::make_shared<LabeledCloud>();
       core::buildLabeledCloud(*cloud, labels_, labeled.get());
       labeled_pub_.publish(boost::shared_ptr<const LabeledCloud>(labeled));
-    }
-    if (foreground_pub_.getNumSubscribers() > 0) {
-      auto foreground = boost::make_shared<LabeledCloud>();
-      core::extractForeground(*cloud, labels_, foreground.get());
-      foreground_pub_.publish(boost::shared_ptr<const LabeledCloud>(foreground));
     }
     diagnostics_->frame((ros::WallTime::now() - start).toSec());
     diagnostics_->output();

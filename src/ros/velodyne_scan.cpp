@@ -19,6 +19,32 @@ void toMessage(const core::RawPacket& packet, const ros::Time& stamp, VelodynePa
   std::memcpy(msg->data.data(), packet.data(), core::kPacketSize);
 }
 
+namespace {
+// The revolution boundary's decision on one packet, shared by the assembler and the streaming
+// decoder: false when the packet belongs to no revolution (invalid or stray); else the open
+// revolution is closed into *finished (close()) or dropped (a drop, a forced cut, a new
+// start), and the packet goes into the open revolution (or a new one when *current is null).
+template <class Ptr, class Close>
+bool atBoundary(core::RevolutionBoundary* boundary, const core::RawPacket& packet, Ptr* current,
+                Ptr* finished, const Close& close) {
+  switch (boundary->add(packet.data(), packet.size())) {
+    case core::RevolutionBoundary::Action::kSkip:
+      return false;
+    case core::RevolutionBoundary::Action::kAppend:
+      break;
+    case core::RevolutionBoundary::Action::kClose:
+      *finished = close();
+      break;
+    case core::RevolutionBoundary::Action::kDrop:
+    case core::RevolutionBoundary::Action::kForcedCut:
+    case core::RevolutionBoundary::Action::kOpen:
+      current->reset();
+      break;
+  }
+  return true;
+}
+}  // namespace
+
 ScanAssembler::ScanAssembler(double cut_angle_deg, const std::string& frame_id,
                              std::size_t expected_packets, ScanStamp stamp)
     : boundary_(cut_angle_deg),
@@ -29,20 +55,8 @@ ScanAssembler::ScanAssembler(double cut_angle_deg, const std::string& frame_id,
 
 VelodyneScan::Ptr ScanAssembler::add(const core::RawPacket& packet, const ros::Time& stamp) {
   VelodyneScan::Ptr finished;
-  switch (boundary_.add(packet.data(), packet.size())) {
-    case core::RevolutionBoundary::Action::kSkip:
-      return finished;  // invalid or stray: in no revolution
-    case core::RevolutionBoundary::Action::kAppend:
-      break;
-    case core::RevolutionBoundary::Action::kClose:
-      finished = close();
-      break;
-    case core::RevolutionBoundary::Action::kDrop:
-    case core::RevolutionBoundary::Action::kForcedCut:
-    case core::RevolutionBoundary::Action::kOpen:
-      current_.reset();
-      break;
-  }
+  if (!atBoundary(&boundary_, packet, &current_, &finished, [this] { return close(); }))
+    return finished;
   if (!current_) {
     current_ = boost::make_shared<VelodyneScan>();
     current_->header.frame_id = frame_id_;
@@ -202,20 +216,8 @@ void StreamingScanDecoder::open(const ros::Time& stamp) {
 boost::shared_ptr<CloudXYZIRT> StreamingScanDecoder::add(const core::RawPacket& packet,
                                                          const ros::Time& stamp) {
   boost::shared_ptr<CloudXYZIRT> finished;
-  switch (boundary_.add(packet.data(), packet.size())) {
-    case core::RevolutionBoundary::Action::kSkip:
-      return finished;  // invalid or stray: in no revolution
-    case core::RevolutionBoundary::Action::kAppend:
-      break;
-    case core::RevolutionBoundary::Action::kClose:
-      finished = close();
-      break;
-    case core::RevolutionBoundary::Action::kDrop:
-    case core::RevolutionBoundary::Action::kForcedCut:
-    case core::RevolutionBoundary::Action::kOpen:
-      current_.reset();
-      break;
-  }
+  if (!atBoundary(&boundary_, packet, &current_, &finished, [this] { return close(); }))
+    return finished;
   if (!current_) open(stamp);
   last_stamp_ = stamp;
   decodePacket(*decoder_, packet.data(), packet.size(), stamp, first_stamp_, nullptr,

@@ -146,24 +146,8 @@ int main(int argc, char** argv) {
   if (!urban_detection::tools::loadConfigs(configs, &params)) return 2;
 
   std::vector<std::unique_ptr<core::RevolutionSource> > sources;
-  for (const auto& d : pcd_dirs) {
-    auto files = core::listFiles(d, ".pcd");
-    if (files.empty())
-      std::fprintf(stderr, "warning: no .pcd files in %s\n", d.c_str());
-    else
-      sources.emplace_back(new core::FileRevolutionSource(d, files, true));
-  }
-  for (const auto& d : bin_dirs) {
-    auto files = core::listFiles(d, ".bin");
-    if (files.empty())
-      std::fprintf(stderr, "warning: no .bin files in %s\n", d.c_str());
-    else
-      sources.emplace_back(new core::FileRevolutionSource(d, files, false));
-  }
   try {
-    if (!pcap.empty()) {
-      sources.emplace_back(new core::PcapRevolutionSource(pcap, core::loadCalibration(calib_path)));
-    }
+    sources = core::openRevolutionSources(pcd_dirs, bin_dirs, pcap, calib_path);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;

@@ -38,6 +38,7 @@
 #include "urban_detection/core/detection/kdtree_detector.h"
 #include "urban_detection/core/evaluation/bench_sources.h"
 #include "urban_detection/core/evaluation/output_digest.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 
 using namespace urban_detection;
@@ -157,9 +158,8 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "skipping %s: %s\n", f.c_str(), err.c_str());
         continue;
       }
-      segmenter.segment(cloud, &labels);
       g_frames.emplace_back();
-      core::extractForeground(cloud, labels, &g_frames.back());
+      core::segmentForeground(segmenter, cloud, &labels, &g_frames.back());
       points += cloud.size();
       fg_points += g_frames.back().size();
     }

@@ -24,6 +24,7 @@
 #include <benchmark/benchmark.h>
 
 #include "urban_detection/core/evaluation/bench_sources.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/core/sensor/kitti_io.h"
 
@@ -98,8 +99,8 @@ void BM_ExtractForeground(benchmark::State& state) {
   }
   core::GridSegmenter seg;
   std::vector<core::SegmentClass> labels;
-  seg.segment(g_frames[0], &labels);
   urban_detection::LabeledCloud fg;
+  core::segmentForeground(seg, g_frames[0], &labels, &fg);
   for (auto _ : state) {
     core::extractForeground(g_frames[0], labels, &fg);
     benchmark::DoNotOptimize(fg.points.data());

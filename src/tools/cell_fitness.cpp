@@ -21,6 +21,7 @@
 
 #include "tool_common.h"
 #include "urban_detection/core/detection/cell_fitness.h"
+#include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 
 using namespace urban_detection;
@@ -73,10 +74,10 @@ int main(int argc, char** argv) {
       }
       if (whole) {
         labels.assign(cloud.size(), core::SegmentClass::kShort);
+        core::extractForeground(cloud, labels, &grid_input);
       } else {
-        segmenter.segment(cloud, &labels);
+        core::segmentForeground(segmenter, cloud, &labels, &grid_input);
       }
-      core::extractForeground(cloud, labels, &grid_input);
       for (std::size_t k = 0; k < sizes.size(); ++k) {
         core::countCells(grid_input, sizes[k], range, tmin, &counts[k]);
       }

@@ -32,6 +32,7 @@
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/evaluation/evaluation.h"
 #include "urban_detection/core/evaluation/external_detections.h"
+#include "urban_detection/core/evaluation/feature_table.h"
 #include "urban_detection/core/evaluation/frame_picture.h"
 #include "urban_detection/core/evaluation/kitti_box_quality.h"
 #include "urban_detection/core/evaluation/report.h"
@@ -66,119 +67,6 @@ int writeJsonFile(const std::string& path, const std::string& text) {
     return 1;
   }
   return 0;
-}
-
-void printMot(const char* what, const core::ClearMotResult& r) {
-  std::printf(
-      "%-28s frames %4zu  GT %6zu  GT tracks %4zu  MOTA %.3f  MOTP %.3f m  recall %.3f  "
-      "precision %.3f  FN %zu  FP %zu  IDSW %zu (%.2f per 100 GT tracks)  frag %zu  "
-      "MT %zu  PT %zu  ML %zu\n",
-      what, r.frames, r.gt, r.gt_tracks, r.mota(), r.motp_m(), r.recall(), r.precision(), r.misses,
-      r.false_positives, r.id_switches, r.idSwitchesPer100GtTracks(), r.fragmentations,
-      r.mostly_tracked, r.partially_tracked, r.mostly_lost);
-}
-
-// --tracking on a simulated drive. Returns the process exit code.
-int runSimTracking(const core::TrackingEvalParams& p, const std::string& gt_path,
-                   const std::string& pcap_path, const core::Calibration& calibration,
-                   double cut_angle_deg, const std::string& json_path) {
-  core::SimTrackingResult res;
-  std::string error;
-  if (!core::evaluateSimTracking(p, gt_path, pcap_path, calibration, cut_angle_deg, &res, &error)) {
-    std::fprintf(stderr, "error: %s\n", error.c_str());
-    return 1;
-  }
-  const std::size_t frames = res.frames, skipped = res.skipped;
-  const core::ClearMotResult &r = res.tracker, &d = res.detector, &o = res.oracle;
-  const std::vector<double>&speed_error = res.speed_error, &static_speed = res.static_speed,
-        &update_ms = res.update_ms;
-  std::printf(
-      "tracking on the simulated drive (%zu revolutions, %zu skipped), detector %s, "
-      "classifier %s\n",
-      frames, skipped, p.params.detector.c_str(), p.params.classifier.enabled ? "on" : "off");
-  printMot("tracker (confirmed tracks)", r);
-  std::printf(
-      "%-28s recall %.3f  precision %.3f  (MOTA <= recall of the tracks; the detector "
-      "bounds it unless coasting fills its gaps)\n",
-      "detector alone", d.recall(), d.precision());
-  printMot("tracker on GT boxes", o);
-  std::printf(
-      "speed error of matched moving cars/vans: median %.3f m/s, p90 %.3f m/s "
-      "(%zu matches); speed of matched parked cars/vans: median %.3f m/s, p90 %.3f m/s "
-      "(%zu)\n",
-      core::median(speed_error), core::percentile(speed_error, 0.9), speed_error.size(),
-      core::median(static_speed), core::percentile(static_speed, 0.9), static_speed.size());
-  std::printf(
-      "tracker update: median %.4f ms, max %.4f ms per revolution (wall clock, with "
-      "the pipeline around it)\n",
-      core::median(update_ms),
-      update_ms.empty() ? 0.0 : *std::max_element(update_ms.begin(), update_ms.end()));
-  return writeJsonFile(json_path, core::simTrackingJson(res, pcap_path));
-}
-
-// --kitti-tracking DIR. Returns the process exit code.
-int runKittiTracking(const core::TrackingEvalParams& p, const std::string& dir,
-                     const std::string& json_path) {
-  core::KittiTrackingEvalResult res;
-  std::string error;
-  if (!core::evaluateKittiTracking(p, dir, &res, &error)) {
-    std::fprintf(stderr, "error: %s\n", error.c_str());
-    return 1;
-  }
-  const std::size_t sequences = res.sequences, frames = res.frames;
-  const core::ClearMotResult& r = res.tracker;
-  std::printf("tracking on KITTI tracking (%zu sequences, %zu frames), sensor frame (no poses)\n",
-              sequences, frames);
-  printMot("tracker (confirmed tracks)", r);
-  return writeJsonFile(json_path, core::kittiTrackingJson(res, dir));
-}
-
-// --tracking --semantic-kitti DIR. Returns the process exit code.
-int runSemanticKittiTracking(const core::TrackingEvalParams& p, const std::string& dir,
-                             const std::string& json_path) {
-  core::SemanticKittiTrackingEvalResult res;
-  std::string error;
-  if (!core::evaluateSemanticKittiTracking(p, dir, &res, &error)) {
-    std::fprintf(stderr, "error: %s\n", error.c_str());
-    return 1;
-  }
-  const std::size_t frames = res.frames;
-  const bool any_nominal = res.nominal_tr;
-  const core::ClearMotResult &r = res.tracker, &d = res.detector;
-  const auto& per_sequence = res.per_sequence;
-  const std::vector<double>& update_ms = res.update_ms;
-  std::printf(
-      "tracking on SemanticKITTI (%zu sequences, %zu scans), world frame (poses.txt%s), "
-      "detector %s, classifier %s, min GT points %zu\n",
-      per_sequence.size(), frames, any_nominal ? ", nominal Tr" : ", calib Tr",
-      p.params.detector.c_str(), p.params.classifier.enabled ? "on" : "off", p.min_gt_points);
-  for (const auto& s : per_sequence) printMot(("  sequence " + s.first).c_str(), s.second);
-  printMot("tracker, pooled", r);
-  std::printf("%-28s recall %.3f  precision %.3f\n", "detector alone", d.recall(), d.precision());
-  std::printf("tracker update: median %.4f ms per scan\n", core::median(update_ms));
-  return writeJsonFile(json_path, core::semanticKittiTrackingJson(res, dir, p.min_gt_points));
-}
-
-// The box-quality tables on stdout.
-void printBoxQuality(const core::KittiBoxQuality& q) {
-  const std::pair<const char*, const std::vector<core::BoxQualitySample>*> tables[] = {
-      {"matched detections (the pipeline)", &q.detections()},
-      {"box fitting alone, on each labelled object's own points", &q.labelledPoints()}};
-  for (const auto& t : tables) {
-    std::printf(
-        "\nbox quality (bird's-eye view) vs KITTI 3-D boxes, %s:\n"
-        "%-11s %-9s %8s %8s %10s %12s %9s %10s\n",
-        t.first, "class", "range", "labelled", "matched", "centre_m", "heading_deg", "IoU_med",
-        "IoU>=0.5");
-    for (const core::KittiBoxQuality::Row& r : core::KittiBoxQuality::rows()) {
-      const core::BoxQualitySummary s =
-          core::summarize(*t.second, r.category, r.min_m, r.max_m, 0.5);
-      if (s.labelled == 0) continue;
-      std::printf("%-11s %-9s %8zu %8zu %10.3f %12.2f %9.3f %10.3f\n", core::toString(r.category),
-                  r.name.c_str(), s.labelled, s.matched, s.median_center_error_m,
-                  s.median_heading_error_deg, s.median_iou, s.share_iou_at_least);
-    }
-  }
 }
 
 void usage() {
@@ -226,9 +114,8 @@ void usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string kitti_dir, skitti_dir, sim_gt, sim_pcap, calibration_path, json_path,
-      detector_arg = "hierarchical";
-  double cut_angle_deg = 0.0;
+  core::TrackingEvalInput source;  // the dataset: one of them (KITTI object: no tracking)
+  std::string json_path, detector_arg = "hierarchical";
   std::vector<std::string> configs;
   long max_frames = -1;
   long min_points = 30;
@@ -236,25 +123,25 @@ int main(int argc, char** argv) {
   std::string png_dir, features_path, classifier_arg, detections_dir;
   core::PngView png_view;
   bool tracking = false;
-  std::string kitti_tracking_dir, tracker_config;
+  std::string tracker_config;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const urban_detection::tools::OptionArgs arg{argc, argv, &i};
     if (a == "--kitti-object")
-      kitti_dir = arg.value("--kitti-object");
+      source.kitti_object_dir = arg.value("--kitti-object");
     else if (a == "--semantic-kitti")
-      skitti_dir = arg.value("--semantic-kitti");
+      source.semantic_kitti_dir = arg.value("--semantic-kitti");
     else if (a == "--sim")
-      sim_gt = arg.value("--sim");
+      source.sim_gt = arg.value("--sim");
     else if (a == "--pcap")
-      sim_pcap = arg.value("--pcap");
+      source.sim_pcap = arg.value("--pcap");
     else if (a == "--calibration")
-      calibration_path = arg.value("--calibration");
+      source.calibration_path = arg.value("--calibration");
     else if (a == "--cut-angle") {
       const std::string v = arg.value("--cut-angle");
       char* end = nullptr;
-      cut_angle_deg = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end != '\0' || !std::isfinite(cut_angle_deg)) {
+      source.cut_angle_deg = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !std::isfinite(source.cut_angle_deg)) {
         std::fprintf(stderr, "error: --cut-angle needs a number of degrees, got '%s'\n", v.c_str());
         return 2;
       }
@@ -281,7 +168,7 @@ int main(int argc, char** argv) {
     else if (a == "--tracking")
       tracking = true;
     else if (a == "--kitti-tracking")
-      kitti_tracking_dir = arg.value("--kitti-tracking");
+      source.kitti_tracking_dir = arg.value("--kitti-tracking");
     else if (a == "--tracker-config")
       tracker_config = arg.value("--tracker-config");
     else if (a == "--png-view") {
@@ -303,19 +190,19 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if ((!kitti_dir.empty() + !skitti_dir.empty() + !sim_gt.empty() + !kitti_tracking_dir.empty()) !=
-          1 ||
-      (tracking && !kitti_dir.empty())) {
+  if ((!source.kitti_object_dir.empty() + !source.semantic_kitti_dir.empty() +
+       !source.sim_gt.empty() + !source.kitti_tracking_dir.empty()) != 1 ||
+      (tracking && !source.kitti_object_dir.empty())) {
     std::fprintf(stderr, "error: give exactly one dataset\n");
     usage();
     return 2;
   }
-  if (sim_gt.empty() != sim_pcap.empty()) {
+  if (source.sim_gt.empty() != source.sim_pcap.empty()) {
     std::fprintf(stderr, "error: --sim GTFILE and --pcap PCAP go together\n");
     usage();
     return 2;
   }
-  if (sim_gt.empty() && (!calibration_path.empty() || cut_angle_deg != 0.0)) {
+  if (source.sim_gt.empty() && (!source.calibration_path.empty() || source.cut_angle_deg != 0.0)) {
     std::fprintf(stderr, "error: --calibration and --cut-angle apply to --sim only\n");
     return 2;
   }
@@ -323,22 +210,14 @@ int main(int argc, char** argv) {
   // Parameters: in-class defaults, then each --config file in order.
   core::PipelineParams params;
   if (!urban_detection::tools::loadConfigs(configs, &params)) return 2;
-  std::FILE* features_out = nullptr;
   core::ObjectFeatureParams feature_params;
   feature_params.sensor_height_m = params.segmentation.sensor_height_m;
   core::ObjectFeatureExtractor feature_extractor(feature_params);
   std::vector<core::ObjectFeatureVector> feature_rows;
-  if (!features_path.empty()) {
-    features_out = std::fopen(features_path.c_str(), "w");
-    if (!features_out) {
-      std::fprintf(stderr, "error: cannot write %s\n", features_path.c_str());
-      return 1;
-    }
-    std::fprintf(features_out, "dataset,frame,detector,verdict,content");
-    for (int k = 0; k < core::kNumObjectFeatures; ++k) {
-      std::fprintf(features_out, ",%s", core::featureName(k));
-    }
-    std::fprintf(features_out, "\n");
+  core::FeatureCsvWriter features_out(features_path, "dataset,frame,detector,verdict,content");
+  if (!features_out.ok()) {
+    std::fprintf(stderr, "error: cannot write %s\n", features_path.c_str());
+    return 1;
   }
 
   // The classifier: the config's, replaced or switched off by --classifier.
@@ -386,7 +265,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: --detector must be hierarchical, kdtree or both\n");
     return 2;
   }
-  if (tracking || !kitti_tracking_dir.empty()) {
+  if (tracking || !source.kitti_tracking_dir.empty()) {
     core::TrackingEvalParams tp;
     tp.params = pipelines[0]->params();
     tp.min_gt_points = static_cast<std::size_t>(min_points);
@@ -397,44 +276,22 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "error: %s\n", tracker_error.c_str());
       return 2;
     }
-    if (!kitti_tracking_dir.empty()) {
-      return runKittiTracking(tp, kitti_tracking_dir, json_path);
-    }
-    if (!skitti_dir.empty()) {
-      return runSemanticKittiTracking(tp, skitti_dir, json_path);
-    }
-    try {
-      return runSimTracking(tp, sim_gt, sim_pcap, core::loadCalibration(calibration_path),
-                            cut_angle_deg, json_path);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "error: %s\n", e.what());
+    std::string text, json;
+    if (!core::runTrackingEvaluation(tp, source, &text, &json, &tracker_error)) {
+      std::fprintf(stderr, "error: %s\n", tracker_error.c_str());
       return 1;
     }
+    std::fputs(text.c_str(), stdout);
+    return writeJsonFile(json_path, json);
   }
 
+  const std::string& dataset_path = source.path();
   std::unique_ptr<Dataset> dataset;
-  std::string dataset_path;
-  if (!kitti_dir.empty()) {
-    core::KittiGroundTruthParams p;
-    p.min_points = 1;  // the evaluator applies --min-points (small objects count when matched)
-    dataset.reset(new KittiObjectDataset(kitti_dir, p));
-    dataset_path = kitti_dir;
-  } else if (!skitti_dir.empty()) {
-    core::SemanticKittiGroundTruthParams p;
-    p.min_points = 1;  // the evaluator applies --min-points (small objects count when matched)
-    dataset.reset(new SemanticKittiDataset(skitti_dir, p));
-    dataset_path = skitti_dir;
-  } else {
-    core::SimulatedGroundTruthParams p;
-    p.min_points = 1;  // the evaluator applies --min-points (small objects count when matched)
-    try {
-      const core::Calibration cal = core::loadCalibration(calibration_path);
-      dataset.reset(new SimulatedDriveDataset(sim_gt, sim_pcap, cal, cut_angle_deg, p));
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "error: %s\n", e.what());
-      return 1;
-    }
-    dataset_path = sim_pcap;
+  try {
+    dataset = core::openEvalDataset(source);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
   }
   const std::size_t max_frames_n =
       max_frames >= 0 ? static_cast<std::size_t>(max_frames) : static_cast<std::size_t>(-1);
@@ -449,8 +306,8 @@ int main(int argc, char** argv) {
   std::vector<float> gt_range;
   std::map<std::string, std::size_t> fg_composition;   // foreground points by dataset class
   std::unique_ptr<core::KittiBoxQuality> box_quality;  // first detector's
-  if (!kitti_dir.empty())
-    box_quality.reset(new core::KittiBoxQuality(kitti_dir, params.box_fitting));
+  if (!source.kitti_object_dir.empty())
+    box_quality.reset(new core::KittiBoxQuality(source.kitti_object_dir, params.box_fitting));
   std::ostringstream rows;
   bool first_row = true;
   std::size_t failed = 0, frames = 0;
@@ -473,7 +330,8 @@ int main(int argc, char** argv) {
       ++failed;
       continue;
     }
-    if (classifier && !skitti_dir.empty()) {  // a scan of a sequence the model learned from?
+    if (classifier &&
+        !source.semantic_kitti_dir.empty()) {  // a scan of a sequence the model learned from?
       const auto& seqs = pipelines[0]->classifier().model().trainingGroups();
       trained_on +=
           std::find(seqs.begin(), seqs.end(), f.id.substr(0, f.id.find('/'))) != seqs.end();
@@ -483,14 +341,13 @@ int main(int argc, char** argv) {
     auto detectorAlone = [&](std::size_t k, const urban_detection::LabeledCloud& fg,
                              const std::vector<core::DetectedObject>& objects) {
       scoring[k].addDetectorAlone(f.gt, objects, gt_range, &match);
-      if (!features_out) return;
+      if (!features_out.enabled()) return;
       feature_extractor.computeAll(fg, objects, &feature_rows);
       for (std::size_t d = 0; d < objects.size(); ++d) {
-        std::fprintf(features_out, "%s,%s,%s,%s,%s", dataset->name().c_str(), f.id.c_str(),
-                     pipelines[k]->detector().name().c_str(), core::toString(match.verdict[d]),
-                     detectionContent(f, *dataset, objects[d]).c_str());
-        for (const float v : feature_rows[d]) std::fprintf(features_out, ",%.6g", v);
-        std::fprintf(features_out, "\n");
+        features_out.row(dataset->name() + "," + f.id + "," + pipelines[k]->detector().name() +
+                             "," + core::toString(match.verdict[d]) + "," +
+                             detectionContent(f, *dataset, objects[d]),
+                         feature_rows[d]);
       }
     };
     // The first pipeline runs the whole chain; the others take its foreground.
@@ -532,53 +389,28 @@ int main(int argc, char** argv) {
     }
   }
 
-  if (features_out) std::fclose(features_out);
   if (frames == 0) {
     std::error_code ec;
     std::fprintf(stderr, "error: %s %s\n", dataset_path.c_str(),
                  fs::exists(dataset_path, ec) ? "holds no frames" : "not found");
     return 1;
   }
-  std::printf(
-      "\nsmall objects (< %ld points) count only when matched (--min-points %ld); N = 1: "
-      "every object counts\n",
-      min_points, min_points);
-  std::printf("%-15s %-18s %-11s %6s %5s %5s %5s %5s %9s %7s %7s\n", "dataset", "detector",
-              "classifier", "frames", "NO", "MO", "FO", "ign", "precision", "recall", "F-rate");
+  core::EvalRunSummary summary;
+  summary.dataset = dataset->name();
+  summary.path = dataset_path;
+  summary.frames_evaluated = frames - failed;
+  summary.frames_failed = failed;
+  summary.params = eval_params;
+  summary.classifier = classifier;
+  summary.classifier_model = params.classifier.model_path;
+  summary.configs = configs;
   for (std::size_t k = 0; k < pipelines.size(); ++k) {
-    const std::pair<const char*, const core::DetectionEvaluator*> rows_k[] = {
-        {classifier ? "on" : "off", &scoring[k].scored()},
-        {classifier ? "on, N=1" : "off, N=1", &scoring[k].allObjects()},
-        {"off", &scoring[k].detectorAlone()},
-        {"off, N=1", &scoring[k].detectorAloneAllObjects()}};
-    for (int r = 0; r < (classifier ? 4 : 2); ++r) {
-      const core::DetectionScore& t = rows_k[r].second->total();
-      std::printf("%-15s %-18s %-11s %6zu %5zu %5zu %5zu %5zu %9.3f %7.3f %7.3f\n",
-                  dataset->name().c_str(), pipelines[k]->detector().name().c_str(), rows_k[r].first,
-                  frames - failed, t.no, t.mo, t.fo, t.ignored, t.precision(), t.recall(),
-                  t.fRate());
-    }
+    summary.detectors.push_back(pipelines[k]->detector().name());
+    summary.scoring.push_back(&scoring[k]);
   }
-  for (std::size_t k = 0; k < pipelines.size(); ++k) {
-    std::printf("\n%s, classifier %s:\n%s", pipelines[k]->detector().name().c_str(),
-                classifier ? "on" : "off", scoring[k].breakdown().table("  ").c_str());
-    if (classifier) {
-      std::printf("%s, classifier off (the detector alone):\n%s",
-                  pipelines[k]->detector().name().c_str(),
-                  scoring[k].breakdownDetectorAlone().table("  ").c_str());
-    }
-  }
-  std::printf("\n");
-  for (std::size_t k = 0; k < pipelines.size() && scoring[k].byGroup().size() > 1; ++k) {
-    for (const auto& g : scoring[k].byGroup()) {
-      const core::DetectionScore& t = g.second;
-      std::printf("%-15s %-18s %6s %5zu %5zu %5zu %5zu %9.3f %7.3f %7.3f\n",
-                  (dataset->name() + ":" + g.first).c_str(),
-                  pipelines[k]->detector().name().c_str(), "", t.no, t.mo, t.fo, t.ignored,
-                  t.precision(), t.recall(), t.fRate());
-    }
-  }
-  if (box_quality) printBoxQuality(*box_quality);
+  summary.foreground = fg_composition;
+  std::fputs(core::scoreTables(summary).c_str(), stdout);
+  if (box_quality) std::fputs(box_quality->tables().c_str(), stdout);
   std::printf("classifier: %s\n",
               classifier ? params.classifier.model_path.c_str() : "off (objects unclassified)");
   if (trained_on > 0) {
@@ -592,60 +424,10 @@ int main(int argc, char** argv) {
         trained_on, frames - failed, seqs.c_str() + 1);
   }
   std::printf("foreground points by class: %s\n", core::countsJson(fg_composition).c_str());
-  for (std::size_t k = 0; k < pipelines.size(); ++k) {
-    if (classifier) {
-      std::printf(
-          "%s: classifier rejected by content %s; matched objects' class "
-          "(truth->given) %s\n",
-          pipelines[k]->detector().name().c_str(),
-          core::countsJson(scoring[k].classifierRejected()).c_str(),
-          core::countsJson(scoring[k].classPairs()).c_str());
-    }
-    std::printf("%s: missed by cause %s; false by content %s\n",
-                pipelines[k]->detector().name().c_str(),
-                core::countsJson(scoring[k].diagnostics().missed_by_cause).c_str(),
-                core::countsJson(scoring[k].diagnostics().false_by_class).c_str());
-    if (details) {
-      std::printf("%s: false parts of GT objects by kind %s\n",
-                  pipelines[k]->detector().name().c_str(),
-                  core::countsJson(scoring[k].diagnostics().false_fragments).c_str());
-    }
-  }
-
-  if (!json_path.empty()) {
-    std::ofstream out(json_path);
-    if (!out) {
-      std::fprintf(stderr, "error: cannot write %s\n", json_path.c_str());
-      return 1;
-    }
-    out << "{\n  \"dataset\": \"" << dataset->name() << "\",\n  \"path\": \""
-        << jsonEscape(dataset_path) << "\",\n  \"frames_evaluated\": " << frames - failed
-        << ",\n  \"frames_failed\": " << failed
-        << ",\n  \"min_iou\": " << jsonNumber(eval_params.min_iou)
-        << ",\n  \"min_points\": " << min_points << ",\n  \"classifier\": "
-        << (classifier ? "\"" + jsonEscape(params.classifier.model_path) + "\"" : "null")
-        << ",\n  \"configs\": [";
-    for (std::size_t c = 0; c < configs.size(); ++c) {
-      out << (c ? ", " : "") << "\"" << jsonEscape(configs[c]) << "\"";
-    }
-    out << "],\n  \"detectors\": [";
-    for (std::size_t k = 0; k < pipelines.size(); ++k) {
-      out << (k ? ", " : "") << "\"" << pipelines[k]->detector().name() << "\"";
-    }
-    out << "],\n  \"frames\": [\n" << rows.str() << "\n  ],\n";
-    out << "  \"overall\": {" << core::scoreJsonMembers(scoring[0].scored().total()) << "},\n";
-    out << "  \"by_detector\": {";
-    for (std::size_t k = 0; k < pipelines.size(); ++k) {
-      out << (k ? ",\n" : "\n") << "    \"" << pipelines[k]->detector().name() << "\": {"
-          << scoring[k].jsonMembers() << "}";
-    }
-    out << "\n  },\n  \"foreground_points_by_class\": " << core::countsJson(fg_composition);
-    if (box_quality) out << ",\n  \"box_quality\": " << box_quality->json();
-    out << "\n}\n";
-    if (!out) {
-      std::fprintf(stderr, "error: writing %s failed\n", json_path.c_str());
-      return 1;
-    }
-  }
+  std::fputs(core::diagnosticsLines(summary, details).c_str(), stdout);
+  if (!json_path.empty() &&
+      writeJsonFile(json_path, core::evalReportJson(summary, rows.str(),
+                                                    box_quality ? box_quality->json() : "")) != 0)
+    return 1;
   return failed == frames ? 1 : 0;
 }

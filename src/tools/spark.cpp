@@ -26,8 +26,6 @@
 //   relative files, --classes, --colours, --input-size WxH, --mean, --scale, --bgr.
 #include "urban_detection/core/common/point_types.h"  // first: PCL_NO_PRECOMPILE
 
-#include <pcl/io/pcd_io.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -52,6 +50,7 @@
 #include "urban_detection/core/spark/kitti_spark_eval.h"
 #include "urban_detection/core/spark/spark_capture.h"
 #include "urban_detection/core/spark/spark_instances.h"
+#include "urban_detection/core/spark/spark_io.h"
 #include "urban_detection/core/spark/spark_scene.h"
 #include "urban_detection/core/spark/spark_segmenter.h"
 #include "urban_detection/ros/object_conversions.h"
@@ -65,16 +64,6 @@ namespace {
 
 double msBetween(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
-}
-
-std::vector<std::string> splitList(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
 }
 
 [[noreturn]] void fail(const std::string& msg) {
@@ -102,44 +91,14 @@ ModelOptions readModelConfig(int argc, char** argv) {
   return mo;
 }
 
-// Common model options; returns true when argv[*i] was one of them.
+// Common model options (core::applyCameraModelOption); true when argv[*i] was one of them.
 bool modelOption(int argc, char** argv, int* i, ModelOptions* m) {
-  const std::string a = argv[*i];
-  auto value = [&](const char* o) { return ud::tools::optionValue(argc, argv, i, o); };
-  core::CameraModelParams& mp = m->stage.model;
-  auto triple = [&](const char* o, std::array<double, 3>* dst) {
-    const auto v = splitList(value(o));
-    if (v.size() != 3) fail(std::string(o) + " needs three comma-separated numbers");
-    for (int c = 0; c < 3; ++c) (*dst)[c] = std::stod(v[c]);
-  };
-  if (a == "--model")
-    mp.network.model_path = value("--model");
-  else if (a == "--model-config")
-    value("--model-config");  // read first, by readModelConfig()
-  else if (a == "--model-dir")
-    mp.dir = value("--model-dir");
-  else if (a == "--colours")
-    m->colours_file = value("--colours");
-  else if (a == "--classes")
-    mp.class_names_file = value("--classes");
-  else if (a == "--keep")
-    mp.keep_classes = splitList(value("--keep"));
-  else if (a == "--input-size") {
-    int w = 0, h = 0;
-    if (std::sscanf(value("--input-size").c_str(), "%dx%d", &w, &h) != 2) fail("--input-size WxH");
-    mp.network.input_width_px = w;
-    mp.network.input_height_px = h;
-  } else if (a == "--mean")
-    triple("--mean", &mp.network.mean);
-  else if (a == "--scale")
-    triple("--scale", &mp.network.scale);
-  else if (a == "--bgr")
-    mp.network.input_rgb = false;
-  else if (a == "--probabilities")
-    mp.network.output_softmax = false;
-  else
-    return false;
-  return true;
+  std::string error;
+  const int r = core::applyCameraModelOption(
+      argv[*i], [&] { return ud::tools::optionValue(argc, argv, i, argv[*i]); }, &m->stage,
+      &m->colours_file, &error);
+  if (r < 0) fail(error);
+  return r > 0;
 }
 
 // The nodelet's model loading (core::loadCameraModel); the colours file is also found in the
@@ -148,101 +107,6 @@ void loadModel(ModelOptions* m, bool load_network) {
   std::string error;
   if (!core::loadCameraModel(m->stage.model, load_network, &m->model, &error)) fail(error);
   m->colours_file = core::inModelDir(m->stage.model.dir, m->colours_file);
-}
-
-// Colour of each class id: the colours file ("r g b" or "r,g,b" per line, line n = class n), else a
-// fixed palette; 255 (no class) is black.
-std::vector<cv::Vec3b> classColours(const ModelOptions& m) {
-  std::vector<cv::Vec3b> colours;
-  if (!m.colours_file.empty()) {
-    std::ifstream in(m.colours_file);
-    if (!in) fail("cannot read colours file " + m.colours_file);
-    std::string line;
-    while (std::getline(in, line)) {  // "r g b" or "r,g,b"
-      std::replace(line.begin(), line.end(), ',', ' ');
-      int r = 0, g = 0, b = 0;
-      if (std::sscanf(line.c_str(), "%d %d %d", &r, &g, &b) != 3) continue;
-      colours.emplace_back(static_cast<uchar>(b), static_cast<uchar>(g), static_cast<uchar>(r));
-    }
-  }
-  for (int c = static_cast<int>(colours.size()); c < 256; ++c)
-    colours.emplace_back(static_cast<uchar>((c * 67) % 256), static_cast<uchar>((c * 151) % 256),
-                         static_cast<uchar>((c * 37 + 80) % 256));
-  colours[255] = cv::Vec3b(0, 0, 0);
-  return colours;
-}
-
-// A label image (8-bit class ids) as colours a person can look at.
-cv::Mat colourMask(const cv::Mat& labels, const std::vector<cv::Vec3b>& colours) {
-  cv::Mat out(labels.size(), CV_8UC3);
-  for (int y = 0; y < labels.rows; ++y)
-    for (int x = 0; x < labels.cols; ++x) out.at<cv::Vec3b>(y, x) = colours[labels.at<uchar>(y, x)];
-  return out;
-}
-
-std::string className(const std::vector<std::string>& names, int id) {
-  if (id >= 0 && static_cast<std::size_t>(id) < names.size() && !names[id].empty())
-    return names[id];
-  return id < 0 ? "unknown" : "class_" + std::to_string(id);
-}
-
-// ---------------------------------------------------------------------------------------------
-// Cloud I/O: PCD (x y z, optional rgb/rgba and intensity) or KITTI .bin.
-bool readCloud(const std::string& path, ud::CloudXYZIRT* cloud, std::vector<cv::Vec3b>* rgb,
-               std::string* error) {
-  rgb->clear();
-  if (fs::path(path).extension() == ".bin") return core::readKittiBin(path, cloud, error);
-  pcl::PCLPointCloud2 blob;
-  if (pcl::io::loadPCDFile(path, blob) != 0) {
-    *error = "cannot read PCD file '" + path + "'";
-    return false;
-  }
-  bool has_rgb = false, has_intensity = false;
-  for (const auto& f : blob.fields) {
-    has_rgb |= f.name == "rgb" || f.name == "rgba";
-    has_intensity |= f.name == "intensity";
-  }
-  pcl::PointCloud<pcl::PointXYZ> xyz;
-  pcl::fromPCLPointCloud2(blob, xyz);
-  cloud->clear();
-  cloud->reserve(xyz.size());
-  for (const auto& p : xyz) {
-    cloud->push_back(ud::makePoint(p.x, p.y, p.z));
-  }
-  if (has_intensity) {
-    pcl::PointCloud<pcl::PointXYZI> xyzi;
-    pcl::fromPCLPointCloud2(blob, xyzi);
-    for (std::size_t i = 0; i < xyzi.size() && i < cloud->size(); ++i)
-      (*cloud)[i].intensity = xyzi[i].intensity;
-  }
-  if (has_rgb) {
-    pcl::PointCloud<pcl::PointXYZRGB> c;
-    pcl::fromPCLPointCloud2(blob, c);
-    rgb->reserve(c.size());
-    for (const auto& p : c) rgb->emplace_back(p.b, p.g, p.r);
-  }
-  return true;
-}
-
-bool writeSubCloud(const std::string& path, const ud::CloudXYZIRT& cloud,
-                   const std::vector<cv::Vec3b>& rgb, const std::vector<std::uint32_t>& idx) {
-  pcl::PointCloud<pcl::PointXYZRGB> out;
-  out.reserve(idx.size());
-  for (const std::uint32_t i : idx) {
-    pcl::PointXYZRGB p;
-    p.x = cloud[i].x;
-    p.y = cloud[i].y;
-    p.z = cloud[i].z;
-    const cv::Vec3b c = i < rgb.size() ? rgb[i] : cv::Vec3b(128, 128, 128);
-    p.b = c[0];
-    p.g = c[1];
-    p.r = c[2];
-    out.push_back(p);
-  }
-  out.width = static_cast<std::uint32_t>(out.size());
-  out.height = 1;
-  return out.empty() ? pcl::io::savePCDFileASCII(path, out) == 0
-                     : pcl::io::savePCDFileBinary(path, out) == 0;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -279,7 +143,7 @@ int runOffline(int argc, char** argv) {
     else if (a == "--box-margin")
       sp.box_margin_m = std::stod(value("--box-margin"));
     else if (a == "--cut")
-      cut = splitList(value("--cut"));
+      cut = core::splitCommaList(value("--cut"));
     else if (a == "--instance-pcd")
       instance_pcd = true;
     else if (a == "--no-images")
@@ -308,7 +172,7 @@ int runOffline(int argc, char** argv) {
   sp.kept_classes = mo.model.kept_classes;
   ud::CloudXYZIRT cloud;
   std::vector<cv::Vec3b> rgb, colours;
-  if (!readCloud(cloud_path, &cloud, &rgb, &error)) fail(error);
+  if (!core::readSparkCloud(cloud_path, &cloud, &rgb, &error)) fail(error);
   if (cp.colour == "rgb" && rgb.empty())
     std::fprintf(stderr,
                  "warning: %s has no rgb field; points are drawn grey (set \"colour\": "
@@ -320,7 +184,8 @@ int runOffline(int argc, char** argv) {
     fs::create_directories(out_dir + "/masks");
     fs::create_directories(out_dir + "/masks_colour");
   }
-  const std::vector<cv::Vec3b> palette = classColours(mo);
+  std::vector<cv::Vec3b> palette;
+  if (!core::classColours(mo.colours_file, &palette, &error)) fail(error);
 
   // Classes: names file, or class_<id> up to the network's class count (after the first run).
   const auto poses = core::capturePoses(cp);
@@ -365,7 +230,7 @@ int runOffline(int argc, char** argv) {
       const cv::Mat labels = scores.labelImage();
       cv::imwrite(out_dir + "/masks/" + name + ".png", labels);
       // For a person: the class colours, and the image with them blended in.
-      cv::Mat colour = colourMask(labels, palette), resized, blend;
+      cv::Mat colour = core::colourMask(labels, palette), resized, blend;
       cv::imwrite(out_dir + "/masks_colour/" + name + ".png", colour);
       cv::resize(colour, resized, image.size(), 0, 0, cv::INTER_NEAREST);
       cv::addWeighted(image, 0.5, resized, 0.5, 0.0, blend);
@@ -406,10 +271,10 @@ int runOffline(int argc, char** argv) {
       core::pointsInBox(cloud, inst, sp.box_margin_m, &idx);
       char name[160];
       std::snprintf(name, sizeof name, "/instances/instance_%04u_%s.pcd", inst.id,
-                    className(names, inst.class_id).c_str());
+                    core::sparkClassName(names, inst.class_id).c_str());
       std::string file = out_dir + name;
       std::replace(file.begin() + static_cast<long>(out_dir.size()), file.end(), ' ', '_');
-      if (!writeSubCloud(file, cloud, rgb, idx)) fail("cannot write " + file);
+      if (!core::writeColouredCloud(file, cloud, rgb, idx)) fail("cannot write " + file);
     }
   }
   if (!cut.empty()) {
@@ -418,14 +283,14 @@ int runOffline(int argc, char** argv) {
     if (!core::resolveKeptClasses(cut, names, bound, &cut_ids, &error)) fail("--cut: " + error);
     std::vector<std::uint32_t> kept;
     core::cutOutClasses(cloud, instances, cut_ids, sp.box_margin_m, &kept);
-    if (!writeSubCloud(out_dir + "/cloud_cut.pcd", cloud, rgb, kept))
+    if (!core::writeColouredCloud(out_dir + "/cloud_cut.pcd", cloud, rgb, kept))
       fail("cannot write cloud_cut.pcd");
     std::printf("cut: %zu of %zu points kept in %s/cloud_cut.pcd\n", kept.size(), cloud.size(),
                 out_dir.c_str());
   }
 
   std::map<std::string, int> per_class;
-  for (const auto& inst : instances) ++per_class[className(names, inst.class_id)];
+  for (const auto& inst : instances) ++per_class[core::sparkClassName(names, inst.class_id)];
   std::printf("cloud: %s, %zu points; %zu images %dx%d (%d rotations, %.3f m/px)\n",
               cloud_path.c_str(), cloud.size(), poses.size(), cp.image_width_px, cp.image_height_px,
               cp.rotations, cp.metres_per_pixel);
@@ -472,7 +337,8 @@ int runSynthetic(int argc, char** argv) {
   core::makeSparkScene(step, &cloud, &rgb, &objects);
   std::vector<std::uint32_t> all(cloud.size());
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<std::uint32_t>(i);
-  if (!writeSubCloud(out_dir + "/scene.pcd", cloud, rgb, all)) fail("cannot write scene.pcd");
+  if (!core::writeColouredCloud(out_dir + "/scene.pcd", cloud, rgb, all))
+    fail("cannot write scene.pcd");
   FILE* f = std::fopen((out_dir + "/path.json").c_str(), "w");
   if (!f) fail("cannot write path.json");
   std::fprintf(
@@ -504,20 +370,6 @@ int runSynthetic(int argc, char** argv) {
 struct RangeCounts {
   int n = 0, correct = 0, unknown = 0;
   std::map<std::string, int> got;  // camera category -> count
-};
-
-struct PrecisionCounts {
-  int kept = 0, true_objects = 0, class_correct = 0, vetoed = 0, vetoed_true = 0;
-  std::string json() const {
-    std::ostringstream o;
-    o << "{\"kept\": " << kept << ", \"true\": " << true_objects
-      << ", \"class_correct\": " << class_correct << ", \"vetoed\": " << vetoed
-      << ", \"vetoed_true\": " << vetoed_true << ", \"precision\": "
-      << ud::tools::jsonNumber(kept ? static_cast<double>(true_objects) / kept : 0.0)
-      << ", \"class_precision\": "
-      << ud::tools::jsonNumber(kept ? static_cast<double>(class_correct) / kept : 0.0) << "}";
-    return o.str();
-  }
 };
 
 int runKitti(int argc, char** argv) {
@@ -607,7 +459,7 @@ int runKitti(int argc, char** argv) {
   const auto ids = core::listFiles(data + "/label_2", ".txt");
   if (ids.empty()) fail("no label_2/*.txt under " + data);
   std::map<std::string, RangeCounts> near_counts, all_counts;  // by KITTI category
-  PrecisionCounts lidar_p, veto_p, relabel_p;
+  core::SparkPrecisionCounts lidar_p, veto_p, relabel_p;
   std::vector<double> net_ms, pre_ms, transfer_ms;
   std::ostringstream objects_json, detections_json;
   int frames = 0;
@@ -623,22 +475,7 @@ int runKitti(int argc, char** argv) {
     ++frames;
     core::SegmentationScores scores;
     if (oracle) {
-      std::vector<std::size_t> order(f.labels.size());
-      for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-      std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        return f.labels[a].location.z() > f.labels[b].location.z();
-      });
-      cv::Mat mask(f.image.rows, f.image.cols, CV_8U, cv::Scalar(0));
-      for (const std::size_t k : order) {
-        const auto it = std::find(names.begin(), names.end(), f.labels[k].type);
-        if (it == names.end()) continue;
-        const auto& b = f.labels[k].bbox;
-        mask(cv::Rect(cv::Point(static_cast<int>(b[0]), static_cast<int>(b[1])),
-                      cv::Point(static_cast<int>(b[2]) + 1, static_cast<int>(b[3]) + 1)) &
-             cv::Rect(0, 0, mask.cols, mask.rows))
-            .setTo(static_cast<int>(it - names.begin()));
-      }
-      scores.assignLabels(mask, -1);
+      scores.assignLabels(core::kittiBoxOracleMask(f, names), -1);
     } else {
       if (!model.run(f.image, &scores, &error)) fail(error);
       net_ms.push_back(model.stats().inference_ms);
@@ -675,14 +512,14 @@ int runKitti(int argc, char** argv) {
       }
       std::printf("%-7s %-15s %6.1f %7u %7u %-13s %-12s %6.2f %6.2f %s\n", id.c_str(),
                   l.type.c_str(), range, v.points, v.considered,
-                  className(names, best_class).c_str(), cam_name.c_str(), e.best_share,
+                  core::sparkClassName(names, best_class).c_str(), cam_name.c_str(), e.best_share,
                   e.background_share(), scored ? (ok ? "yes" : "NO") : "-");
       objects_json << (objects_json.tellp() > 0 ? ",\n  " : "  ") << "{\"frame\": \"" << id
                    << "\", \"type\": \"" << l.type
                    << "\", \"range_m\": " << ud::tools::jsonNumber(range)
                    << ", \"points\": " << v.points << ", \"visible\": " << v.considered
                    << ", \"camera_class\": \""
-                   << ud::tools::jsonEscape(className(names, best_class))
+                   << ud::tools::jsonEscape(core::sparkClassName(names, best_class))
                    << "\", \"camera_category\": \"" << cam_name
                    << "\", \"share\": " << ud::tools::jsonNumber(e.best_share)
                    << ", \"background_share\": " << ud::tools::jsonNumber(e.background_share())
@@ -709,44 +546,10 @@ int runKitti(int argc, char** argv) {
     const auto t0 = Clock::now();
     transfer.transfer(object_points, f.camera_from_velo, f.camera, scores, &votes);
     transfer_ms.push_back(msBetween(t0, Clock::now()));
-    // Per cloud point: the label whose box (10 cm margin, no ground band) holds it.
-    std::vector<int> owner(f.cloud.size(), -1);
-    for (std::size_t k = 0; k < f.labels.size(); ++k) {
-      if (f.labels[k].type == "DontCare") continue;
-      core::KittiLabel big = f.labels[k];
-      big.length_m += 0.2;
-      big.width_m += 0.2;
-      big.height_m += 0.1;
-      for (const std::size_t i : core::kittiBoxPoints(f, big, 0.0)) owner[i] = static_cast<int>(k);
-    }
+    const std::vector<int> owner = core::kittiPointOwners(f);
     for (const core::DetectedObject& o : objects) {
-      int in_view = 0, in_dontcare = 0;
-      std::map<int, int> hits;
-      for (const std::uint32_t i : o.indices) {
-        const auto& p = f.cloud[i];
-        const Eigen::Vector3d pv(p.x, p.y, p.z);
-        double u = 0, v = 0;
-        if (!f.camera.project(f.camera_from_velo * pv, 0.5, &u, &v) || u < 0 || v < 0 ||
-            u >= f.camera.width_px || v >= f.camera.height_px)
-          continue;
-        ++in_view;
-        for (const auto& l : f.labels)
-          if (l.type == "DontCare" && u >= l.bbox[0] && u <= l.bbox[2] && v >= l.bbox[1] &&
-              v <= l.bbox[3]) {
-            ++in_dontcare;
-            break;
-          }
-        ++hits[owner[i]];
-      }
-      if (2 * in_view < static_cast<int>(o.indices.size())) continue;  // not in the camera view
-      int label = -1, best_hits = 0;
-      for (const auto& [k, n] : hits)
-        if (k >= 0 && n > best_hits) best_hits = n, label = k;
-      const bool is_true = label >= 0 && 2 * best_hits >= in_view;
-      if (!is_true && 2 * in_dontcare > in_view) continue;  // DontCare region
-      const core::ObjectCategory truth =
-          is_true ? core::kittiTypeCategory(f.labels[static_cast<std::size_t>(label)].type)
-                  : core::ObjectCategory::kNonObject;
+      const core::KittiDetectionTruth t = core::kittiDetectionTruth(f, owner, o);
+      if (!t.scored) continue;
       const auto vit = std::lower_bound(
           votes.begin(), votes.end(), o.id,
           [](const core::ObjectClassVote& v, std::uint32_t i) { return v.object_id < i; });
@@ -761,24 +564,14 @@ int runKitti(int argc, char** argv) {
       relabel.relabel = true;
       const core::FusedClass fv = core::fuseObjectClass(o.category, o.class_confidence, e, veto);
       const core::FusedClass fr = core::fuseObjectClass(o.category, o.class_confidence, e, relabel);
-      auto count = [&](PrecisionCounts* c, core::ObjectCategory cat) {
-        if (cat == core::ObjectCategory::kNonObject) {
-          ++c->vetoed;
-          c->vetoed_true += is_true;
-          return;
-        }
-        ++c->kept;
-        c->true_objects += is_true;
-        c->class_correct += is_true && cat == truth;
-      };
-      count(&lidar_p, o.category);
-      count(&veto_p, fv.category);
-      count(&relabel_p, fr.category);
+      lidar_p.add(o.category, t);
+      veto_p.add(fv.category, t);
+      relabel_p.add(fr.category, t);
       detections_json << (detections_json.tellp() > 0 ? ",\n  " : "  ") << "{\"frame\": \"" << id
                       << "\", \"points\": " << o.indices.size() << ", \"range_m\": "
                       << ud::tools::jsonNumber(std::hypot(o.centroid.x(), o.centroid.y()))
                       << ", \"truth\": \""
-                      << (is_true ? f.labels[static_cast<std::size_t>(label)].type : "none")
+                      << (t.is_true ? f.labels[static_cast<std::size_t>(t.label)].type : "none")
                       << "\", \"lidar\": \"" << core::toString(o.category)
                       << "\", \"camera_best\": \"" << core::toString(e.best)
                       << "\", \"camera_share\": " << ud::tools::jsonNumber(e.best_share)
@@ -815,7 +608,7 @@ int runKitti(int argc, char** argv) {
   std::printf("\nin-view detections (hierarchical grid + LiDAR classifier), precision\n");
   std::printf("%-22s %5s %5s %7s %9s %7s %11s\n", "classes", "kept", "true", "P", "class ok",
               "P_class", "vetoed(true)");
-  const std::pair<const char*, const PrecisionCounts*> rows[] = {
+  const std::pair<const char*, const core::SparkPrecisionCounts*> rows[] = {
       {"lidar", &lidar_p}, {"fused (veto only)", &veto_p}, {"fused (veto+relabel)", &relabel_p}};
   for (const auto& [name, c] : rows)
     std::printf("%-22s %5d %5d %6.1f%% %9d %6.1f%% %7d(%d)\n", name, c->kept, c->true_objects,

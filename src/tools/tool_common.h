@@ -74,12 +74,8 @@ inline bool loadConfigs(const std::vector<std::string>& paths, core::PipelinePar
   return false;
 }
 
-/// `s` as the inside of a JSON string (core::jsonStringContent).
-inline std::string jsonEscape(const std::string& s) {
-  return core::jsonStringContent(s);
-}
-
 // The report and sweep helpers of the core, named here as the tools have always called them.
+using core::jsonEscape;
 using core::jsonNumber;
 using core::listSweeps;
 using core::median;

@@ -46,6 +46,7 @@
 #include "urban_detection/core/evaluation/datasets.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/evaluation/evaluation.h"
+#include "urban_detection/core/evaluation/feature_table.h"
 #include "urban_detection/core/evaluation/report.h"
 #include "urban_detection/core/evaluation/training.h"
 #include "urban_detection/core/pipeline/pipeline.h"
@@ -63,22 +64,6 @@ using core::TrainingScore;
 using urban_detection::tools::jsonEscape;
 
 namespace {
-
-std::string scoreRow(const core::DetectionScore& s) {
-  char b[160];
-  std::snprintf(b, sizeof b, "%5zu %5zu %5zu %9.3f %7.3f %7.3f", s.no, s.mo, s.fo, s.precision(),
-                s.recall(), s.fRate());
-  return b;
-}
-
-std::string scoreJson(const core::DetectionScore& s) {
-  std::ostringstream o;
-  o << "{\"no\": " << s.no << ", \"mo\": " << s.mo << ", \"fo\": " << s.fo
-    << ", \"precision\": " << jsonNumber(s.precision())
-    << ", \"recall\": " << jsonNumber(s.recall()) << ", \"f_rate\": " << jsonNumber(s.fRate())
-    << "}";
-  return o.str();
-}
 
 void usage() {
   std::fprintf(
@@ -274,17 +259,10 @@ int main(int argc, char** argv) {
   std::vector<TrainingFrame> frames;
   const bool augmenting = augment.person_copies > 0 || augment.vehicle_copies > 0;
   std::map<std::string, std::vector<core::LabelledScan>> scans_of_group;  // for augmentation
-  std::FILE* csv = nullptr;
-  if (!csv_path.empty()) {
-    csv = std::fopen(csv_path.c_str(), "w");
-    if (!csv) {
-      std::fprintf(stderr, "error: cannot write %s\n", csv_path.c_str());
-      return 1;
-    }
-    std::fprintf(csv, "sequence,frame,detector,label,verdict,content");
-    for (int k = 0; k < core::kNumObjectFeatures; ++k)
-      std::fprintf(csv, ",%s", core::featureName(k));
-    std::fprintf(csv, "\n");
+  core::FeatureCsvWriter csv(csv_path, "sequence,frame,detector,label,verdict,content");
+  if (!csv.ok()) {
+    std::fprintf(stderr, "error: cannot write %s\n", csv_path.c_str());
+    return 1;
   }
   core::Frame f;
   std::size_t read = 0;
@@ -301,14 +279,13 @@ int main(int argc, char** argv) {
     TrainingFrame fd =
         core::labelledTrainingFrame(f, dataset, core::frameGroup(f.id, dataset.name()), pipelines,
                                     pipelines.size(), &extractor, fragments);
-    for (std::size_t k = 0; k < fd.detectors.size() && csv; ++k) {
+    for (std::size_t k = 0; k < fd.detectors.size() && csv.enabled(); ++k) {
       const TrainingDetections& d = fd.detectors[k];
       for (std::size_t i = 0; i < d.objects.size(); ++i) {
-        std::fprintf(csv, "%s,%s,%s,%s,%s,%s", fd.group.c_str(), f.id.c_str(),
-                     pipelines[k]->detector().name().c_str(), core::toString(d.labels[i]),
-                     core::toString(d.verdicts[i]), d.contents[i].c_str());
-        for (const float v : d.features[i]) std::fprintf(csv, ",%.6g", v);
-        std::fprintf(csv, "\n");
+        csv.row(fd.group + "," + f.id + "," + pipelines[k]->detector().name() + "," +
+                    core::toString(d.labels[i]) + "," + core::toString(d.verdicts[i]) + "," +
+                    d.contents[i],
+                d.features[i]);
       }
     }
     fd.gt_range = core::gtObjectRanges(f.gt, f.cloud);
@@ -316,7 +293,6 @@ int main(int argc, char** argv) {
     fd.gt = std::move(f.gt);
     frames.push_back(std::move(fd));
   }
-  if (csv) std::fclose(csv);
   // Augmented examples: each sequence's objects copied into its own scans, so that they stay on
   // the training side of every leave-one-sequence-out split.
   std::size_t augmented_rows = 0;
@@ -344,23 +320,8 @@ int main(int argc, char** argv) {
   std::size_t sim_rows = 0;
   if (!sim_gt.empty()) {
     try {
-      core::SimulatedGroundTruthParams sgp;
-      sgp.min_points = 1;
-      core::SimulatedDriveDataset sim(sim_gt, sim_pcap, core::loadCalibration(""), 0.0, sgp);
-      core::Frame sf;
-      for (long n = 0; n < sim_frames; ++n) {
-        std::string err;
-        const auto status = sim.next(&sf, &err);
-        if (status == core::Dataset::Status::kEnd) break;
-        if (status == core::Dataset::Status::kSkipped) continue;
-        TrainingFrame fd =
-            core::labelledTrainingFrame(sf, sim, "sim", pipelines, 1, &extractor, fragments);
-        fd.id = "sim/" + sf.id;
-        fd.augmented = true;
-        fd.always_train = true;
-        for (const auto l : fd.detectors[0].labels) sim_rows += l != core::ObjectCategory::kUnknown;
-        frames.push_back(std::move(fd));
-      }
+      sim_rows = core::addSimTrainingFrames(sim_gt, sim_pcap, static_cast<std::size_t>(sim_frames),
+                                            pipelines, &extractor, fragments, &frames);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "error: %s\n", e.what());
       return 1;
@@ -418,24 +379,27 @@ int main(int argc, char** argv) {
       for (const std::string& g : groups) {
         std::printf("%-8s %-18s %-22s | %s | %s\n", g.c_str(),
                     pipelines[k]->detector().name().c_str(),
-                    core::decisionText(fold_decision[g]).c_str(), scoreRow(off[k][g].score).c_str(),
-                    scoreRow(on[k][g].score).c_str());
+                    core::decisionText(fold_decision[g]).c_str(),
+                    core::trainingScoreRow(off[k][g].score).c_str(),
+                    core::trainingScoreRow(on[k][g].score).c_str());
         json << (first ? "" : ", ") << "\"" << g
              << "\": {\"decision\": " << core::decisionJson(fold_decision[g])
-             << ", \"off\": " << scoreJson(off[k][g].score)
-             << ", \"on\": " << scoreJson(on[k][g].score) << "}";
+             << ", \"off\": " << core::trainingScoreJson(off[k][g].score)
+             << ", \"on\": " << core::trainingScoreJson(on[k][g].score) << "}";
         first = false;
       }
       std::printf("%-8s %-18s %-22s | %s | %s\n", "pooled", pipelines[k]->detector().name().c_str(),
-                  "", scoreRow(off_total[k].score).c_str(), scoreRow(on_total[k].score).c_str());
+                  "", core::trainingScoreRow(off_total[k].score).c_str(),
+                  core::trainingScoreRow(on_total[k].score).c_str());
       std::printf("%-8s %-18s %-22s | %s | %s\n", "N = 1", pipelines[k]->detector().name().c_str(),
-                  "", scoreRow(off_total[k].all).c_str(), scoreRow(on_total[k].all).c_str());
+                  "", core::trainingScoreRow(off_total[k].all).c_str(),
+                  core::trainingScoreRow(on_total[k].all).c_str());
       double min_f = 1.0;
       for (const std::string& g : groups) min_f = std::min(min_f, on[k][g].score.fRate());
-      json << "}, \"pooled_off\": " << scoreJson(off_total[k].score)
-           << ", \"pooled_on\": " << scoreJson(on_total[k].score)
-           << ", \"pooled_off_all_objects\": " << scoreJson(off_total[k].all)
-           << ", \"pooled_on_all_objects\": " << scoreJson(on_total[k].all)
+      json << "}, \"pooled_off\": " << core::trainingScoreJson(off_total[k].score)
+           << ", \"pooled_on\": " << core::trainingScoreJson(on_total[k].score)
+           << ", \"pooled_off_all_objects\": " << core::trainingScoreJson(off_total[k].all)
+           << ", \"pooled_on_all_objects\": " << core::trainingScoreJson(on_total[k].all)
            << ", \"breakdown_off\": " << off_total[k].breakdown.json()
            << ", \"breakdown_on\": " << on_total[k].breakdown.json()
            << ", \"min_sequence_f_on\": " << jsonNumber(min_f) << "}";
@@ -455,9 +419,9 @@ int main(int argc, char** argv) {
     std::printf("%-8s %-18s %-22s | %-43s | %s\n", "+ time",
                 pipelines[0]->detector().name().c_str(),
                 temporal_ok ? "tracker, poses" : "(some poses missing)", "",
-                scoreRow(on_time.score).c_str());
+                core::trainingScoreRow(on_time.score).c_str());
     std::printf("%-8s %-18s %-22s | %-43s | %s\n", "N = 1", pipelines[0]->detector().name().c_str(),
-                "", "", scoreRow(on_time.all).c_str());
+                "", "", core::trainingScoreRow(on_time.all).c_str());
     std::printf(
         "time as evidence: %zu detections rejected by their scan kept by their track's "
         "class, %zu kept ones given their track's class\n",
@@ -466,15 +430,15 @@ int main(int argc, char** argv) {
     for (const std::string& g : groups) {
       min_f_time = std::min(min_f_time, on_time_by_group[g].score.fRate());
     }
-    json << "  \"time_as_evidence\": {\"pooled\": " << scoreJson(on_time.score)
-         << ", \"pooled_all_objects\": " << scoreJson(on_time.all)
+    json << "  \"time_as_evidence\": {\"pooled\": " << core::trainingScoreJson(on_time.score)
+         << ", \"pooled_all_objects\": " << core::trainingScoreJson(on_time.all)
          << ", \"breakdown\": " << on_time.breakdown.json()
          << ", \"min_sequence_f\": " << jsonNumber(min_f_time)
          << ", \"kept_by_track_class\": " << temporal_stats.kept
          << ", \"class_from_track\": " << temporal_stats.reclassed << ", \"sequences\": {";
     for (std::size_t gi = 0; gi < groups.size(); ++gi) {
       json << (gi ? ", " : "") << "\"" << groups[gi]
-           << "\": " << scoreJson(on_time_by_group[groups[gi]].score);
+           << "\": " << core::trainingScoreJson(on_time_by_group[groups[gi]].score);
     }
     json << "}},\n";
     for (std::size_t k = 0; k < pipelines.size(); ++k) {
@@ -488,24 +452,9 @@ int main(int argc, char** argv) {
     // Pooled confusion matrix of the held-out predictions (hierarchical grid, each fold's
     // decision).
     const core::CategoryConfusion confusion = core::heldOutConfusion(frames, fold_decision);
-    std::printf("\nheld-out confusion (rows: label, columns: prediction), hierarchical grid\n%14s",
-                "");
-    for (int c = 0; c < core::kNumObjectCategories; ++c) {
-      std::printf(" %12s", core::toString(static_cast<core::ObjectCategory>(c)));
-    }
-    std::printf("\n");
-    json << "  \"confusion\": [";
-    for (int r = 0; r < core::kNumObjectCategories; ++r) {
-      std::printf("%14s", core::toString(static_cast<core::ObjectCategory>(r)));
-      json << (r ? ", " : "") << "[";
-      for (int c = 0; c < core::kNumObjectCategories; ++c) {
-        std::printf(" %12zu", confusion[r][c]);
-        json << (c ? ", " : "") << confusion[r][c];
-      }
-      json << "]";
-      std::printf("\n");
-    }
-    json << "],\n";
+    std::printf("\nheld-out confusion (rows: label, columns: prediction), hierarchical grid\n%s",
+                core::confusionTable(confusion).c_str());
+    json << "  \"confusion\": " << core::confusionJson(confusion) << ",\n";
     // 4. The shipped decision: chosen on the pooled held-out predictions.
     if (auto_threshold) {
       shipped_decision =

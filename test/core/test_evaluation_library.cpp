@@ -78,7 +78,8 @@ TEST(EvaluationReport, OrderStatisticsAndJson) {
   EXPECT_EQ(ud::jsonNumber(1.0 / 3.0), "0.333333");
   EXPECT_EQ(ud::jsonNumber(std::numeric_limits<double>::quiet_NaN()), "null");
   EXPECT_EQ(ud::jsonNumber(std::numeric_limits<double>::infinity()), "null");
-  EXPECT_EQ(ud::jsonStringContent("a\"b\\c\nd"), "a\\\"b\\\\cd");
+  EXPECT_EQ(ud::jsonEscape("a\"b\\c\nd"), "a\\\"b\\\\c\\u000ad");
+  EXPECT_EQ(ud::jsonEscape("plain/path_0.bin"), "plain/path_0.bin");
 }
 
 TEST(EvaluationReport, PlotNeedsARangeAndWritesAPng) {

@@ -228,6 +228,46 @@ TEST(Pipeline, FieldTableNestsEveryStage) {
   }
 }
 
+// The chain's first two stages, as the segmentation nodelet and the benchmarks run them with a
+// segmenter of their own: the labels and foreground process() gives, nothing detected.
+TEST(Pipeline, SegmentGivesTheLabelsAndForegroundOfProcess) {
+  const CloudXYZIRT cloud = street();
+  PipelineParams p;
+  Pipeline full(p);
+  const PipelineResult& r = full.process(cloud);
+  ASSERT_FALSE(r.objects.empty());
+  const std::vector<SegmentClass> labels = r.labels;
+  const LabeledCloud foreground = r.foreground;
+  ASSERT_GT(foreground.size(), 0u);
+
+  Pipeline seg_only(p);
+  const PipelineResult& s = seg_only.segment(cloud);
+  EXPECT_EQ(s.labels, labels);
+  ASSERT_EQ(s.foreground.size(), foreground.size());
+  for (std::size_t i = 0; i < foreground.size(); ++i) {
+    EXPECT_EQ(s.foreground[i].index, foreground[i].index);
+    EXPECT_EQ(s.foreground[i].x, foreground[i].x);
+  }
+  EXPECT_TRUE(s.objects.empty());
+  ASSERT_EQ(s.timings.size(), 2u);
+  EXPECT_STREQ(s.timings[0].name, "segmentation");
+  EXPECT_STREQ(s.timings[1].name, "foreground_extraction");
+
+  GridSegmenter own(p.segmentation);
+  std::vector<SegmentClass> own_labels;
+  LabeledCloud own_foreground;
+  segmentForeground(own, cloud, &own_labels, &own_foreground);
+  EXPECT_EQ(own_labels, labels);
+  EXPECT_EQ(own_foreground.size(), foreground.size());
+  // Without a foreground only the labels are made.
+  std::vector<SegmentClass> only_labels;
+  std::vector<StageTiming> timings;
+  segmentForeground(own, cloud, &only_labels, nullptr, &timings);
+  EXPECT_EQ(only_labels, labels);
+  ASSERT_EQ(timings.size(), 1u);
+  EXPECT_STREQ(timings[0].name, "segmentation");
+}
+
 }  // namespace
 }  // namespace core
 }  // namespace urban_detection

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <utility>
 
+#include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/sensor/kitti_io.h"
 
 namespace urban_detection {
@@ -73,6 +74,24 @@ bool PcapRevolutionSource::next(CloudXYZIRT* cloud, double* decode_ms, double* d
   *decode_cpu_ms = threadCpuMs() - c0;
   *decode_ms = msSince(t0);
   return true;
+}
+
+std::vector<std::unique_ptr<RevolutionSource>> openRevolutionSources(
+    const std::vector<std::string>& pcd_dirs, const std::vector<std::string>& bin_dirs,
+    const std::string& pcap, const std::string& calibration_path) {
+  std::vector<std::unique_ptr<RevolutionSource>> sources;
+  for (const bool pcd : {true, false}) {
+    for (const std::string& d : pcd ? pcd_dirs : bin_dirs) {
+      auto files = listFiles(d, pcd ? ".pcd" : ".bin");
+      if (files.empty())
+        std::fprintf(stderr, "warning: no %s files in %s\n", pcd ? ".pcd" : ".bin", d.c_str());
+      else
+        sources.emplace_back(new FileRevolutionSource(d, files, pcd));
+    }
+  }
+  if (!pcap.empty())
+    sources.emplace_back(new PcapRevolutionSource(pcap, loadCalibration(calibration_path)));
+  return sources;
 }
 
 }  // namespace core

@@ -153,5 +153,28 @@ bool readSweep(const std::string& path, CloudXYZIRT* cloud, std::string* error) 
   return ext == ".bin" ? readKittiBin(path, cloud, error) : readPcdXyzi(path, cloud, error);
 }
 
+const std::string& EvalDatasetSource::path() const {
+  if (!kitti_object_dir.empty()) return kitti_object_dir;
+  return semantic_kitti_dir.empty() ? sim_pcap : semantic_kitti_dir;
+}
+
+std::unique_ptr<Dataset> openEvalDataset(const EvalDatasetSource& source) {
+  if (!source.kitti_object_dir.empty()) {
+    KittiGroundTruthParams p;
+    p.min_points = 1;
+    return std::make_unique<KittiObjectDataset>(source.kitti_object_dir, p);
+  }
+  if (!source.semantic_kitti_dir.empty()) {
+    SemanticKittiGroundTruthParams p;
+    p.min_points = 1;
+    return std::make_unique<SemanticKittiDataset>(source.semantic_kitti_dir, p);
+  }
+  SimulatedGroundTruthParams p;
+  p.min_points = 1;
+  return std::make_unique<SimulatedDriveDataset>(source.sim_gt, source.sim_pcap,
+                                                 loadCalibration(source.calibration_path),
+                                                 source.cut_angle_deg, p);
+}
+
 }  // namespace core
 }  // namespace urban_detection

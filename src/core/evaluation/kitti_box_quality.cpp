@@ -111,6 +111,28 @@ std::vector<KittiBoxQuality::Row> KittiBoxQuality::rows() {
   return out;
 }
 
+std::string KittiBoxQuality::tables() const {
+  std::string out;
+  const std::pair<const char*, const std::vector<BoxQualitySample>*> tables[] = {
+      {"matched detections (the pipeline)", &samples_},
+      {"box fitting alone, on each labelled object's own points", &own_}};
+  for (const auto& t : tables) {
+    appendf(&out,
+            "\nbox quality (bird's-eye view) vs KITTI 3-D boxes, %s:\n"
+            "%-11s %-9s %8s %8s %10s %12s %9s %10s\n",
+            t.first, "class", "range", "labelled", "matched", "centre_m", "heading_deg", "IoU_med",
+            "IoU>=0.5");
+    for (const Row& r : rows()) {
+      const BoxQualitySummary s = summarize(*t.second, r.category, r.min_m, r.max_m, 0.5);
+      if (s.labelled == 0) continue;
+      appendf(&out, "%-11s %-9s %8zu %8zu %10.3f %12.2f %9.3f %10.3f\n", toString(r.category),
+              r.name.c_str(), s.labelled, s.matched, s.median_center_error_m,
+              s.median_heading_error_deg, s.median_iou, s.share_iou_at_least);
+    }
+  }
+  return out;
+}
+
 std::string KittiBoxQuality::json() const {
   return "{\"iou_threshold\": 0.5, \"detections\": " + jsonRows(samples_) +
          ", \"labelled_points\": " + jsonRows(own_) + "}";

@@ -34,18 +34,6 @@ std::string jsonNumber(double v) {
   return b;
 }
 
-/// `s` as the inside of a JSON string: quotes and backslashes escaped, control characters
-/// dropped.
-std::string jsonStringContent(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    o += c;
-  }
-  return o;
-}
-
 /// Writes a simple x/y plot (linear axes, grid, legend) to `png`. Returns false on failure.
 bool plotSeries(const std::string& png, const std::string& title, const std::string& xlabel,
                 const std::vector<Series>& series, double ymin, double ymax) {

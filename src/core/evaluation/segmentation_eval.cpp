@@ -277,7 +277,7 @@ bool writeSegmentationJson(const std::string& path, const std::string& dataset,
   FILE* f = std::fopen(path.c_str(), "w");
   if (!f) return false;
   std::fprintf(f, "{\n  \"dataset\": \"%s\",\n  \"path\": \"%s\",\n  \"frames\": %d",
-               dataset.c_str(), jsonStringContent(source).c_str(), on.frames);
+               dataset.c_str(), jsonEscape(source).c_str(), on.frames);
   const std::pair<const char*, SegGroup> shares[] = {{"car", SegGroup::kCar},
                                                      {"person", SegGroup::kPerson},
                                                      {"cyclist", SegGroup::kCyclist},

@@ -14,6 +14,7 @@
 #include "urban_detection/core/common/object_class.h"
 #include "urban_detection/core/evaluation/eval_datasets.h"
 #include "urban_detection/core/evaluation/report.h"
+#include "urban_detection/core/sensor/calibration.h"
 #include "urban_detection/core/sensor/kitti_io.h"
 #include "urban_detection/core/tracking/kitti_tracking.h"
 #include "urban_detection/core/tracking/tracker.h"
@@ -448,7 +449,7 @@ bool evaluateSemanticKittiTracking(const TrackingEvalParams& p, const std::strin
 
 std::string simTrackingJson(const SimTrackingResult& r, const std::string& pcap) {
   std::ostringstream out;
-  out << "{\n  \"dataset\": \"sim\",\n  \"pcap\": \"" << jsonStringContent(pcap)
+  out << "{\n  \"dataset\": \"sim\",\n  \"pcap\": \"" << jsonEscape(pcap)
       << "\",\n  \"revolutions\": " << r.frames << ",\n  \"tracker\": " << motJson(r.tracker)
       << ",\n  \"detector_alone\": " << motJson(r.detector)
       << ",\n  \"tracker_on_ground_truth_boxes\": " << motJson(r.oracle)
@@ -464,7 +465,7 @@ std::string simTrackingJson(const SimTrackingResult& r, const std::string& pcap)
 
 std::string kittiTrackingJson(const KittiTrackingEvalResult& r, const std::string& dir) {
   std::ostringstream out;
-  out << "{\n  \"dataset\": \"kitti_tracking\",\n  \"path\": \"" << jsonStringContent(dir)
+  out << "{\n  \"dataset\": \"kitti_tracking\",\n  \"path\": \"" << jsonEscape(dir)
       << "\",\n  \"sequences\": " << r.sequences << ",\n  \"tracker\": " << motJson(r.tracker)
       << "\n}\n";
   return out.str();
@@ -473,17 +474,94 @@ std::string kittiTrackingJson(const KittiTrackingEvalResult& r, const std::strin
 std::string semanticKittiTrackingJson(const SemanticKittiTrackingEvalResult& r,
                                       const std::string& dir, std::size_t min_gt_points) {
   std::ostringstream out;
-  out << "{\n  \"dataset\": \"semantic_kitti_tracking\",\n  \"path\": \"" << jsonStringContent(dir)
+  out << "{\n  \"dataset\": \"semantic_kitti_tracking\",\n  \"path\": \"" << jsonEscape(dir)
       << "\",\n  \"scans\": " << r.frames << ",\n  \"min_gt_points\": " << min_gt_points
       << ",\n  \"nominal_tr\": " << (r.nominal_tr ? "true" : "false")
       << ",\n  \"tracker\": " << motJson(r.tracker)
       << ",\n  \"detector_alone\": " << motJson(r.detector) << ",\n  \"by_sequence\": {";
   for (std::size_t k = 0; k < r.per_sequence.size(); ++k) {
-    out << (k ? ",\n    " : "\n    ") << "\"" << jsonStringContent(r.per_sequence[k].first)
+    out << (k ? ",\n    " : "\n    ") << "\"" << jsonEscape(r.per_sequence[k].first)
         << "\": " << motJson(r.per_sequence[k].second);
   }
   out << "\n  }\n}\n";
   return out.str();
+}
+
+std::string motLine(const char* what, const ClearMotResult& r) {
+  std::string out;
+  appendf(&out,
+          "%-28s frames %4zu  GT %6zu  GT tracks %4zu  MOTA %.3f  MOTP %.3f m  recall %.3f  "
+          "precision %.3f  FN %zu  FP %zu  IDSW %zu (%.2f per 100 GT tracks)  frag %zu  "
+          "MT %zu  PT %zu  ML %zu\n",
+          what, r.frames, r.gt, r.gt_tracks, r.mota(), r.motp_m(), r.recall(), r.precision(),
+          r.misses, r.false_positives, r.id_switches, r.idSwitchesPer100GtTracks(),
+          r.fragmentations, r.mostly_tracked, r.partially_tracked, r.mostly_lost);
+  return out;
+}
+
+bool runTrackingEvaluation(const TrackingEvalParams& p, const TrackingEvalInput& in,
+                           std::string* text, std::string* json, std::string* error) {
+  text->clear();
+  const char* classifier = p.params.classifier.enabled ? "on" : "off";
+  if (!in.kitti_tracking_dir.empty()) {
+    KittiTrackingEvalResult r;
+    if (!evaluateKittiTracking(p, in.kitti_tracking_dir, &r, error)) return false;
+    appendf(text,
+            "tracking on KITTI tracking (%zu sequences, %zu frames), sensor frame (no poses)\n",
+            r.sequences, r.frames);
+    *text += motLine("tracker (confirmed tracks)", r.tracker);
+    *json = kittiTrackingJson(r, in.kitti_tracking_dir);
+    return true;
+  }
+  if (!in.semantic_kitti_dir.empty()) {
+    SemanticKittiTrackingEvalResult r;
+    if (!evaluateSemanticKittiTracking(p, in.semantic_kitti_dir, &r, error)) return false;
+    appendf(text,
+            "tracking on SemanticKITTI (%zu sequences, %zu scans), world frame (poses.txt%s), "
+            "detector %s, classifier %s, min GT points %zu\n",
+            r.per_sequence.size(), r.frames, r.nominal_tr ? ", nominal Tr" : ", calib Tr",
+            p.params.detector.c_str(), classifier, p.min_gt_points);
+    for (const auto& s : r.per_sequence)
+      *text += motLine(("  sequence " + s.first).c_str(), s.second);
+    *text += motLine("tracker, pooled", r.tracker);
+    appendf(text, "%-28s recall %.3f  precision %.3f\n", "detector alone", r.detector.recall(),
+            r.detector.precision());
+    appendf(text, "tracker update: median %.4f ms per scan\n", median(r.update_ms));
+    *json = semanticKittiTrackingJson(r, in.semantic_kitti_dir, p.min_gt_points);
+    return true;
+  }
+  SimTrackingResult r;
+  try {
+    if (!evaluateSimTracking(p, in.sim_gt, in.sim_pcap, loadCalibration(in.calibration_path),
+                             in.cut_angle_deg, &r, error))
+      return false;
+  } catch (const std::exception& e) {
+    *error = e.what();
+    return false;
+  }
+  appendf(text,
+          "tracking on the simulated drive (%zu revolutions, %zu skipped), detector %s, "
+          "classifier %s\n",
+          r.frames, r.skipped, p.params.detector.c_str(), classifier);
+  *text += motLine("tracker (confirmed tracks)", r.tracker);
+  appendf(text,
+          "%-28s recall %.3f  precision %.3f  (MOTA <= recall of the tracks; the detector "
+          "bounds it unless coasting fills its gaps)\n",
+          "detector alone", r.detector.recall(), r.detector.precision());
+  *text += motLine("tracker on GT boxes", r.oracle);
+  appendf(text,
+          "speed error of matched moving cars/vans: median %.3f m/s, p90 %.3f m/s "
+          "(%zu matches); speed of matched parked cars/vans: median %.3f m/s, p90 %.3f m/s "
+          "(%zu)\n",
+          median(r.speed_error), percentile(r.speed_error, 0.9), r.speed_error.size(),
+          median(r.static_speed), percentile(r.static_speed, 0.9), r.static_speed.size());
+  appendf(text,
+          "tracker update: median %.4f ms, max %.4f ms per revolution (wall clock, with "
+          "the pipeline around it)\n",
+          median(r.update_ms),
+          r.update_ms.empty() ? 0.0 : *std::max_element(r.update_ms.begin(), r.update_ms.end()));
+  *json = simTrackingJson(r, in.sim_pcap);
+  return true;
 }
 
 }  // namespace core

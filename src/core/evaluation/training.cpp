@@ -433,5 +433,72 @@ LabelCounts trainingLabelCounts(const std::vector<TrainingFrame>& frames,
   return counts;
 }
 
+std::string confusionTable(const CategoryConfusion& confusion) {
+  std::string out;
+  appendf(&out, "%14s", "");
+  for (int c = 0; c < kNumObjectCategories; ++c)
+    appendf(&out, " %12s", toString(static_cast<ObjectCategory>(c)));
+  out += "\n";
+  for (int r = 0; r < kNumObjectCategories; ++r) {
+    appendf(&out, "%14s", toString(static_cast<ObjectCategory>(r)));
+    for (int c = 0; c < kNumObjectCategories; ++c) appendf(&out, " %12zu", confusion[r][c]);
+    out += "\n";
+  }
+  return out;
+}
+
+std::string confusionJson(const CategoryConfusion& confusion) {
+  std::ostringstream json;
+  json << "[";
+  for (int r = 0; r < kNumObjectCategories; ++r) {
+    json << (r ? ", " : "") << "[";
+    for (int c = 0; c < kNumObjectCategories; ++c) json << (c ? ", " : "") << confusion[r][c];
+    json << "]";
+  }
+  json << "]";
+  return json.str();
+}
+
+std::string trainingScoreRow(const DetectionScore& s) {
+  std::string out;
+  appendf(&out, "%5zu %5zu %5zu %9.3f %7.3f %7.3f", s.no, s.mo, s.fo, s.precision(), s.recall(),
+          s.fRate());
+  return out;
+}
+
+std::string trainingScoreJson(const DetectionScore& s) {
+  std::ostringstream o;
+  o << "{\"no\": " << s.no << ", \"mo\": " << s.mo << ", \"fo\": " << s.fo
+    << ", \"precision\": " << jsonNumber(s.precision())
+    << ", \"recall\": " << jsonNumber(s.recall()) << ", \"f_rate\": " << jsonNumber(s.fRate())
+    << "}";
+  return o.str();
+}
+
+std::size_t addSimTrainingFrames(const std::string& gt, const std::string& pcap,
+                                 std::size_t max_frames,
+                                 const std::vector<std::unique_ptr<Pipeline>>& pipelines,
+                                 ObjectFeatureExtractor* extractor, FragmentRule fragments,
+                                 std::vector<TrainingFrame>* frames) {
+  SimulatedGroundTruthParams sgp;
+  sgp.min_points = 1;
+  SimulatedDriveDataset sim(gt, pcap, loadCalibration(""), 0.0, sgp);
+  Frame sf;
+  std::size_t rows = 0;
+  for (std::size_t n = 0; n < max_frames; ++n) {
+    std::string err;
+    const auto status = sim.next(&sf, &err);
+    if (status == Dataset::Status::kEnd) break;
+    if (status == Dataset::Status::kSkipped) continue;
+    TrainingFrame fd = labelledTrainingFrame(sf, sim, "sim", pipelines, 1, extractor, fragments);
+    fd.id = "sim/" + sf.id;
+    fd.augmented = true;
+    fd.always_train = true;
+    for (const auto l : fd.detectors[0].labels) rows += l != ObjectCategory::kUnknown;
+    frames->push_back(std::move(fd));
+  }
+  return rows;
+}
+
 }  // namespace core
 }  // namespace urban_detection

@@ -308,13 +308,7 @@ const PipelineResult& Pipeline::process(const CloudXYZIRT& cloud,
                                         const Eigen::Isometry3d& world_T_sensor, double stamp_s,
                                         const DetectionsObserver& observer) {
   result_.timings.clear();
-  GridSegmenter& seg = segmenter();
-  const StageClock segmentation("segmentation");
-  seg.segment(cloud, &result_.labels);
-  segmentation.stop(&result_.timings);
-  const StageClock foreground("foreground_extraction");
-  extractForeground(cloud, result_.labels, &result_.foreground);
-  foreground.stop(&result_.timings);
+  segmentForeground(segmenter(), cloud, &result_.labels, &result_.foreground, &result_.timings);
   detectInto(result_.foreground, observer);
   if (tracker_) {
     const StageClock tracking("tracking");
@@ -323,6 +317,28 @@ const PipelineResult& Pipeline::process(const CloudXYZIRT& cloud,
   }
   result_.tracks = tracker_ ? &tracker_->tracks() : nullptr;
   return result_;
+}
+
+const PipelineResult& Pipeline::segment(const CloudXYZIRT& cloud) {
+  result_.timings.clear();
+  result_.objects.clear();
+  result_.rejected.clear();
+  result_.classification = ObjectClassifierStats();
+  result_.tracks = nullptr;
+  segmentForeground(segmenter(), cloud, &result_.labels, &result_.foreground, &result_.timings);
+  return result_;
+}
+
+void segmentForeground(GridSegmenter& segmenter, const CloudXYZIRT& cloud,
+                       std::vector<SegmentClass>* labels, LabeledCloud* foreground,
+                       std::vector<StageTiming>* timings) {
+  const StageClock segmentation("segmentation");
+  segmenter.segment(cloud, labels);
+  if (timings) segmentation.stop(timings);
+  if (!foreground) return;
+  const StageClock extraction("foreground_extraction");
+  extractForeground(cloud, *labels, foreground);
+  if (timings) extraction.stop(timings);
 }
 
 const PipelineResult& Pipeline::detect(const LabeledCloud& foreground,

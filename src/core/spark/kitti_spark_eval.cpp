@@ -1,7 +1,13 @@
 #include "urban_detection/core/spark/kitti_spark_eval.h"
 
+#include <algorithm>
 #include <cmath>
+#include <map>
+#include <numeric>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
+
+#include "urban_detection/core/evaluation/report.h"
 
 #include "urban_detection/core/sensor/kitti_io.h"
 
@@ -73,6 +79,92 @@ double kittiLabelRange(const KittiSparkFrame& f, const KittiLabel& l) {
   const Eigen::Vector3d centre = l.location - Eigen::Vector3d(0.0, 0.5 * l.height_m, 0.0);
   const Eigen::Vector3d v = f.calib.rectToVelo(centre);
   return std::hypot(v.x(), v.y());
+}
+
+cv::Mat kittiBoxOracleMask(const KittiSparkFrame& f, const std::vector<std::string>& names) {
+  std::vector<std::size_t> order(f.labels.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return f.labels[a].location.z() > f.labels[b].location.z();
+  });
+  cv::Mat mask(f.image.rows, f.image.cols, CV_8U, cv::Scalar(0));
+  for (const std::size_t k : order) {
+    const auto it = std::find(names.begin(), names.end(), f.labels[k].type);
+    if (it == names.end()) continue;
+    const auto& b = f.labels[k].bbox;
+    mask(cv::Rect(cv::Point(static_cast<int>(b[0]), static_cast<int>(b[1])),
+                  cv::Point(static_cast<int>(b[2]) + 1, static_cast<int>(b[3]) + 1)) &
+         cv::Rect(0, 0, mask.cols, mask.rows))
+        .setTo(static_cast<int>(it - names.begin()));
+  }
+  return mask;
+}
+
+std::vector<int> kittiPointOwners(const KittiSparkFrame& f) {
+  std::vector<int> owner(f.cloud.size(), -1);
+  for (std::size_t k = 0; k < f.labels.size(); ++k) {
+    if (f.labels[k].type == "DontCare") continue;
+    KittiLabel big = f.labels[k];
+    big.length_m += 0.2;
+    big.width_m += 0.2;
+    big.height_m += 0.1;
+    for (const std::size_t i : kittiBoxPoints(f, big, 0.0)) owner[i] = static_cast<int>(k);
+  }
+  return owner;
+}
+
+KittiDetectionTruth kittiDetectionTruth(const KittiSparkFrame& f, const std::vector<int>& owner,
+                                        const DetectedObject& o) {
+  KittiDetectionTruth t;
+  int in_view = 0, in_dontcare = 0;
+  std::map<int, int> hits;
+  for (const std::uint32_t i : o.indices) {
+    const auto& p = f.cloud[i];
+    const Eigen::Vector3d pv(p.x, p.y, p.z);
+    double u = 0, v = 0;
+    if (!f.camera.project(f.camera_from_velo * pv, 0.5, &u, &v) || u < 0 || v < 0 ||
+        u >= f.camera.width_px || v >= f.camera.height_px)
+      continue;
+    ++in_view;
+    for (const auto& l : f.labels)
+      if (l.type == "DontCare" && u >= l.bbox[0] && u <= l.bbox[2] && v >= l.bbox[1] &&
+          v <= l.bbox[3]) {
+        ++in_dontcare;
+        break;
+      }
+    ++hits[owner[i]];
+  }
+  if (2 * in_view < static_cast<int>(o.indices.size())) return t;  // not in the camera view
+  int best_hits = 0;
+  for (const auto& [k, n] : hits)
+    if (k >= 0 && n > best_hits) best_hits = n, t.label = k;
+  t.is_true = t.label >= 0 && 2 * best_hits >= in_view;
+  if (!t.is_true && 2 * in_dontcare > in_view) return t;  // DontCare region
+  t.scored = true;
+  if (t.is_true) t.truth = kittiTypeCategory(f.labels[static_cast<std::size_t>(t.label)].type);
+  return t;
+}
+
+void SparkPrecisionCounts::add(ObjectCategory given, const KittiDetectionTruth& t) {
+  if (given == ObjectCategory::kNonObject) {
+    ++vetoed;
+    vetoed_true += t.is_true;
+    return;
+  }
+  ++kept;
+  true_objects += t.is_true;
+  class_correct += t.is_true && given == t.truth;
+}
+
+std::string SparkPrecisionCounts::json() const {
+  std::ostringstream o;
+  o << "{\"kept\": " << kept << ", \"true\": " << true_objects
+    << ", \"class_correct\": " << class_correct << ", \"vetoed\": " << vetoed
+    << ", \"vetoed_true\": " << vetoed_true
+    << ", \"precision\": " << jsonNumber(kept ? static_cast<double>(true_objects) / kept : 0.0)
+    << ", \"class_precision\": "
+    << jsonNumber(kept ? static_cast<double>(class_correct) / kept : 0.0) << "}";
+  return o.str();
 }
 
 }  // namespace core

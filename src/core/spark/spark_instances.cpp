@@ -1,5 +1,8 @@
 #include "urban_detection/core/spark/spark_instances.h"
 
+#include "urban_detection/core/common/json.h"
+#include "urban_detection/core/spark/spark_io.h"
+
 #include <pcl/kdtree/kdtree_flann.h>
 
 #include <algorithm>
@@ -193,32 +196,7 @@ void cutOutClasses(const CloudXYZIRT& cloud, const std::vector<SparkInstance>& i
   }
 }
 
-std::string jsonEscape(const std::string& s) {
-  std::string out;
-  out.reserve(s.size() + 2);
-  for (const char ch : s) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += ch;
-    } else if (c < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += ch;
-    }
-  }
-  return out;
-}
-
 namespace {
-
-std::string className(const std::vector<std::string>& names, int id) {
-  if (id >= 0 && static_cast<std::size_t>(id) < names.size() && !names[id].empty())
-    return names[id];
-  return "class_" + std::to_string(id);
-}
 
 void writeVec(std::ostream& out, const Eigen::Vector3d& v) {
   out << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
@@ -252,7 +230,7 @@ bool writeInstancesJson(const std::string& path, const std::string& cloud_path,
     const SparkInstance& inst = instances[k];
     const Eigen::Vector3d lo = inst.min_pt.cast<double>(), hi = inst.max_pt.cast<double>();
     out << (k ? "," : "") << "\n    {\"id\": " << inst.id << ", \"class\": \""
-        << jsonEscape(className(class_names, inst.class_id))
+        << jsonEscape(sparkClassName(class_names, inst.class_id))
         << "\", \"class_id\": " << inst.class_id << ", \"point_count\": " << inst.indices.size()
         << ",\n     \"box\": {\"min\": ";
     writeVec(out, lo);

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -84,6 +85,14 @@ class PcapRevolutionSource : public RevolutionSource {
   std::vector<PcapPacket> revolution_;  // the current revolution's packets (reused)
   DecodeStats stats_;
 };
+
+/// The sources of a benchmark run in order: one FileRevolutionSource per folder of
+/// `pcd_dirs` (.pcd) and `bin_dirs` (.bin) that holds such files (a warning on stderr for one
+/// that does not), then the pcap when given (`calibration_path` empty: nominal). Throws
+/// std::runtime_error when the calibration cannot be loaded.
+std::vector<std::unique_ptr<RevolutionSource>> openRevolutionSources(
+    const std::vector<std::string>& pcd_dirs, const std::vector<std::string>& bin_dirs,
+    const std::string& pcap, const std::string& calibration_path);
 
 }  // namespace core
 }  // namespace urban_detection

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -109,6 +110,21 @@ class SimulatedDriveDataset : public Dataset {
 };
 
 /// The key with the largest count ("?" when empty; the first such key on ties).
+/// Where the frames of an evaluation come from: exactly one of a KITTI object folder, a
+/// SemanticKITTI folder, or a simulated drive (its ground-truth file and pcap, the calibration
+/// it was simulated with (empty: nominal) and the revolution cut).
+struct EvalDatasetSource {
+  std::string kitti_object_dir, semantic_kitti_dir, sim_gt, sim_pcap, calibration_path;
+  double cut_angle_deg = 0.0;
+  /// The folder or pcap the reports name.
+  const std::string& path() const;
+};
+
+/// The dataset of `source` with every labelled object kept (ground-truth min_points 1: the
+/// evaluator applies its own small-object rule). Throws std::runtime_error when the
+/// calibration cannot be loaded.
+std::unique_ptr<Dataset> openEvalDataset(const EvalDatasetSource& source);
+
 std::string mostCommon(const std::map<std::string, std::size_t>& counts);
 
 /// The dataset class most of a detection's points carry ("part_of_<label>" for GT points).

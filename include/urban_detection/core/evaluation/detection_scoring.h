@@ -67,5 +67,33 @@ std::string scoreJsonMembers(const DetectionScore& s);
 /// Counts by name as a JSON object.
 std::string countsJson(const std::map<std::string, std::size_t>& m);
 
+/// One evaluation run (urban_detection_eval) after its frames: what its reports are made of.
+struct EvalRunSummary {
+  std::string dataset;  // Dataset::name()
+  std::string path;     // the dataset's folder or file
+  std::size_t frames_evaluated = 0, frames_failed = 0;
+  EvaluationParams params;
+  bool classifier = false;       // the object classifier ran
+  std::string classifier_model;  // its model file
+  std::vector<std::string> configs;
+  std::vector<std::string> detectors;             // names, in the order of `scoring`
+  std::vector<const DetectorScoring*> scoring;    // one per detector
+  std::map<std::string, std::size_t> foreground;  // foreground points by dataset class
+};
+
+/// The F-rate table (classifier on and off, under min_points and N = 1), the recall breakdowns
+/// and the per-group lines, as urban_detection_eval prints them.
+std::string scoreTables(const EvalRunSummary& s);
+
+/// Per detector: what the classifier rejected and the class pairs (classifier on), the misses
+/// by cause and false detections by content, with `details` the false parts of objects.
+std::string diagnosticsLines(const EvalRunSummary& s, bool details);
+
+/// The JSON report: dataset, path, frame counts, min_iou, min_points, classifier, configs,
+/// detectors, `frame_rows` (the "frames" array's rows), overall, by_detector,
+/// foreground_points_by_class and, when not empty, `box_quality_json`.
+std::string evalReportJson(const EvalRunSummary& s, const std::string& frame_rows,
+                           const std::string& box_quality_json);
+
 }  // namespace core
 }  // namespace urban_detection

@@ -48,6 +48,10 @@ class KittiBoxQuality {
 
   /// The JSON object of `box_quality`.
   std::string json() const;
+  /// The two tables (matched detections, box fitting alone) as urban_detection_eval prints
+  /// them: per class and range bin labelled, matched, median centre and heading errors, median
+  /// IoU and the share with IoU >= 0.5 (bins without labelled objects left out).
+  std::string tables() const;
 
  private:
   std::string dir_;

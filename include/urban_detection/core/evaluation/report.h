@@ -1,12 +1,16 @@
 /// \file report.h
 /// What the evaluation and benchmark reports are made of: order statistics (percentile,
-/// median), JSON numbers and strings, and a minimal x/y line plot written as a PNG. ROS-free.
+/// median), JSON numbers (strings: common/json.h), and a minimal x/y line plot written as a PNG.
+/// ROS-free.
 #pragma once
 
+#include <cstdio>
 #include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
+
+#include "urban_detection/core/common/json.h"  // jsonEscape, with the reports
 
 namespace urban_detection {
 namespace core {
@@ -20,9 +24,16 @@ double median(std::vector<double> v);
 /// A JSON number with 6 significant digits, or null when `v` is not finite.
 std::string jsonNumber(double v);
 
-/// `s` as the inside of a JSON string: quotes and backslashes escaped, control characters
-/// dropped (the evaluation's reports; core/spark's jsonEscape writes them as \u00XX).
-std::string jsonStringContent(const std::string& s);
+/// printf into a string: appends the formatted text to `*out` (the reports' text tables).
+template <class... A>
+void appendf(std::string* out, const char* format, A... args) {
+  const int n = std::snprintf(nullptr, 0, format, args...);
+  if (n <= 0) return;
+  std::string text(static_cast<std::size_t>(n) + 1, '\0');
+  std::snprintf(text.data(), text.size(), format, args...);
+  text.resize(static_cast<std::size_t>(n));
+  *out += text;
+}
 
 /// One line (or dot set) of a plot.
 struct Series {

@@ -44,6 +44,7 @@
 #include <utility>
 #include <vector>
 
+#include "urban_detection/core/evaluation/datasets.h"
 #include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/sensor/calibration.h"
 #include "urban_detection/core/tracking/clear_mot.h"
@@ -104,6 +105,21 @@ std::string simTrackingJson(const SimTrackingResult& r, const std::string& pcap)
 std::string kittiTrackingJson(const KittiTrackingEvalResult& r, const std::string& dir);
 std::string semanticKittiTrackingJson(const SemanticKittiTrackingEvalResult& r,
                                       const std::string& dir, std::size_t min_gt_points);
+
+/// One CLEAR-MOT result as a line of the text summary, `what` in front.
+std::string motLine(const char* what, const ClearMotResult& r);
+
+/// The dataset of a tracking run: exactly one of a simulated drive, a SemanticKITTI folder
+/// (EvalDatasetSource; no KITTI object frames) or a KITTI tracking folder.
+struct TrackingEvalInput : EvalDatasetSource {
+  std::string kitti_tracking_dir;
+};
+
+/// The tracking evaluation of `in` (evaluateSimTracking, evaluateSemanticKittiTracking or
+/// evaluateKittiTracking): `text` the summary urban_detection_eval --tracking prints, `json`
+/// its report. False with `error` (nothing read, a calibration that cannot be loaded).
+bool runTrackingEvaluation(const TrackingEvalParams& p, const TrackingEvalInput& in,
+                           std::string* text, std::string* json, std::string* error);
 
 }  // namespace core
 }  // namespace urban_detection

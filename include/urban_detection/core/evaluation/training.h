@@ -189,6 +189,27 @@ using CategoryConfusion =
 CategoryConfusion heldOutConfusion(const std::vector<TrainingFrame>& frames,
                                    const std::map<std::string, ClassDecision>& fold_decision);
 
+/// The confusion as the text table urban_detection_train_classifier prints (a header line of
+/// the predictions, then one line per label) and as a JSON array of rows.
+std::string confusionTable(const CategoryConfusion& confusion);
+std::string confusionJson(const CategoryConfusion& confusion);
+
+/// A detection score as one row of the leave-one-sequence-out table ("NO MO FO P R F") and
+/// as a JSON object {"no", "mo", "fo", "precision", "recall", "f_rate"}.
+std::string trainingScoreRow(const DetectionScore& s);
+std::string trainingScoreJson(const DetectionScore& s);
+
+/// The first `max_frames` revolutions of a simulated drive (ground-truth file and pcap of
+/// urban_detection_simulate, nominal calibration) through pipelines[0] as training frames
+/// ("sim/<id>", group "sim", augmented: trained on in every fold, never scored), appended to
+/// `frames`. Returns the labelled rows added. Throws std::runtime_error when the drive cannot
+/// be read.
+std::size_t addSimTrainingFrames(const std::string& gt, const std::string& pcap,
+                                 std::size_t max_frames,
+                                 const std::vector<std::unique_ptr<Pipeline>>& pipelines,
+                                 ObjectFeatureExtractor* extractor, FragmentRule fragments,
+                                 std::vector<TrainingFrame>* frames);
+
 /// A labelled frame through the first `detectors` pipelines: pipelines[0] runs the whole chain
 /// on the cloud, the others detect on its foreground; every detection is scored against the
 /// frame's ground truth (default EvaluationParams), its features computed and its training

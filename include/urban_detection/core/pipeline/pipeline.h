@@ -140,6 +140,9 @@ class Pipeline {
   /// The same with the sensor's pose in a fixed frame at `stamp_s` (for the tracker).
   const PipelineResult& process(const CloudXYZIRT& cloud, const Eigen::Isometry3d& world_T_sensor,
                                 double stamp_s, const DetectionsObserver& observer = nullptr);
+  /// The chain's first two stages only: labels and foreground of the result (objects left
+  /// empty), as process() makes them. No tracking.
+  const PipelineResult& segment(const CloudXYZIRT& cloud);
   /// The chain after the segmentation, on a foreground made elsewhere (the labels and
   /// foreground of the result are left empty). No tracking.
   const PipelineResult& detect(const LabeledCloud& foreground,
@@ -191,6 +194,14 @@ class Pipeline {
   std::unique_ptr<Tracker> tracker_;
   PipelineResult result_;
 };
+
+/// The chain's first two stages with a segmenter held elsewhere (the segmentation nodelet's
+/// streaming one, the single-stage benchmarks): the class of every point of `cloud`, then the
+/// foreground (the detectors' input; skipped when `foreground` is null). Stage times are
+/// appended to `timings` when given. Pipeline::process() and segment() run this.
+void segmentForeground(GridSegmenter& segmenter, const CloudXYZIRT& cloud,
+                       std::vector<SegmentClass>* labels, LabeledCloud* foreground,
+                       std::vector<StageTiming>* timings = nullptr);
 
 /// The detector params.detector names, built from its parameters (throws std::invalid_argument).
 std::unique_ptr<ObjectDetector> makeDetector(const PipelineParams& params);

@@ -52,5 +52,36 @@ void kittiLabelObjects(const KittiSparkFrame& frame, LabeledCloud* points,
 /// [m] horizontal distance of a label from the LiDAR (its box centre).
 double kittiLabelRange(const KittiSparkFrame& frame, const KittiLabel& label);
 
+/// The "box oracle" segmentation: label k's 2-D box painted with the index of its type in
+/// `names` (types not in `names` left out), far boxes first so that near ones cover them;
+/// 0 elsewhere. The size of frame.image.
+cv::Mat kittiBoxOracleMask(const KittiSparkFrame& frame, const std::vector<std::string>& names);
+
+/// Per cloud point: the index of the label (not DontCare) whose box, grown by 20 cm in length
+/// and width and 10 cm in height, holds it (no ground band), else -1.
+std::vector<int> kittiPointOwners(const KittiSparkFrame& frame);
+
+/// The truth of one detection for the camera-fusion precision: made mostly of points in the
+/// camera view (`in_view`), true when most of those lie in one label's box (`label`, with the
+/// category of its type), left out (`scored` false) when out of view or, not true, mostly in
+/// DontCare rectangles.
+struct KittiDetectionTruth {
+  bool scored = false;
+  bool is_true = false;
+  int label = -1;  // index into frame.labels when is_true
+  ObjectCategory truth = ObjectCategory::kNonObject;
+};
+KittiDetectionTruth kittiDetectionTruth(const KittiSparkFrame& frame,
+                                        const std::vector<int>& owners, const DetectedObject& o);
+
+/// Precision counts of the in-view detections under one class rule (LiDAR only, fused).
+struct SparkPrecisionCounts {
+  int kept = 0, true_objects = 0, class_correct = 0, vetoed = 0, vetoed_true = 0;
+  /// One scored detection given category `given` (kNonObject: vetoed).
+  void add(ObjectCategory given, const KittiDetectionTruth& t);
+  /// {"kept", "true", "class_correct", "vetoed", "vetoed_true", "precision", "class_precision"}
+  std::string json() const;
+};
+
 }  // namespace core
 }  // namespace urban_detection

@@ -101,8 +101,5 @@ bool writeInstancesJson(const std::string& path, const std::string& cloud_path,
 bool writeCaptureRecordJson(const std::string& path, const std::string& image_file, int index,
                             const OrthoCamera& camera, std::string* error);
 
-/// Escapes a string for a JSON string literal (quotes, backslashes, control characters).
-std::string jsonEscape(const std::string& s);
-
 }  // namespace core
 }  // namespace urban_detection
