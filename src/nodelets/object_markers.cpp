@@ -27,7 +27,7 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
     const ros::NodeHandle pnh(getPrivateNodeHandle(), "markers");
     try {
       loadFields(pnh, &params_);
-      loadFields(getPrivateNodeHandle(), &params_);
+      loadFields(getPrivateNodeHandle(), &queue_params_);
     } catch (const ParamError& e) {
       return stage_.refuse(getNodeHandle(), getPrivateNodeHandle(), getName(),
                            "ObjectMarkers: " + std::string(e.what()) + "; the nodelet stays idle");
@@ -43,7 +43,8 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
     reconfigure_ = std::make_unique<Reconfigure>(pnh, initial, apply);
     ros::NodeHandle& nh = getNodeHandle();
     stage_.start(nh, getPrivateNodeHandle(), getName(), "markers", [this, nh]() mutable {
-      return nh.subscribe("objects", params_.queue_size, &ObjectMarkersNodelet::objectsCb, this);
+      return nh.subscribe("objects", queue_params_.queue_size, &ObjectMarkersNodelet::objectsCb,
+                          this);
     });
     pub_ = stage_.advertise<visualization_msgs::MarkerArray>(nh, "objects/markers", 2);
   }
@@ -63,7 +64,7 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
   using Reconfigure = ros_conv::ValidatedReconfigure<ObjectMarkersConfig>;
   ros_conv::ObjectMarkerParams params_;
   std::mutex params_mutex_;  // params_ between messages and reconfigure
-  ObjectQueueParams params_;
+  ObjectQueueParams queue_params_;
   std::unique_ptr<Reconfigure> reconfigure_;
   ros::Publisher pub_;
   LazyStage stage_;

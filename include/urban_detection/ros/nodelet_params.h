@@ -70,13 +70,27 @@ struct SimulatedSensorParams {
 };
 
 // No cross-field rules: the tables' ranges are the whole check (checkFields needs a validate()).
-inline std::string validate(const CloudInputParams&) { return ""; }
-inline std::string validate(const GridSegmentationNodeletParams&) { return ""; }
-inline std::string validate(const DetectorNodeletParams&) { return ""; }
-inline std::string validate(const ObjectTrackerNodeletParams&) { return ""; }
-inline std::string validate(const ObjectQueueParams&) { return ""; }
-inline std::string validate(const ObjectRecorderParams&) { return ""; }
-inline std::string validate(const SimulatedSensorParams&) { return ""; }
+inline std::string validate(const CloudInputParams&) {
+  return "";
+}
+inline std::string validate(const GridSegmentationNodeletParams&) {
+  return "";
+}
+inline std::string validate(const DetectorNodeletParams&) {
+  return "";
+}
+inline std::string validate(const ObjectTrackerNodeletParams&) {
+  return "";
+}
+inline std::string validate(const ObjectQueueParams&) {
+  return "";
+}
+inline std::string validate(const ObjectRecorderParams&) {
+  return "";
+}
+inline std::string validate(const SimulatedSensorParams&) {
+  return "";
+}
 
 }  // namespace ros_conv
 }  // namespace urban_detection
