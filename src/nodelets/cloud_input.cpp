@@ -22,6 +22,7 @@
 
 #include "urban_detection/core/sensor/hdl64e_packet.h"
 #include "urban_detection/ros/lazy_stage.h"
+#include "urban_detection/ros/nodelet_params.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/pointcloud2_input.h"
 
@@ -33,14 +34,13 @@ class CloudInputNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     try {
-      loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
-      loadParam(getPrivateNodeHandle(), "max_points", &max_points_, 1, 100000000, "points");
+      loadFields(getPrivateNodeHandle(), &params_);
     } catch (const ParamError& e) {
       return stage_.refuse(nh, getPrivateNodeHandle(), getName(),
                            "CloudInput: " + std::string(e.what()) + "; the nodelet stays idle");
     }
     stage_.start(nh, getPrivateNodeHandle(), getName(), "cloud input", [this, nh]() mutable {
-      return nh.subscribe("points_in", queue_size_, &CloudInputNodelet::cloudCb, this,
+      return nh.subscribe("points_in", params_.queue_size, &CloudInputNodelet::cloudCb, this,
                           ros::TransportHints().tcpNoDelay());
     });
     pub_ = stage_.advertise<CloudXYZIRT>(nh, "velodyne_points", 2);
@@ -52,9 +52,9 @@ class CloudInputNodelet : public nodelet::Nodelet {
     diagnostics.input(msg->header.seq);
     const std::uint64_t points = static_cast<std::uint64_t>(msg->width) * msg->height;
     std::string error;
-    if (points > static_cast<std::uint64_t>(max_points_)) {  // before any allocation of ours
+    if (points > static_cast<std::uint64_t>(params_.max_points)) {  // before any allocation of ours
       error = "too many points: " + std::to_string(points) + " (max_points " +
-              std::to_string(max_points_) + ")";
+              std::to_string(params_.max_points) + ")";
     }
     auto cloud = boost::make_shared<CloudXYZIRT>();
     ros_conv::PointCloud2InputInfo info;
@@ -76,10 +76,7 @@ class CloudInputNodelet : public nodelet::Nodelet {
     stage_.published(start);
   }
 
-  int queue_size_ = 2;
-  // Three revolutions at 300 rpm, as PacketToCloud's max_packets_per_scan.
-  int max_points_ = static_cast<int>(core::RevolutionBoundary::kMaxPacketsPerRevolution *
-                                     core::kBlocksPerPacket * core::kLasersPerBlock);
+  CloudInputParams params_;
   ros::Publisher pub_;
   LazyStage stage_;
 };

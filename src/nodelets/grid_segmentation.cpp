@@ -25,6 +25,7 @@
 #include "urban_detection/core/pipeline/pipeline.h"
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 #include "urban_detection/ros/lazy_outputs.h"
+#include "urban_detection/ros/nodelet_params.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 #include "urban_detection/ros/stage_thread.h"
@@ -47,8 +48,7 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
     core::GridSegmenterParams params;
     std::string error;
     try {
-      loadParam(pnh, "queue_size", &queue_size_, 1, 100, "messages");
-      loadParam(pnh, "stream_sectors", &stream_sectors_);
+      loadFields(pnh, &nodelet_params_);
     } catch (const ParamError& e) {
       error = e.what();
     }
@@ -87,11 +87,11 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
         sector_sub_.shutdown();
         return sub_.shutdown();
       }
-      sub_ =
-          thread_->handle(getNodeHandle())
-              .subscribe("velodyne_points", queue_size_, &GridSegmentationNodelet::cloudCb, this);
+      sub_ = thread_->handle(getNodeHandle())
+                 .subscribe("velodyne_points", nodelet_params_.queue_size,
+                            &GridSegmentationNodelet::cloudCb, this);
       // Same thread, so a revolution's sectors are binned before its cloud arrives.
-      if (stream_sectors_) {
+      if (nodelet_params_.stream_sectors) {
         sector_sub_ =
             thread_->handle(getNodeHandle())
                 .subscribe("velodyne_points/sectors", 64, &GridSegmentationNodelet::sectorCb, this);
@@ -149,9 +149,8 @@ class GridSegmentationNodelet : public nodelet::Nodelet {
   using Reconfigure = ros_conv::ValidatedReconfigure<GridSegmentationConfig>;
   std::unique_ptr<core::GridSegmenter> segmenter_;
   std::mutex segment_mutex_;  // segmenter_ between frames and reconfigure
-  int queue_size_ = 2;
-  bool stream_sectors_ = true;  // bin velodyne_points/sectors as they arrive
-  bool sectors_seen_ = false;   // a sector arrived (PacketSource publishes them)
+  GridSegmentationNodeletParams nodelet_params_;
+  bool sectors_seen_ = false;  // a sector arrived (PacketSource publishes them)
   std::unique_ptr<Reconfigure> reconfigure_;
   std::unique_ptr<ros_conv::StageDiagnostics> diagnostics_;
   std::unique_ptr<ros_conv::RefusalDiagnostics> refusal_;  // set when it refused to start

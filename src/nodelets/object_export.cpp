@@ -11,6 +11,7 @@
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/Detection3DArray.h"
 #include "urban_detection/ros/lazy_stage.h"
+#include "urban_detection/ros/nodelet_params.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/standard_outputs.h"
 
@@ -22,13 +23,13 @@ class ObjectExportNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     try {
-      loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
+      loadFields(getPrivateNodeHandle(), &params_);
     } catch (const ParamError& e) {
       return stage_.refuse(nh, getPrivateNodeHandle(), getName(),
                            "ObjectExport: " + std::string(e.what()) + "; the nodelet stays idle");
     }
     stage_.start(nh, getPrivateNodeHandle(), getName(), "export", [this, nh]() mutable {
-      return nh.subscribe("objects", queue_size_, &ObjectExportNodelet::objectsCb, this);
+      return nh.subscribe("objects", params_.queue_size, &ObjectExportNodelet::objectsCb, this);
     });
     pub_ = stage_.advertise<Detection3DArray>(nh, "objects/detections3d", 2);
   }
@@ -42,7 +43,7 @@ class ObjectExportNodelet : public nodelet::Nodelet {
     stage_.published(start, objects->header.stamp);
   }
 
-  int queue_size_ = 2;
+  ObjectQueueParams params_;
   ros::Publisher pub_;
   LazyStage stage_;
 };

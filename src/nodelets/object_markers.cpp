@@ -12,6 +12,7 @@
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/ObjectMarkersConfig.h"
 #include "urban_detection/ros/lazy_stage.h"
+#include "urban_detection/ros/nodelet_params.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/tunable_fields.h"
@@ -26,7 +27,7 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
     const ros::NodeHandle pnh(getPrivateNodeHandle(), "markers");
     try {
       loadFields(pnh, &params_);
-      loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
+      loadFields(getPrivateNodeHandle(), &queue_params_);
     } catch (const ParamError& e) {
       return stage_.refuse(getNodeHandle(), getPrivateNodeHandle(), getName(),
                            "ObjectMarkers: " + std::string(e.what()) + "; the nodelet stays idle");
@@ -42,7 +43,8 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
     reconfigure_ = std::make_unique<Reconfigure>(pnh, initial, apply);
     ros::NodeHandle& nh = getNodeHandle();
     stage_.start(nh, getPrivateNodeHandle(), getName(), "markers", [this, nh]() mutable {
-      return nh.subscribe("objects", queue_size_, &ObjectMarkersNodelet::objectsCb, this);
+      return nh.subscribe("objects", queue_params_.queue_size, &ObjectMarkersNodelet::objectsCb,
+                          this);
     });
     pub_ = stage_.advertise<visualization_msgs::MarkerArray>(nh, "objects/markers", 2);
   }
@@ -62,7 +64,7 @@ class ObjectMarkersNodelet : public nodelet::Nodelet {
   using Reconfigure = ros_conv::ValidatedReconfigure<ObjectMarkersConfig>;
   ros_conv::ObjectMarkerParams params_;
   std::mutex params_mutex_;  // params_ between messages and reconfigure
-  int queue_size_ = 2;
+  ObjectQueueParams queue_params_;
   std::unique_ptr<Reconfigure> reconfigure_;
   ros::Publisher pub_;
   LazyStage stage_;

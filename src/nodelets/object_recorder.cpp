@@ -23,6 +23,7 @@
 
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/ros/cloud_serialization.h"
+#include "urban_detection/ros/nodelet_params.h"
 #include "urban_detection/ros/object_recording.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/stage_diagnostics.h"
@@ -34,11 +35,9 @@ class ObjectRecorderNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    int first_index = 0;
     try {
-      loadParam(pnh, "output_dir", &output_dir_);
-      loadParam(pnh, "first_index", &first_index, 0, 99999999, "");
-      loadParam(pnh, "queue_size", &queue_size_, 1, 100, "messages");
+      loadFields(pnh, &params_);
+      output_dir_ = params_.output_dir;
       if (output_dir_.empty())
         throw ParamError("parameter '" + pnh.resolveName("output_dir") +
                          "' must name a folder to write into");
@@ -54,14 +53,15 @@ class ObjectRecorderNodelet : public nodelet::Nodelet {
           "ObjectRecorder: " + std::string(e.what()) + "; the nodelet stays idle");
       return;
     }
-    next_ = static_cast<std::uint64_t>(first_index);
+    next_ = static_cast<std::uint64_t>(params_.first_index);
     csv_.open(output_dir_ + "/objects.csv");
     csv_ << csvHeader() << '\n';
     diagnostics_ =
         std::make_unique<ros_conv::StageDiagnostics>(getNodeHandle(), pnh, getName(), "recorder");
     ros::NodeHandle& nh = getNodeHandle();
     cloud_sub_ = nh.subscribe("velodyne_points", 10, &ObjectRecorderNodelet::cloudCb, this);
-    objects_sub_ = nh.subscribe("objects", queue_size_, &ObjectRecorderNodelet::objectsCb, this);
+    objects_sub_ =
+        nh.subscribe("objects", params_.queue_size, &ObjectRecorderNodelet::objectsCb, this);
     NODELET_INFO("ObjectRecorder: writing revolutions into %s", output_dir_.c_str());
   }
 
@@ -119,8 +119,8 @@ class ObjectRecorderNodelet : public nodelet::Nodelet {
     diagnostics_->output();
   }
 
-  std::string output_dir_;
-  int queue_size_ = 10;
+  ObjectRecorderParams params_;
+  std::string output_dir_;  // params_.output_dir
   std::uint64_t next_ = 0;  // number of the next revolution written
   std::ofstream csv_;
   std::mutex mutex_;                                         // sizes_

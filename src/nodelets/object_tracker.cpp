@@ -23,6 +23,7 @@
 #include "urban_detection/ObjectTrackerConfig.h"
 #include "urban_detection/TrackedObjectArray.h"
 #include "urban_detection/ros/lazy_outputs.h"
+#include "urban_detection/ros/nodelet_params.h"
 #include "urban_detection/ros/object_tracking.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/stage_diagnostics.h"
@@ -41,8 +42,8 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
     try {
       loadFields(tnh, &params);
       loadFields(ros::NodeHandle(pnh, "markers"), &marker_params_);
-      loadParam(pnh, "fixed_frame", &fixed_frame_);
-      loadParam(pnh, "queue_size", &queue_size_, 1, 100, "messages");
+      loadFields(pnh, &params_);
+      fixed_frame_ = params_.fixed_frame;
     } catch (const ParamError& e) {
       refusal_ = ros_conv::RefusalDiagnostics::report(
           getNodeHandle(), pnh, getName(),
@@ -69,8 +70,8 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
     lazy_ = std::make_unique<ros_conv::LazyOutputs>([this](bool wanted) {
       diagnostics_->setActive(wanted);
       if (!wanted) return sub_.shutdown();
-      sub_ =
-          getNodeHandle().subscribe("objects", queue_size_, &ObjectTrackerNodelet::objectsCb, this);
+      sub_ = getNodeHandle().subscribe("objects", params_.queue_size,
+                                       &ObjectTrackerNodelet::objectsCb, this);
     });
     ros::NodeHandle& nh = getNodeHandle();
     tracks_pub_ = lazy_->advertise<TrackedObjectArray>(nh, "objects/tracked", 2);
@@ -223,7 +224,7 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
   static constexpr double kRestartGraceS = 1.0;   // [s] of stamps at a (re)start: tf may lag
   static constexpr double kRestartTfWaitS = 0.2;  // [s] wait for tf then
   std::set<std::uint32_t> arrows_;                // tracks whose velocity arrow is shown
-  int queue_size_ = 2;
+  ObjectTrackerNodeletParams params_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<Reconfigure> reconfigure_;

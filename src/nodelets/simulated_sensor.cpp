@@ -14,6 +14,7 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "urban_detection/core/simulation/simulation_config.h"
+#include "urban_detection/ros/nodelet_params.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/simulation_conversions.h"
 #include "urban_detection/ros/stage_diagnostics.h"
@@ -39,38 +40,34 @@ class SimulatedSensorNodelet : public nodelet::Nodelet {
     diagnostics_.reset(new ros_conv::StageDiagnostics(nh, getPrivateNodeHandle(), getName(),
                                                       "simulation", "revolutions_simulated"));
     diagnostics_->setHardwareId("simulated HDL-64E");
-    if (realtime_) diagnostics_->setExpectedRate(config_.sensor.rpm / 60.0 * rate_factor_);
+    if (params_.realtime)
+      diagnostics_->setExpectedRate(config_.sensor.rpm / 60.0 * params_.rate_factor);
     running_ = true;
     worker_ = std::thread(&SimulatedSensorNodelet::run, this);
   }
 
   bool loadParams() {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    std::string config_path;
-    if (!pnh.getParam("config", config_path) || config_path.empty()) {
-      refusal_ = ros_conv::RefusalDiagnostics::report(
-          getNodeHandle(), getPrivateNodeHandle(), getName(),
-          "SimulatedSensor: parameter ~config (path of a drive YAML such as "
-          "config/demo_drive.yaml) is required; the nodelet stays idle");
-      return false;
-    }
-    bool first_packet = false;  // header.stamp convention of velodyne_driver (and PacketSource)
     try {  // type-checked: a wrong type is refused, never replaced by the default
-      loadParam(pnh, "realtime", &realtime_);
-      loadParam(pnh, "rate_factor", &rate_factor_, 1e-3, 100.0);
-      loadParam(pnh, "loop", &loop_);
-      loadParam(pnh, "publish_tf", &publish_tf_);
-      loadParam(pnh, "timestamp_first_packet", &first_packet);
-      loadParam(pnh, "frame_id", &frames_.sensor);
-      loadParam(pnh, "odom_frame", &frames_.odom);
-      loadParam(pnh, "base_frame", &frames_.base_link);
+      loadFields(pnh, &params_);
     } catch (const ParamError& e) {
       refusal_ = ros_conv::RefusalDiagnostics::report(
           getNodeHandle(), getPrivateNodeHandle(), getName(),
           "SimulatedSensor: " + std::string(e.what()) + "; the nodelet stays idle");
       return false;
     }
-    stamp_ = first_packet ? ScanStamp::kFirstPacket : ScanStamp::kLastPacket;
+    const std::string& config_path = params_.config;
+    if (config_path.empty()) {
+      refusal_ = ros_conv::RefusalDiagnostics::report(
+          getNodeHandle(), getPrivateNodeHandle(), getName(),
+          "SimulatedSensor: parameter ~config (path of a drive YAML such as "
+          "config/demo_drive.yaml) is required; the nodelet stays idle");
+      return false;
+    }
+    stamp_ = params_.timestamp_first_packet ? ScanStamp::kFirstPacket : ScanStamp::kLastPacket;
+    frames_.sensor = params_.frame_id;
+    frames_.odom = params_.odom_frame;
+    frames_.base_link = params_.base_frame;
     try {
       config_ = core::loadSimulationConfig(config_path);
       calibration_ = core::loadCalibration(config_.calibration_file);
@@ -101,16 +98,16 @@ class SimulatedSensorNodelet : public nodelet::Nodelet {
         diagnostics_->input();
         diagnostics_->frame((ros::WallTime::now() - start).toSec());
         const double rev_s = 60.0 / c.sensor.rpm;
-        if (realtime_) {  // publish when the revolution's last packet would have arrived
+        if (params_.realtime) {  // publish when the revolution's last packet would have arrived
           const ros::WallTime due =
-              wall0 + ros::WallDuration((rev.start_time_s + rev_s) / rate_factor_);
+              wall0 + ros::WallDuration((rev.start_time_s + rev_s) / params_.rate_factor);
           const ros::WallDuration wait = due - ros::WallTime::now();
           if (wait > ros::WallDuration(0.0)) wait.sleep();
-          if (wait < ros::WallDuration(-rev_s / rate_factor_)) {  // the machine is too slow
+          if (wait < ros::WallDuration(-rev_s / params_.rate_factor)) {  // the machine is too slow
             diagnostics_->count("late_revolutions");
           }
         }
-        if (publish_tf_) publishTf(sim, rev, rev_s, first);
+        if (params_.publish_tf) publishTf(sim, rev, rev_s, first);
         first = false;
         auto scan = boost::make_shared<VelodyneScan>();
         ros_conv::toScanMsg(rev, frames_.sensor, scan.get(), stamp_);
@@ -122,11 +119,11 @@ class SimulatedSensorNodelet : public nodelet::Nodelet {
           ros_conv::toGroundTruthMsg(rev, frames_.sensor, gt.get(), stamp_);
           gt_pub_.publish(boost::shared_ptr<const GroundTruth>(gt));
         }
-        if (!realtime_ && rev.stats.returns == 0) {
+        if (!params_.realtime && rev.stats.returns == 0) {
           NODELET_WARN_THROTTLE(5.0, "SimulatedSensor: a revolution without any return");
         }
       }
-      if (!loop_) break;
+      if (!params_.loop) break;
     }
   }
 
@@ -147,9 +144,8 @@ class SimulatedSensorNodelet : public nodelet::Nodelet {
   core::SimulationConfig config_;
   core::Calibration calibration_;
   ros_conv::SimulationFrames frames_;
-  bool realtime_ = true, loop_ = true, publish_tf_ = true;
+  SimulatedSensorParams params_;
   ScanStamp stamp_ = ScanStamp::kLastPacket;  // header.stamp of scans and ground truth
-  double rate_factor_ = 1.0;
   ros::Publisher scan_pub_, gt_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_tf_;

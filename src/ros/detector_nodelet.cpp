@@ -11,6 +11,7 @@
 #include "urban_detection/DetectedObjectArray.h"
 #include "urban_detection/ros/detection_params.h"
 #include "urban_detection/ros/lazy_outputs.h"
+#include "urban_detection/ros/nodelet_params.h"
 #include "urban_detection/ros/object_conversions.h"
 #include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/tunable_fields.h"
@@ -21,12 +22,13 @@ namespace ros_conv {
 void DetectorNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   try {
-    loadParam(getPrivateNodeHandle(), "queue_size", &queue_size_, 1, 100, "messages");
-    loadParam(getPrivateNodeHandle(), "thread_nice", &thread_nice_, 0, 19,
-              "(nice value of the stage's thread, 0 = the manager's)");
-    getPrivateNodeHandle().param("thread_idle", thread_idle_, false);
-    getPrivateNodeHandle().param("best_effort", best_effort_, false);
-    loadParam(getPrivateNodeHandle(), "early_objects", &early_objects_);
+    DetectorNodeletParams settings;  // the nodelet's own settings (nodelet_params.h)
+    loadFields(getPrivateNodeHandle(), &settings);
+    queue_size_ = settings.queue_size;
+    thread_nice_ = settings.thread_nice;
+    thread_idle_ = settings.thread_idle;
+    best_effort_ = settings.best_effort;
+    early_objects_ = settings.early_objects;
     std::unique_ptr<core::ObjectDetector> detector = createDetector(getPrivateNodeHandle());
     core::PipelineParams params;  // the chain after the segmentation (its own nodelet)
     params.detector = detector->name();

@@ -17,18 +17,6 @@ void readOptional(const ros::NodeHandle& nh, const std::string& name, T* value,
 
 }  // namespace
 
-void loadParam(const ros::NodeHandle& nh, const std::string& name, double* value, double min,
-               double max, const std::string& unit) {
-  readOptional(nh, name, value, "a number");
-  checkRange(nh.resolveName(name), *value, min, max, unit);
-}
-
-void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value, int min, int max,
-               const std::string& unit) {
-  readOptional(nh, name, value, "an integer");
-  checkRange(nh.resolveName(name), *value, min, max, unit);
-}
-
 void loadParam(const ros::NodeHandle& nh, const std::string& name, double* value) {
   readOptional(nh, name, value, "a number");
 }

@@ -9,8 +9,10 @@
 
 #include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/pipeline/early_objects.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 #include "urban_detection/core/spark/camera_model.h"
 #include "urban_detection/core/spark/spark_capture.h"
+#include "urban_detection/ros/nodelet_params.h"
 #include "urban_detection/ros/object_markers.h"
 #include "urban_detection/ros/object_tracking.h"
 #include "urban_detection/ros/packet_params.h"
@@ -91,5 +93,26 @@ int main(int argc, char** argv) {
   section<ros_conv::TrackMarkerParams>(
       "Track markers (ObjectTracker)",
       "`config/object_tracker.yaml`, map `markers:`; nodelet parameters `~markers/<name>`.");
+  section<ros_conv::CloudInputParams>("Cloud input (CloudInput)", "nodelet parameters `~<name>`.");
+  section<ros_conv::GridSegmentationNodeletParams>(
+      "Segmentation nodelet (GridSegmentation)",
+      "nodelet parameters `~<name>`, besides the segmentation's above.");
+  section<ros_conv::DetectorNodeletParams>(
+      "Detector nodelets (HierarchicalGridDetector, KdTreeDetector)",
+      "nodelet parameters `~<name>`, besides the detector's, classifier's and box fitting's.");
+  section<ros_conv::ObjectTrackerNodeletParams>(
+      "Tracker nodelet (ObjectTracker)", "nodelet parameters `~<name>`, besides `~tracker/`.");
+  section<ros_conv::ObjectQueueParams>("Object markers and export (ObjectMarkers, ObjectExport)",
+                                       "nodelet parameters `~<name>`.");
+  section<ros_conv::ObjectRecorderParams>("Object recorder (ObjectRecorder)",
+                                          "nodelet parameters `~<name>`.");
+  section<ros_conv::SimulatedSensorParams>(
+      "Simulated sensor (SimulatedSensor)",
+      "nodelet parameters `~<name>`; `config` names the drive file below.");
+  section<core::SimulationConfig>(
+      "Simulated drive (SimulatedSensor, urban_detection_simulate)",
+      "`config/demo_drive.yaml` (the file's nested maps: `scene/buildings/depth_m` is "
+      "`scene: {buildings: {depth_m: ...}}`; `scene/sections` is a list of maps, one per "
+      "section, each with the `scene/sections[]/` keys); `urban_detection_simulate --config`.");
   return 0;
 }

@@ -12,6 +12,7 @@
 
 #include "urban_detection/core/params/params_yaml.h"
 #include "urban_detection/core/sensor/hdl64e_packet.h"
+#include "urban_detection/core/simulation/simulation_config.h"
 #include "urban_detection/core/spark/camera_fusion.h"
 #include "urban_detection/core/spark/camera_model.h"
 #include "urban_detection/core/spark/image_label_transfer.h"
@@ -32,7 +33,7 @@ using Structs =
                      ObjectClassifierParams, TrackerParams, CameraFusionParams,
                      ImageLabelTransferParams, PipelineParams, ObjectFeatureParams,
                      ClassifierTrainingParams, SegmentationModelParams, CameraModelParams,
-                     CameraStageParams, DecoderParams>;
+                     CameraStageParams, DecoderParams, SimulationConfig, StreetSection>;
 TYPED_TEST_SUITE(FieldTable, Structs);
 
 // Unique names, a description each, finite ordered ranges around the in-class default.
@@ -59,6 +60,14 @@ TYPED_TEST(FieldTable, IsWellFormedAndHoldsTheDefaults) {
       EXPECT_TRUE(std::isfinite(info.min) && std::isfinite(info.max)) << info.name;
       for (const double v : value) {
         EXPECT_TRUE(v >= info.min && v <= info.max) << info.name << ": default outside its range";
+      }
+    } else if constexpr (kPointList<T>) {
+      EXPECT_TRUE(std::isfinite(info.min) && std::isfinite(info.max)) << info.name;
+      for (const auto& point : value) {
+        for (int k = 0; k < point.size(); ++k) {
+          EXPECT_TRUE(point[k] >= info.min && point[k] <= info.max)
+              << info.name << ": default outside its range";
+        }
       }
     } else {
       EXPECT_TRUE(std::isinf(info.min) && std::isinf(info.max))

@@ -318,8 +318,46 @@ TEST(SimConfig, DemoDriveFileParsesAndTyposAreRejected) {
     ud::parseSimulationConfig("scene: {sections: [{type: roundabout}]}");
     FAIL() << "unknown section type accepted";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("sections[0].type"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("scene/sections[0]/type"), std::string::npos) << e.what();
   }
+  // Every key goes through the field tables: a wrong type, an out-of-range value and an unknown
+  // key inside a section are refused naming the key.
+  const auto refusal = [](const std::string& yaml) {
+    try {
+      ud::parseSimulationConfig(yaml, "drive.yaml");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(refusal("scene: {sections: [{type: street}, {length_m: long}]}")
+                .find("drive.yaml: scene/sections[1]/length_m: wrong type"),
+            std::string::npos)
+      << refusal("scene: {sections: [{type: street}, {length_m: long}]}");
+  EXPECT_NE(refusal("scene: {sections: [{road_half_width_m: 25}]}")
+                .find("parameter 'scene/sections[0]/road_half_width_m' = 25 is out of range"),
+            std::string::npos)
+      << refusal("scene: {sections: [{road_half_width_m: 25}]}");
+  EXPECT_NE(refusal("scene: {sections: [{type: street}, {lenght_m: 30}]}")
+                .find("scene/sections[1]/lenght_m: unknown parameter"),
+            std::string::npos)
+      << refusal("scene: {sections: [{type: street}, {lenght_m: 30}]}");
+  EXPECT_NE(refusal("scene: {sections: {type: street}}").find("scene/sections"), std::string::npos);
+  EXPECT_NE(refusal("drive: {waypoints: [[0, 0, 1], [5, 0]]}").find("drive/waypoints[0]"),
+            std::string::npos);
+  EXPECT_NE(refusal("scene: {objects: {pedestrians: -1}}").find("scene/objects/pedestrians"),
+            std::string::npos);
+  EXPECT_NE(refusal("sensor: {calibration: [1, 2]}").find("sensor/calibration: wrong type"),
+            std::string::npos);
+  // A list of sections replaces the default list; unspecified fields keep their defaults.
+  const ud::SimulationConfig two = ud::parseSimulationConfig(
+      "scene: {sections: [{type: intersection, length_m: 12}, {sidewalk_width_m: 2}]}");
+  ASSERT_EQ(two.scene.sections.size(), 2u);
+  EXPECT_EQ(two.scene.sections[0].type, ud::StreetSection::Type::kIntersection);
+  EXPECT_DOUBLE_EQ(two.scene.sections[0].length_m, 12.0);
+  EXPECT_EQ(two.scene.sections[1].type, ud::StreetSection::Type::kStreet);
+  EXPECT_DOUBLE_EQ(two.scene.sections[1].sidewalk_width_m, 2.0);
+  EXPECT_DOUBLE_EQ(two.scene.sections[1].length_m, ud::StreetSection().length_m);
   EXPECT_THROW(ud::parseSimulationConfig("drive: {waypoints: [[0, 0]]}"), std::invalid_argument);
   EXPECT_THROW(ud::parseSimulationConfig("drive: {speed_mps: abc}"), std::invalid_argument);
   EXPECT_NO_THROW(ud::parseSimulationConfig(""));

@@ -398,11 +398,16 @@ TEST(Reconfigure, OutOfRangeParametersAtStartFailNamingParameterAndRange) {
   ros::param::set("/bad_kd/detector/kdtree/min_cluster_size", 0);
   ros::param::set("/bad_mk/markers/markers/box_alpha", 1.5);
   ros::param::set("/bad_seg/segmentation/queue_size", 0);
+  // The nodelets' own settings come from their tables too (nodelet_params.h): range and type.
+  ros::param::set("/bad_ex/export/queue_size", 0);
+  ros::param::set("/bad_idle/detector/thread_idle", std::string("yes"));
   nodelet::Loader manager(false);
   manager.load("/bad_hg/detector", "urban_detection/HierarchicalGridDetector", {}, {});
   manager.load("/bad_kd/detector", "urban_detection/KdTreeDetector", {}, {});
   manager.load("/bad_mk/markers", "urban_detection/ObjectMarkers", {}, {});
   manager.load("/bad_seg/segmentation", "urban_detection/GridSegmentation", {}, {});
+  manager.load("/bad_ex/export", "urban_detection/ObjectExport", {}, {});
+  manager.load("/bad_idle/detector", "urban_detection/HierarchicalGridDetector", {}, {});
   EXPECT_TRUE(waitFor(
       [&] {
         return rosout.contains(rosgraph_msgs::Log::FATAL,
@@ -415,14 +420,20 @@ TEST(Reconfigure, OutOfRangeParametersAtStartFailNamingParameterAndRange) {
                                "accepted [0, 1]") &&
                rosout.contains(rosgraph_msgs::Log::FATAL,
                                "'/bad_seg/segmentation/queue_size' = 0 is out of range: "
-                               "accepted [1, 100] messages");
+                               "accepted [1, 100] messages") &&
+               rosout.contains(rosgraph_msgs::Log::FATAL,
+                               "'/bad_ex/export/queue_size' = 0 is out of range: "
+                               "accepted [1, 100] messages") &&
+               rosout.contains(rosgraph_msgs::Log::FATAL,
+                               "parameter '/bad_idle/detector/thread_idle' must be");
       },
       10.0));
   // The manager (this process) keeps running; the nodelets advertise nothing.
   ros::master::V_TopicInfo topics;
   ASSERT_TRUE(ros::master::getTopics(topics));
   for (const auto& t : topics) {
-    for (const char* ns : {"/bad_hg/", "/bad_kd/", "/bad_mk/", "/bad_seg/"}) {
+    for (const char* ns :
+         {"/bad_hg/", "/bad_kd/", "/bad_mk/", "/bad_seg/", "/bad_ex/", "/bad_idle/"}) {
       EXPECT_NE(t.name.rfind(ns, 0), 0u) << t.name << " advertised by a nodelet that failed";
     }
   }

@@ -39,15 +39,11 @@ void checkRange(const std::string& name, T value, T min, T max, const std::strin
   throw ParamError(outOfRangeMessage(name, value, min, max, unit));
 }
 
-/// Reads `name` (relative to `nh`, usually the private node handle) into `*value` when set, then
-/// checks the range. A parameter of the wrong type is an error, not silently ignored.
-void loadParam(const ros::NodeHandle& nh, const std::string& name, double* value, double min,
-               double max, const std::string& unit = "");
-void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value, int min, int max,
-               const std::string& unit = "");
+/// Reads `name` (relative to `nh`, usually the private node handle) into `*value` when set. A
+/// parameter of the wrong type is an error, not silently ignored. Ranges are checked from the
+/// field tables afterwards (loadFields below), never here.
 void loadParam(const ros::NodeHandle& nh, const std::string& name, bool* value);
 void loadParam(const ros::NodeHandle& nh, const std::string& name, std::string* value);
-/// Type-checked only (for structs whose ranges are checked as a whole afterwards).
 void loadParam(const ros::NodeHandle& nh, const std::string& name, double* value);
 void loadParam(const ros::NodeHandle& nh, const std::string& name, int* value);
 

@@ -43,18 +43,11 @@ void require(bool ok, const std::string& what) {
 }  // namespace
 
 void validate(const SimSensorParams& s) {
-  require(s.rpm >= 300.0 && s.rpm <= 1200.0, "sensor.rpm must be in [300, 1200]");
-  require(s.height_m >= 0.3 && s.height_m <= 5.0, "sensor.height_m must be in [0.3, 5] m");
-  require(s.range_noise_m >= 0.0 && s.range_noise_m <= 0.5,
-          "sensor.range_noise_m must be in [0, 0.5] m");
-  require(s.dropout_probability >= 0.0 && s.dropout_probability <= 1.0,
-          "sensor.dropout_probability must be in [0, 1]");
-  require(s.min_range_m >= 0.0 && s.max_range_m > s.min_range_m && s.max_range_m <= 130.0,
-          "sensor: need 0 <= min_range_m < max_range_m <= 130 m");
-  require(std::isfinite(s.start_stamp_s) && s.start_stamp_s >= 0.0,
-          "sensor.start_stamp_s must be a finite epoch time >= 0");
-  require(s.cut_angle_deg >= 0.0 && s.cut_angle_deg < 360.0,
-          "sensor.cut_angle_deg must be in [0, 360)");
+  const std::string range =
+      checkFieldRanges(s, [](const std::string& name) { return "sensor/" + name; });
+  require(range.empty(), range);
+  require(s.max_range_m > s.min_range_m, "sensor: need min_range_m < max_range_m");
+  require(s.cut_angle_deg < 360.0, "parameter 'sensor/cut_angle_deg' must be < 360");
 }
 
 LidarSimulator::LidarSimulator(Scene scene, const SceneParams& scene_params,

@@ -930,103 +930,36 @@ std::vector<StreetSection> SceneParams::defaultSections() {
 }
 
 void validate(const SceneParams& p) {
-  require(!p.sections.empty(), "scene.sections: at least one section is required");
-  for (std::size_t i = 0; i < p.sections.size(); ++i) {
-    const StreetSection& s = p.sections[i];
-    const std::string n = "scene.sections[" + std::to_string(i) + "].";
-    require(s.length_m >= 5.0 && s.length_m <= 2000.0, n + "length_m must be in [5, 2000] m");
-    require(s.road_half_width_m >= 2.0 && s.road_half_width_m <= 20.0,
-            n + "road_half_width_m must be in [2, 20] m");
-    require(s.sidewalk_width_m >= 0.5 && s.sidewalk_width_m <= 20.0,
-            n + "sidewalk_width_m must be in [0.5, 20] m");
-  }
-  require(std::abs(p.slope) <= 0.15, "scene.slope must be in [-0.15, 0.15]");
-  require(p.camber >= 0.0 && p.camber <= 0.08, "scene.camber must be in [0, 0.08]");
-  require(p.curb_height_m >= 0.0 && p.curb_height_m <= 0.4,
-          "scene.curb_height_m must be in [0, 0.4] m");
-  require(p.terrain_width_m >= 1.0 && p.terrain_width_m <= 200.0,
-          "scene.terrain_width_m must be in [1, 200] m");
+  const std::string range =
+      checkFieldRanges(p, [](const std::string& name) { return "scene/" + name; });
+  require(range.empty(), range);
+  require(!p.sections.empty(), "scene/sections: at least one section is required");
   const BuildingParams& b = p.buildings;
-  require(b.length_min_m >= 2.0 && b.length_max_m >= b.length_min_m,
-          "scene.buildings: need 2 <= length_min_m <= length_max_m");
-  require(b.height_min_m >= 2.0 && b.height_max_m >= b.height_min_m,
-          "scene.buildings: need 2 <= height_min_m <= height_max_m");
-  require(b.gap_min_m > 0.0 && b.gap_max_m >= b.gap_min_m,
-          "scene.buildings: need 0 < gap_min_m <= gap_max_m");
-  require(b.depth_m >= 1.0 && b.recess_max_m >= 0.5,
-          "scene.buildings: depth_m >= 1, recess_max_m >= 0.5");
+  require(b.length_max_m >= b.length_min_m, "scene/buildings: need length_min_m <= length_max_m");
+  require(b.height_max_m >= b.height_min_m, "scene/buildings: need height_min_m <= height_max_m");
+  require(b.gap_max_m >= b.gap_min_m, "scene/buildings: need gap_min_m <= gap_max_m");
   const StreetObjectParams& o = p.objects;
-  require(o.parked_gap_min_m > 0.0 && o.parked_gap_max_m >= o.parked_gap_min_m,
-          "scene.objects: need 0 < parked_gap_min_m <= parked_gap_max_m");
-  require(o.moving_cars >= 0 && o.pedestrians >= 0 && o.cyclists >= 0 && o.signs >= 0 &&
-              o.bins >= 0 && o.benches >= 0,
-          "scene.objects: object counts must be >= 0");
-  require(o.tree_spacing_m >= 3.0 && o.pole_spacing_m >= 3.0,
-          "scene.objects: tree_spacing_m and pole_spacing_m must be >= 3 m");
-  require(o.pedestrians <= 1000 && o.moving_cars <= 1000 && o.cyclists <= 1000,
-          "scene.objects: at most 1000 objects of a kind");
+  require(o.parked_gap_max_m >= o.parked_gap_min_m,
+          "scene/objects: need parked_gap_min_m <= parked_gap_max_m");
   const VegetationParams& v = p.vegetation;
-  auto in = [](double x, double lo, double hi) { return x >= lo && x <= hi; };
-  for (const auto& f : {std::make_pair(v.verge_probability, "verge_probability"),
-                        std::make_pair(v.hedge_probability, "hedge_probability"),
-                        std::make_pair(v.hedge_transmission, "hedge_transmission"),
-                        std::make_pair(v.bush_transmission, "bush_transmission"),
-                        std::make_pair(v.crown_transmission, "crown_transmission")}) {
-    require(in(f.first, 0.0, 1.0),
-            std::string("scene.vegetation.") + f.second + " must be in [0, 1]");
-  }
-  for (const auto& f : {std::make_pair(v.hedge_penetration_m, "hedge_penetration_m"),
-                        std::make_pair(v.bush_penetration_m, "bush_penetration_m"),
-                        std::make_pair(v.crown_penetration_m, "crown_penetration_m")}) {
-    require(in(f.first, 0.0, 2.0),
-            std::string("scene.vegetation.") + f.second + " must be in [0, 2] m");
-  }
-  require(in(v.verge_offset_m, 0.0, 2.0), "scene.vegetation.verge_offset_m must be in [0, 2] m");
-  require(in(v.verge_width_m, 0.3, 5.0), "scene.vegetation.verge_width_m must be in [0.3, 5] m");
-  require(in(v.verge_step_max_m, 0.0, 0.3),
-          "scene.vegetation.verge_step_max_m must be in [0, 0.3] m");
-  require(v.verge_bush_spacing_m >= 2.0, "scene.vegetation.verge_bush_spacing_m must be >= 2 m");
-  require(in(v.terrain_tile_m, 0.25, 5.0),
-          "scene.vegetation.terrain_tile_m must be in [0.25, 5] m");
-  require(in(v.terrain_roughness_m, 0.0, 0.2),
-          "scene.vegetation.terrain_roughness_m must be in [0, 0.2] m");
-  require(in(v.terrain_tilt_deg, 0.0, 10.0),
-          "scene.vegetation.terrain_tilt_deg must be in [0, 10] deg");
-  require(in(v.garden_depth_m, 0.5, 20.0),
-          "scene.vegetation.garden_depth_m must be in [0.5, 20] m");
-  require(in(v.garden_step_max_m, 0.0, 0.5),
-          "scene.vegetation.garden_step_max_m must be in [0, 0.5] m");
-  require(v.hedge_height_min_m >= 0.3 && v.hedge_height_max_m >= v.hedge_height_min_m &&
-              v.hedge_height_max_m <= 4.0,
-          "scene.vegetation: need 0.3 <= hedge_height_min_m <= hedge_height_max_m <= 4 m");
-  require(v.hedge_width_min_m >= 0.3 && v.hedge_width_max_m >= v.hedge_width_min_m &&
-              v.hedge_width_max_m <= 3.0,
-          "scene.vegetation: need 0.3 <= hedge_width_min_m <= hedge_width_max_m <= 3 m");
-  require(v.hedge_gap_spacing_m >= 2.0, "scene.vegetation.hedge_gap_spacing_m must be >= 2 m");
-  require(v.bush_spacing_m >= 1.0, "scene.vegetation.bush_spacing_m must be >= 1 m");
-  require(v.facade_shrub_spacing_m >= 1.0,
-          "scene.vegetation.facade_shrub_spacing_m must be >= 1 m");
-  require(v.bush_height_min_m >= 0.2 && v.bush_height_max_m >= v.bush_height_min_m &&
-              v.bush_height_max_m <= 4.0,
-          "scene.vegetation: need 0.2 <= bush_height_min_m <= bush_height_max_m <= 4 m");
-  require(v.garden_tree_spacing_m >= 4.0, "scene.vegetation.garden_tree_spacing_m must be >= 4 m");
-  require(v.canopy_lobes_min >= 0 && v.canopy_lobes_max >= v.canopy_lobes_min &&
-              v.canopy_lobes_max <= 12,
-          "scene.vegetation: need 0 <= canopy_lobes_min <= canopy_lobes_max <= 12");
-  require(in(v.canopy_overhang_max_m, 1.0, 8.0),
-          "scene.vegetation.canopy_overhang_max_m must be in [1, 8] m");
-  require(v.canopy_clearance_min_m >= 1.0 && v.canopy_clearance_max_m >= v.canopy_clearance_min_m &&
-              v.canopy_clearance_max_m <= 8.0,
-          "scene.vegetation: need 1 <= canopy_clearance_min_m <= canopy_clearance_max_m <= 8 m");
+  require(v.hedge_height_max_m >= v.hedge_height_min_m,
+          "scene/vegetation: need hedge_height_min_m <= hedge_height_max_m");
+  require(v.hedge_width_max_m >= v.hedge_width_min_m,
+          "scene/vegetation: need hedge_width_min_m <= hedge_width_max_m");
+  require(v.bush_height_max_m >= v.bush_height_min_m,
+          "scene/vegetation: need bush_height_min_m <= bush_height_max_m");
+  require(v.canopy_lobes_max >= v.canopy_lobes_min,
+          "scene/vegetation: need canopy_lobes_min <= canopy_lobes_max");
+  require(v.canopy_clearance_max_m >= v.canopy_clearance_min_m,
+          "scene/vegetation: need canopy_clearance_min_m <= canopy_clearance_max_m");
 }
 
 void validate(const DriveParams& d) {
-  require(d.waypoints.size() >= 2, "drive.waypoints: at least two [x, y] points are required");
-  for (const auto& w : d.waypoints) {
-    require(w.allFinite(), "drive.waypoints: coordinates must be finite");
-  }
-  require(d.length() > 0.0, "drive.waypoints: the path must have a non-zero length");
-  require(d.speed_mps >= 0.0 && d.speed_mps <= 40.0, "drive.speed_mps must be in [0, 40] m/s");
+  const std::string range =
+      checkFieldRanges(d, [](const std::string& name) { return "drive/" + name; });
+  require(range.empty(), range);
+  require(d.waypoints.size() >= 2, "drive/waypoints: at least two [x, y] points are required");
+  require(d.length() > 0.0, "drive/waypoints: the path must have a non-zero length");
 }
 
 Scene generateScene(const SceneParams& scene, const DriveParams& drive) {

@@ -17,10 +17,13 @@
 /// const struct) calling `f(FieldInfo{...}, p.member)` for every field in order; nested
 /// parameter structs are visited with forEachField(p.sub, "sub", f), which names their fields
 /// "sub/field". Fields are double, int, bool, std::string, std::vector<double>,
-/// std::vector<std::string>, std::array<double, N> or an enum. Ranges apply to the numbers and to
-/// each element of a std::array (inclusive); an enum field is written as one of the names its
-/// FieldInfo::choice() lists (the names of its values 0, 1, 2, ... in order); the other types
-/// take any value of their type.
+/// std::vector<std::string>, std::array<double, N>, an enum, a list of fixed-size points
+/// (std::vector of a fixed-size Eigen vector, e.g. waypoints) or a list of tabled structs
+/// (std::vector<S> with a ParamFields<S>; its elements' fields are named "list[i]/field").
+/// Ranges apply to the numbers, to each element of a std::array and to each coordinate of a
+/// point (inclusive); an enum field is written as one of the names its FieldInfo::choice() lists
+/// (the names of its values 0, 1, 2, ... in order); the elements of a list of structs are checked
+/// against their own table; the other types take any value of their type.
 #pragma once
 
 #include <array>
@@ -96,6 +99,30 @@ struct IsRangedArray<std::array<double, N>> : std::true_type {};
 template <class T>
 constexpr bool kRangedArray = IsRangedArray<T>::value;
 
+/// True for types with a field table (a ParamFields specialisation declared before the use).
+template <class T, class = void>
+struct HasFieldTable : std::false_type {};
+template <class T>
+struct HasFieldTable<T, std::void_t<decltype(sizeof(ParamFields<T>))>> : std::true_type {};
+
+/// True for lists of tabled structs (std::vector<S>, S with a field table).
+template <class T>
+struct IsTabledList : std::false_type {};
+template <class S, class A>
+struct IsTabledList<std::vector<S, A>> : HasFieldTable<S> {};
+template <class T>
+constexpr bool kTabledList = IsTabledList<T>::value;
+
+/// True for lists of fixed-size points (std::vector of a fixed-size Eigen vector): the range
+/// applies to each coordinate.
+template <class T, class = void>
+struct IsPointList : std::false_type {};
+template <class V, class A>
+struct IsPointList<std::vector<V, A>, std::void_t<decltype(V::SizeAtCompileTime)>>
+    : std::bool_constant<(V::SizeAtCompileTime > 0)> {};
+template <class T>
+constexpr bool kPointList = IsPointList<T>::value;
+
 /// The name of enum `value` in `info.choices` ("" when it has none).
 template <class E>
 std::string choiceName(const FieldInfo& info, E value) {
@@ -155,6 +182,22 @@ std::string checkFieldRanges(const Params& params, Shown shown) {
                                     info.min, info.max, info.unit);
         }
       }
+    } else if constexpr (kPointList<T>) {
+      for (std::size_t i = 0; i < value.size() && error.empty(); ++i) {
+        for (int k = 0; k < value[i].size() && error.empty(); ++k) {
+          if (!(value[i][k] >= info.min && value[i][k] <= info.max)) {
+            error = outOfRangeMessage(
+                shown(info.name) + "[" + std::to_string(i) + "][" + std::to_string(k) + "]",
+                static_cast<double>(value[i][k]), info.min, info.max, info.unit);
+          }
+        }
+      }
+    } else if constexpr (kTabledList<T>) {
+      for (std::size_t i = 0; i < value.size() && error.empty(); ++i) {
+        const std::string element = shown(info.name) + "[" + std::to_string(i) + "]/";
+        error = checkFieldRanges(value[i],
+                                 [&element](const std::string& name) { return element + name; });
+      }
     } else if constexpr (std::is_enum_v<T>) {
       if (error.empty() && choiceName(info, value).empty()) {
         error = badChoiceMessage(shown(info.name), std::to_string(static_cast<long long>(value)),
@@ -170,15 +213,12 @@ std::string checkFieldRanges(const Params& params) {
   return checkFieldRanges(params, [](const std::string& name) { return name; });
 }
 
-/// The Markdown table of `params`' fields (name, default = the value in `params`, range, unit,
-/// description): docs/parameters.md is made of these (urban_detection_params).
+/// The rows of fieldTableMarkdown() for `params`, names prefixed by `prefix`.
 template <class Params>
-std::string fieldTableMarkdown(const Params& params) {
-  std::ostringstream md;
-  md << "| parameter | default | range | unit | description |\n|---|---|---|---|---|\n";
-  forEachField(params, [&md](const FieldInfo& info, const auto& value) {
+void fieldTableRows(const Params& params, const std::string& prefix, std::ostringstream& md) {
+  forEachField(params, [&md, &prefix](const FieldInfo& info, const auto& value) {
     using T = std::decay_t<decltype(value)>;
-    md << "| `" << info.name << "` | ";
+    md << "| `" << prefix << info.name << "` | ";
     if constexpr (std::is_same_v<T, bool>) {
       md << (value ? "true" : "false") << " | | | ";
     } else if constexpr (std::is_same_v<T, std::string>) {
@@ -193,6 +233,11 @@ std::string fieldTableMarkdown(const Params& params) {
       md << "[";
       for (std::size_t i = 0; i < value.size(); ++i) md << (i ? ", " : "") << value[i];
       md << "] | [" << info.min << ", " << info.max << "] each | " << info.unit << " | ";
+    } else if constexpr (kPointList<T>) {
+      md << value.size() << " points | [" << info.min << ", " << info.max << "] each | "
+         << info.unit << " | ";
+    } else if constexpr (kTabledList<T>) {
+      md << value.size() << " entries | | | ";
     } else if constexpr (std::is_enum_v<T>) {
       md << choiceName(info, value) << " | ";
       for (std::size_t i = 0; i < info.choices.size(); ++i)
@@ -203,7 +248,21 @@ std::string fieldTableMarkdown(const Params& params) {
          << "] | " << info.unit << " | ";
     }
     md << info.description << " |\n";
+    if constexpr (kTabledList<T>) {
+      fieldTableRows(typename T::value_type(), prefix + info.name + "[]/", md);
+    }
   });
+}
+
+/// The Markdown table of `params`' fields (name, default = the value in `params`, range, unit,
+/// description): docs/parameters.md is made of these (urban_detection_params). A list of
+/// structs is one row (its length) followed by the rows of its element's table, named
+/// "list[]/field", with the defaults of a default-constructed element.
+template <class Params>
+std::string fieldTableMarkdown(const Params& params) {
+  std::ostringstream md;
+  md << "| parameter | default | range | unit | description |\n|---|---|---|---|---|\n";
+  fieldTableRows(params, "", md);
   return md.str();
 }
 

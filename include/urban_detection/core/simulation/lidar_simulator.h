@@ -63,6 +63,31 @@ struct SimSensorParams {
   std::uint64_t noise_seed = 1;         // seed of noise and dropouts
 };
 
+template <>
+struct ParamFields<SimSensorParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f(FieldInfo("rpm", "rev/min", 300, 1200, "spin rate"), p.rpm);
+    f(FieldInfo("height_m", "m", 0.3, 5, "sensor origin above the ground (KITTI: 1.73 m)"),
+      p.height_m);
+    f(FieldInfo("range_noise_m", "m", 0, 0.5, "std dev of the Gaussian range noise"),
+      p.range_noise_m);
+    f(FieldInfo("dropout_probability", "", 0, 1, "chance a surface return is lost"),
+      p.dropout_probability);
+    f(FieldInfo("min_range_m", "m", 0, 130,
+                "returns nearer are sent as no return (keep inside the decoder's window)"),
+      p.min_range_m);
+    f(FieldInfo("max_range_m", "m", 0, 130,
+                "returns farther are sent as no return (> min_range_m; inside the decoder's)"),
+      p.max_range_m);
+    f(FieldInfo("start_stamp_s", "s", 0, 1e10, "epoch stamp of drive time 0"), p.start_stamp_s);
+    f(FieldInfo("cut_angle_deg", "deg", 0, 360,
+                "revolution cut, as PacketToCloud's cut_angle (< 360)"),
+      p.cut_angle_deg);
+    f(FieldInfo("noise_seed", "", 0, 1e15, "seed of noise and dropouts"), p.noise_seed);
+  }
+};
+
 /// Counters of one revolution.
 struct SimStats {
   std::size_t rays = 0;             // lasers fired

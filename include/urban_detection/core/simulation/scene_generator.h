@@ -31,8 +31,10 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
+#include "urban_detection/core/common/param_fields.h"
 #include "urban_detection/core/simulation/sim_scene.h"
 
 namespace urban_detection {
@@ -162,6 +164,195 @@ struct SceneParams {
   /// a narrow street (facades 2.8 m from the right lane), and a last two-side street.
   static std::vector<StreetSection> defaultSections();
 };
+
+// ---- field tables (core/common/param_fields.h): names, units, ranges, meanings -------------
+// Cross-field rules (min <= max pairs, at least one section, a path of non-zero length) are
+// checked by validate().
+
+template <>
+struct ParamFields<StreetSection> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f(FieldInfo::choice("type", {"street", "intersection"}, "kind of section"), p.type);
+    f(FieldInfo("length_m", "m", 5, 2000,
+                "length along x; for an intersection: width of the cross road"),
+      p.length_m);
+    f(FieldInfo("road_half_width_m", "m", 2, 20, "crown to curb"), p.road_half_width_m);
+    f(FieldInfo("sidewalk_width_m", "m", 0.5, 20, "curb to facade line (street only)"),
+      p.sidewalk_width_m);
+    f(FieldInfo("buildings_left", "facades on the +y side (street only)"), p.buildings_left);
+    f(FieldInfo("buildings_right", "facades on the -y side (street only)"), p.buildings_right);
+    f(FieldInfo("parking", "rows of parked cars along both curbs (street only)"), p.parking);
+    f(FieldInfo("furniture", "trees, poles, signs, bins, benches (street only)"), p.furniture);
+  }
+};
+
+template <>
+struct ParamFields<BuildingParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f(FieldInfo("depth_m", "m", 1, 100, "depth from the facade back"), p.depth_m);
+    f(FieldInfo("height_min_m", "m", 2, 300, "lowest building"), p.height_min_m);
+    f(FieldInfo("height_max_m", "m", 2, 300, "highest building (>= height_min_m)"), p.height_max_m);
+    f(FieldInfo("length_min_m", "m", 2, 1000, "shortest building along the street"),
+      p.length_min_m);
+    f(FieldInfo("length_max_m", "m", 2, 1000, "longest building (>= length_min_m)"),
+      p.length_max_m);
+    f(FieldInfo("gap_probability", "", 0, 1, "chance of a gap (alley) after a building"),
+      p.gap_probability);
+    f(FieldInfo("gap_min_m", "m", 0.01, 100, "narrowest gap"), p.gap_min_m);
+    f(FieldInfo("gap_max_m", "m", 0.01, 100, "widest gap (>= gap_min_m)"), p.gap_max_m);
+    f(FieldInfo("recess_probability", "", 0, 1,
+                "chance a building is set back from the facade line"),
+      p.recess_probability);
+    f(FieldInfo("recess_max_m", "m", 0.5, 50, "largest setback"), p.recess_max_m);
+  }
+};
+
+template <>
+struct ParamFields<StreetObjectParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f(FieldInfo("parked_gap_min_m", "m", 0.01, 50, "smallest gap between parked cars"),
+      p.parked_gap_min_m);
+    f(FieldInfo("parked_gap_max_m", "m", 0.01, 50, "largest gap (>= parked_gap_min_m)"),
+      p.parked_gap_max_m);
+    f(FieldInfo("parked_skip_probability", "", 0, 1, "chance a parking slot stays empty"),
+      p.parked_skip_probability);
+    f(FieldInfo("van_fraction", "", 0, 1, "share of vans among vehicles"), p.van_fraction);
+    f(FieldInfo("moving_cars", "", 0, 1000, "vehicles driving in the two lanes"), p.moving_cars);
+    f(FieldInfo("moving_car_speed_mps", "m/s", 0, 50, "oncoming traffic speed"),
+      p.moving_car_speed_mps);
+    f(FieldInfo("lane_offset_m", "m", 0, 20, "|y| of the traffic lanes' centre lines"),
+      p.lane_offset_m);
+    f(FieldInfo("pedestrians", "", 0, 1000, "pedestrians (singles and groups)"), p.pedestrians);
+    f(FieldInfo("group_probability", "", 0, 1, "chance a pedestrian starts a group of 2-4"),
+      p.group_probability);
+    f(FieldInfo("standing_probability", "", 0, 1, "chance a pedestrian (group) stands still"),
+      p.standing_probability);
+    f(FieldInfo("cyclists", "", 0, 1000, "cyclists riding beside the parked cars"), p.cyclists);
+    f(FieldInfo("tree_spacing_m", "m", 3, 1000, "mean spacing of trees on each sidewalk"),
+      p.tree_spacing_m);
+    f(FieldInfo("pole_spacing_m", "m", 3, 1000, "mean spacing of lamp posts on each sidewalk"),
+      p.pole_spacing_m);
+    f(FieldInfo("signs", "", 0, 1000, "traffic signs"), p.signs);
+    f(FieldInfo("bins", "", 0, 1000, "waste bins"), p.bins);
+    f(FieldInfo("benches", "", 0, 1000, "benches"), p.benches);
+    f(FieldInfo("hard_cases", "add the paper's Fig. 4 / 7 hard cases"), p.hard_cases);
+  }
+};
+
+template <>
+struct ParamFields<VegetationParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f(FieldInfo("enabled", "false: the scene without vegetation (crowns stay solid)"), p.enabled);
+    f(FieldInfo("verge_probability", "", 0, 1, "chance a street side has a grass verge"),
+      p.verge_probability);
+    f(FieldInfo("verge_offset_m", "m", 0, 2, "paved edge between the curb and the verge"),
+      p.verge_offset_m);
+    f(FieldInfo("verge_width_m", "m", 0.3, 5,
+                "verge width across the street (sidewalks >= verge + 1.5 m only)"),
+      p.verge_width_m);
+    f(FieldInfo("verge_step_max_m", "m", 0, 0.3, "largest height of a verge above the sidewalk"),
+      p.verge_step_max_m);
+    f(FieldInfo("verge_bush_spacing_m", "m", 2, 1000, "mean spacing of small shrubs in a verge"),
+      p.verge_bush_spacing_m);
+    f(FieldInfo("terrain_tile_m", "m", 0.25, 5, "side of a terrain tile (raised and tilted)"),
+      p.terrain_tile_m);
+    f(FieldInfo("terrain_roughness_m", "m", 0, 0.2, "largest random extra height of a tile"),
+      p.terrain_roughness_m);
+    f(FieldInfo("terrain_tilt_deg", "deg", 0, 10, "largest random tilt of a tile"),
+      p.terrain_tilt_deg);
+    f(FieldInfo("garden_depth_m", "m", 0.5, 20,
+                "depth of a front garden (a setback: up to the building)"),
+      p.garden_depth_m);
+    f(FieldInfo("garden_step_max_m", "m", 0, 0.5,
+                "largest terrain step at the sidewalk's back edge"),
+      p.garden_step_max_m);
+    f(FieldInfo("hedge_probability", "", 0, 1, "chance a garden stretch is lined with a hedge"),
+      p.hedge_probability);
+    f(FieldInfo("hedge_height_min_m", "m", 0.3, 4, "lowest hedge"), p.hedge_height_min_m);
+    f(FieldInfo("hedge_height_max_m", "m", 0.3, 4, "highest hedge (>= hedge_height_min_m)"),
+      p.hedge_height_max_m);
+    f(FieldInfo("hedge_width_min_m", "m", 0.3, 3, "thinnest hedge"), p.hedge_width_min_m);
+    f(FieldInfo("hedge_width_max_m", "m", 0.3, 3, "thickest hedge (>= hedge_width_min_m)"),
+      p.hedge_width_max_m);
+    f(FieldInfo("hedge_gap_spacing_m", "m", 2, 1000, "mean hedge length between entrance gaps"),
+      p.hedge_gap_spacing_m);
+    f(FieldInfo("bush_spacing_m", "m", 1, 1000, "mean spacing of bushes along a garden"),
+      p.bush_spacing_m);
+    f(FieldInfo("facade_shrub_spacing_m", "m", 1, 1000,
+                "mean spacing of shrubs against facades on the sidewalk (sidewalks >= 2 m)"),
+      p.facade_shrub_spacing_m);
+    f(FieldInfo("bush_height_min_m", "m", 0.2, 4, "lowest bush"), p.bush_height_min_m);
+    f(FieldInfo("bush_height_max_m", "m", 0.2, 4, "highest bush (>= bush_height_min_m)"),
+      p.bush_height_max_m);
+    f(FieldInfo("garden_tree_spacing_m", "m", 4, 1000, "mean spacing of trees in deep gardens"),
+      p.garden_tree_spacing_m);
+    f(FieldInfo("canopy_lobes_min", "", 0, 12, "fewest low crown lobes per tree"),
+      p.canopy_lobes_min);
+    f(FieldInfo("canopy_lobes_max", "", 0, 12, "most lobes per tree (>= canopy_lobes_min)"),
+      p.canopy_lobes_max);
+    f(FieldInfo("canopy_overhang_max_m", "m", 1, 8,
+                "farthest reach of a lobe's edge from the trunk"),
+      p.canopy_overhang_max_m);
+    f(FieldInfo("canopy_clearance_min_m", "m", 1, 8, "lowest leaves above the ground under them"),
+      p.canopy_clearance_min_m);
+    f(FieldInfo("canopy_clearance_max_m", "m", 1, 8,
+                "highest lowest-leaves (>= canopy_clearance_min_m)"),
+      p.canopy_clearance_max_m);
+    f(FieldInfo("hedge_transmission", "", 0, 1, "chance a ray passes through a hedge"),
+      p.hedge_transmission);
+    f(FieldInfo("hedge_penetration_m", "m", 0, 2, "mean depth of a return inside a hedge"),
+      p.hedge_penetration_m);
+    f(FieldInfo("bush_transmission", "", 0, 1, "chance a ray passes through a bush"),
+      p.bush_transmission);
+    f(FieldInfo("bush_penetration_m", "m", 0, 2, "mean depth of a return inside a bush"),
+      p.bush_penetration_m);
+    f(FieldInfo("crown_transmission", "", 0, 1, "chance a ray passes through a tree crown"),
+      p.crown_transmission);
+    f(FieldInfo("crown_penetration_m", "m", 0, 2, "mean depth of a return inside a crown"),
+      p.crown_penetration_m);
+  }
+};
+
+template <>
+struct ParamFields<DriveParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f(FieldInfo("waypoints", "m", -1e6, 1e6,
+                "[x, y] polyline followed at constant speed (>= 2 points, non-zero length)"),
+      p.waypoints);
+    f(FieldInfo("speed_mps", "m/s", 0, 40, "platform speed (0 = standing)"), p.speed_mps);
+  }
+};
+
+/// The scene's table has no `seed` (it sits at the top of a simulation config, see
+/// simulation_config.h).
+template <>
+struct ParamFields<SceneParams> {
+  template <class P, class F>
+  static void visit(P& p, F&& f) {
+    f(FieldInfo("start_x_m", "m", -1e6, 1e6, "x of the street's first section start"), p.start_x_m);
+    f(FieldInfo("slope", "", -0.15, 0.15, "rise of the road per metre along x"), p.slope);
+    f(FieldInfo("camber", "", 0, 0.08, "fall of the road per metre from the crown to the curb"),
+      p.camber);
+    f(FieldInfo("curb_height_m", "m", 0, 0.4, "sidewalk above the road edge"), p.curb_height_m);
+    f(FieldInfo("terrain_width_m", "m", 1, 200,
+                "ground beyond the sidewalks (under buildings, in alleys)"),
+      p.terrain_width_m);
+    f(FieldInfo("sections", "street sections in order along +x (at least one)"), p.sections);
+    forEachField(p.buildings, "buildings", f);
+    forEachField(p.objects, "objects", f);
+    forEachField(p.vegetation, "vegetation", f);
+  }
+};
+
+/// "" or the first field of `section` outside its table range.
+inline std::string validate(const StreetSection& section) {
+  return checkFieldRanges(section);
+}
 
 /// Builds the scene. Throws std::invalid_argument naming the field if a parameter is invalid.
 Scene generateScene(const SceneParams& scene, const DriveParams& drive);
