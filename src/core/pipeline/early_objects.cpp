@@ -42,12 +42,7 @@ std::string validate(const EarlyObjectsParams& p) {
   return checkFieldRanges(p);
 }
 
-SectorCompletion::SectorCompletion(const EarlyObjectsParams& params) : params_(params) {
-  for (int d = 0; d < 8; ++d) {
-    dir_c_[d] = static_cast<float>(std::cos(d * M_PI / 8.0));
-    dir_s_[d] = static_cast<float>(std::sin(d * M_PI / 8.0));
-  }
-}
+SectorCompletion::SectorCompletion(const EarlyObjectsParams& params) : params_(params) {}
 
 bool SectorCompletion::updateSweep(const CloudXYZIRT& cloud) {
   sweep_valid_ = false;
@@ -99,11 +94,7 @@ constexpr double kDetectorReach_m = 2.0;
 
 }  // namespace
 
-bool SectorCompletion::grow(const GridSegmenter& segmenter, std::int32_t seed, int link,
-                            bool occupied_only) {
-  const SimpleGrid& grid = segmenter.grid();
-  const std::vector<SegmentClass>& cls = segmenter.cellClasses();
-  const int rows = grid.rows(), cols = grid.cols();
+void SectorCompletion::startGrowing(std::int32_t seed) {
   component_.clear();
   stack_.clear();
   for (const std::int32_t c : marked_) mark_[c] = 0;
@@ -111,6 +102,14 @@ bool SectorCompletion::grow(const GridSegmenter& segmenter, std::int32_t seed, i
   stack_.push_back(seed);
   mark_[seed] = 1;
   marked_.push_back(seed);
+}
+
+bool SectorCompletion::grow(const GridSegmenter& segmenter, std::int32_t seed, int link,
+                            bool occupied_only) {
+  const SimpleGrid& grid = segmenter.grid();
+  const std::vector<SegmentClass>& cls = segmenter.cellClasses();
+  const int rows = grid.rows(), cols = grid.cols();
+  startGrowing(seed);
   rmin_ = cmin_ = std::numeric_limits<int>::max();
   rmax_ = cmax_ = -1;
   bool closed = true;
@@ -285,13 +284,7 @@ bool SectorCompletion::groupDoomed(const GridSegmenter& segmenter, std::int32_t 
   std::uint8_t state = 2;
   const bool grown = sp.vehicle_max_height_m > 0.0 && member(seed);
   if (grown) {
-    component_.clear();
-    stack_.clear();
-    for (const std::int32_t c : marked_) mark_[c] = 0;
-    marked_.clear();
-    stack_.push_back(seed);
-    mark_[seed] = 1;
-    marked_.push_back(seed);
+    startGrowing(seed);
     bool touches_higher = false;
     while (!stack_.empty()) {
       const std::int32_t c = stack_.back();
@@ -314,24 +307,8 @@ bool SectorCompletion::groupDoomed(const GridSegmenter& segmenter, std::int32_t 
         }
       }
     }
-    // The segmenter's extent: along 8 directions 22.5 deg apart, in cell units plus one.
-    float lo[8], hi[8];
-    std::fill(lo, lo + 8, std::numeric_limits<float>::max());
-    std::fill(hi, hi + 8, std::numeric_limits<float>::lowest());
-    for (const std::int32_t c : component_) {
-      const int r = grid.rowOf(c);
-      const float x = static_cast<float>(c - r * cols), y = static_cast<float>(r);
-      for (int d = 0; d < 8; ++d) {
-        const float v = x * dir_c_[d] + y * dir_s_[d];
-        lo[d] = std::min(lo[d], v);
-        hi[d] = std::max(hi[d], v);
-      }
-    }
-    float len = 0.0f, wid = std::numeric_limits<float>::max();
-    for (int d = 0; d < 8; ++d) {
-      len = std::max(len, hi[d] - lo[d] + 1.0f);
-      wid = std::min(wid, hi[d] - lo[d] + 1.0f);
-    }
+    float len, wid;  // the segmenter's measure of the group
+    cellGroupExtent(grid, component_, &len, &wid);
     const float max_len = static_cast<float>(sp.vehicle_max_length_m / sp.cell_size_m);
     const float max_wid = static_cast<float>(sp.vehicle_max_width_m / sp.cell_size_m);
     if (touches_higher || !(len <= max_len && wid <= max_wid)) state = 1;

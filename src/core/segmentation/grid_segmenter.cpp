@@ -1,6 +1,7 @@
 #include "urban_detection/core/segmentation/grid_segmenter.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -61,6 +62,37 @@ constexpr int kDc[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
 
 std::string validate(const GridSegmenterParams& p) {
   return checkFieldRanges(p);
+}
+
+void cellGroupExtent(const SimpleGrid& grid, const std::vector<std::int32_t>& cells, float* length,
+                     float* width) {
+  static const std::array<std::array<float, 2>, 8> dirs = [] {
+    std::array<std::array<float, 2>, 8> d{};
+    for (int k = 0; k < 8; ++k) {
+      d[k] = {static_cast<float>(std::cos(k * M_PI / 8.0)),
+              static_cast<float>(std::sin(k * M_PI / 8.0))};
+    }
+    return d;
+  }();
+  const int cols = grid.cols();
+  float lo[8], hi[8];
+  std::fill(lo, lo + 8, std::numeric_limits<float>::max());
+  std::fill(hi, hi + 8, std::numeric_limits<float>::lowest());
+  for (const std::int32_t c : cells) {
+    const int r = grid.rowOf(c);
+    const float x = static_cast<float>(c - r * cols), y = static_cast<float>(r);
+    for (int d = 0; d < 8; ++d) {
+      const float v = x * dirs[d][0] + y * dirs[d][1];
+      lo[d] = std::min(lo[d], v);
+      hi[d] = std::max(hi[d], v);
+    }
+  }
+  *length = 0.0f;
+  *width = std::numeric_limits<float>::max();
+  for (int d = 0; d < 8; ++d) {
+    *length = std::max(*length, hi[d] - lo[d] + 1.0f);
+    *width = std::min(*width, hi[d] - lo[d] + 1.0f);
+  }
 }
 
 GridSegmenter::GridSegmenter(const GridSegmenterParams& params)
@@ -684,11 +716,6 @@ void GridSegmenter::shortenVehicles() {
   const float max_wid = static_cast<float>(params_.vehicle_max_width_m / params_.cell_size_m);
   const float min_len = static_cast<float>(kVanMinLength_m / params_.cell_size_m);
   const ConstArrayView<GridCell> stats = grid_.occupiedStats();
-  float dir_c[8], dir_s[8];
-  for (int d = 0; d < 8; ++d) {
-    dir_c[d] = static_cast<float>(std::cos(d * M_PI / 8.0));
-    dir_s[d] = static_cast<float>(std::sin(d * M_PI / 8.0));
-  }
   const float sensor_h = static_cast<float>(params_.sensor_height_m);
   const float tan_top = static_cast<float>(std::tan(params_.fov_top_elevation_deg * M_PI / 180.0));
   const float half_diag = static_cast<float>(params_.cell_size_m * M_SQRT1_2);
@@ -725,23 +752,8 @@ void GridSegmenter::shortenVehicles() {
       }
     }
     if (touches_higher) continue;
-    float lo[8], hi[8];
-    std::fill(lo, lo + 8, std::numeric_limits<float>::max());
-    std::fill(hi, hi + 8, std::numeric_limits<float>::lowest());
-    for (const std::int32_t c : vehicle_group_) {
-      const int r = grid_.rowOf(c);
-      const float x = static_cast<float>(c - r * cols), y = static_cast<float>(r);
-      for (int d = 0; d < 8; ++d) {
-        const float v = x * dir_c[d] + y * dir_s[d];
-        lo[d] = std::min(lo[d], v);
-        hi[d] = std::max(hi[d], v);
-      }
-    }
-    float len = 0.0f, wid = std::numeric_limits<float>::max();
-    for (int d = 0; d < 8; ++d) {
-      len = std::max(len, hi[d] - lo[d] + 1.0f);
-      wid = std::min(wid, hi[d] - lo[d] + 1.0f);
-    }
+    float len, wid;
+    cellGroupExtent(grid_, vehicle_group_, &len, &wid);
     if (!(len <= max_len && wid <= max_wid)) continue;
     // Inside the Hough window the field-of-view test is left to step 5 for groups as long as a
     // van; a pole, a post or a trunk seen to the upper edge keeps it.

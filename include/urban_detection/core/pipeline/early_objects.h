@@ -104,6 +104,8 @@ class SectorCompletion {
   bool cellClosed(const SimpleGrid& grid, std::int32_t cell) const;
 
  private:
+  // Empties the component, stack and marks and starts them at `seed`.
+  void startGrowing(std::int32_t seed);
   // Depth first from `seed` over the cells within Chebyshev `link`: tall and short cells
   // (occupied_only) or groupable ones; fills component_ and its box (rmin_ ...); true when all
   // of them are closed.
@@ -138,7 +140,6 @@ class SectorCompletion {
   std::vector<std::uint8_t> group_state_, hough_state_;
   std::vector<std::uint8_t> doomed_state_;  // 1 doomed, 2 not (reset on doomed_touched_)
   std::vector<std::int32_t> doomed_touched_;
-  float dir_c_[8] = {}, dir_s_[8] = {};
   std::vector<std::int32_t> cells_;  // scratch: one object's cells
   int rmin_ = 0, rmax_ = 0, cmin_ = 0, cmax_ = 0;
   std::vector<std::int32_t> touched_;

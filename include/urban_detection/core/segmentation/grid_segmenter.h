@@ -207,6 +207,11 @@ struct ParamFields<GridSegmenterParams> {
 /// "" when every parameter is in its table range, else why not (outOfRangeMessage()).
 std::string validate(const GridSegmenterParams& p);
 
+/// The vehicle-group test's size of a group of grid cells, in cells: its largest (`length`) and
+/// smallest (`width`) extent plus one along 8 directions 22.5 deg apart.
+void cellGroupExtent(const SimpleGrid& grid, const std::vector<std::int32_t>& cells, float* length,
+                     float* width);
+
 /// Statistics of the last segment() call (points and cells per class).
 struct SegmentationStats {
   std::uint32_t points_unknown = 0, points_clutter = 0, points_ground = 0, points_tall = 0,
