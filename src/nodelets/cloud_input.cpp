@@ -33,12 +33,7 @@ class CloudInputNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
-    try {
-      loadFields(getPrivateNodeHandle(), &params_);
-    } catch (const ParamError& e) {
-      return stage_.refuse(nh, getPrivateNodeHandle(), getName(),
-                           "CloudInput: " + std::string(e.what()) + "; the nodelet stays idle");
-    }
+    if (!stage_.load(nh, getPrivateNodeHandle(), getName(), "CloudInput", &params_)) return;
     stage_.start(nh, getPrivateNodeHandle(), getName(), "cloud input", [this, nh]() mutable {
       return nh.subscribe("points_in", params_.queue_size, &CloudInputNodelet::cloudCb, this,
                           ros::TransportHints().tcpNoDelay());

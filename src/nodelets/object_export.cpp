@@ -22,12 +22,7 @@ class ObjectExportNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
-    try {
-      loadFields(getPrivateNodeHandle(), &params_);
-    } catch (const ParamError& e) {
-      return stage_.refuse(nh, getPrivateNodeHandle(), getName(),
-                           "ObjectExport: " + std::string(e.what()) + "; the nodelet stays idle");
-    }
+    if (!stage_.load(nh, getPrivateNodeHandle(), getName(), "ObjectExport", &params_)) return;
     stage_.start(nh, getPrivateNodeHandle(), getName(), "export", [this, nh]() mutable {
       return nh.subscribe("objects", params_.queue_size, &ObjectExportNodelet::objectsCb, this);
     });

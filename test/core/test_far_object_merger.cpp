@@ -264,7 +264,11 @@ TEST(FarObjectMerger, ValidatesItsParameters) {
   EXPECT_THROW(FarObjectMerger{p}, std::invalid_argument);
   p = FarObjectMergerParams();
   p.max_width_m = p.max_length_m + 1.0;
-  EXPECT_NE(core::validate(p).find("max_width_m"), std::string::npos);
+  const std::string order = core::validate(p);
+  EXPECT_NE(order.find("'max_width_m'"), std::string::npos) << order;
+  EXPECT_NE(order.find("must be at most 'max_length_m'"), std::string::npos) << order;
+  p.max_width_m = p.max_length_m;  // equal is in order
+  EXPECT_EQ(core::validate(p), "");
   core::HierarchicalGridDetectorParams h;
   h.far_merge.max_z_gap_m = -1.0;
   EXPECT_NE(core::validate(h).find("far_merge/max_z_gap_m"), std::string::npos);

@@ -4,8 +4,9 @@
 /// the bookkeeping after each message. A nodelet holds one, declared after the members its
 /// callback uses (so that the subscription goes first when the nodelet is unloaded):
 ///
-///   onInit:   on a bad parameter  stage_.refuse(nh, pnh, getName(), "Name: ...; stays idle");
-///             otherwise           stage_.start(nh, pnh, getName(), "task", [this] {
+///   onInit:   if (!stage_.load(nh, pnh, getName(), "Name", &params_)) return;  (or, on any
+///             other start-up fault, stage_.refuse(nh, pnh, getName(), "Name: ..."); return;)
+///             stage_.start(nh, pnh, getName(), "task", [this] {
 ///                                   return nh.subscribe("in", queue, &Nodelet::cb, this); });
 ///                                 pub_ = stage_.advertise<M>(nh, "out", queue);
 ///   callback: stage_.diagnostics().input(msg->header.seq); ... publish ...;
@@ -20,6 +21,7 @@
 #include <utility>
 
 #include "urban_detection/ros/lazy_outputs.h"
+#include "urban_detection/ros/param_loading.h"
 #include "urban_detection/ros/stage_diagnostics.h"
 
 namespace urban_detection {
@@ -31,6 +33,20 @@ class LazyStage {
   void refuse(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name,
               const std::string& text) {
     refusal_ = RefusalDiagnostics::report(nh, pnh, name, text);
+  }
+
+  /// Loads `params` (field-tabled) from `pnh`; on a bad parameter refuses to start ("<label>:
+  /// <why>; the nodelet stays idle") and returns false.
+  template <class Params>
+  bool load(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name,
+            const std::string& label, Params* params) {
+    try {
+      loadFields(pnh, params);
+      return true;
+    } catch (const ParamError& e) {
+      refuse(nh, pnh, name, label + ": " + e.what() + "; the nodelet stays idle");
+      return false;
+    }
   }
 
   /// Creates the diagnostics (task `task`, input total `input_name`), idle until one of the

@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
+
+#include "urban_detection/core/common/param_rules.h"
 
 namespace urban_detection {
 namespace core {
@@ -28,14 +29,9 @@ float intervalGap(const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
 }  // namespace
 
 std::string validate(const FarObjectMergerParams& p) {
-  std::string error = checkFieldRanges(p);
-  if (error.empty() && !(p.max_width_m <= p.max_length_m)) {
-    std::ostringstream err;
-    err << "max_width_m must be at most max_length_m, got " << p.max_width_m << " > "
-        << p.max_length_m << " m";
-    error = err.str();
-  }
-  return error;
+  const std::string error = checkFieldRanges(p);
+  if (!error.empty()) return error;
+  return orderMessage("max_width_m", p.max_width_m, "max_length_m", p.max_length_m, "m");
 }
 
 FarObjectMerger::FarObjectMerger(const FarObjectMergerParams& params) : params_(params) {

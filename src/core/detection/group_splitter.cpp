@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
+
+#include "urban_detection/core/common/param_rules.h"
 
 namespace urban_detection {
 namespace core {
@@ -32,14 +33,9 @@ std::int32_t positionOf(const LabeledCloud& foreground, std::uint32_t index, std
 }  // namespace
 
 std::string validate(const GroupSplitterParams& p) {
-  std::string error = checkFieldRanges(p);
-  if (error.empty() && p.min_length_m > 0.0 && !(p.min_length_m <= p.max_length_m)) {
-    std::ostringstream err;
-    err << "min_length_m must be at most max_length_m, got " << p.min_length_m << " > "
-        << p.max_length_m << " m";
-    error = err.str();
-  }
-  return error;
+  const std::string error = checkFieldRanges(p);
+  if (!error.empty() || p.min_length_m <= 0.0) return error;  // 0: no lower bound
+  return orderMessage("min_length_m", p.min_length_m, "max_length_m", p.max_length_m, "m");
 }
 
 GroupSplitter::GroupSplitter(const GroupSplitterParams& params) : params_(params) {
