@@ -176,7 +176,8 @@ TEST(FieldTables, CrossFieldRulesStayInValidate) {
   EXPECT_NE(validate(kd).find("max_cluster_size"), std::string::npos);
   HierarchicalGridDetectorParams h;
   h.far_merge.max_width_m = 6.0;  // wider than max_length_m (5)
-  EXPECT_NE(validate(h).find("far_merge: max_width_m"), std::string::npos) << validate(h);
+  EXPECT_NE(validate(h).find("far_merge: parameter 'max_width_m'"), std::string::npos)
+      << validate(h);
   h = HierarchicalGridDetectorParams();
   h.weight.coefficients.clear();
   EXPECT_NE(validate(h).find("weight: coefficients"), std::string::npos) << validate(h);
