@@ -37,15 +37,14 @@ class ObjectRecorderNodelet : public nodelet::Nodelet {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     try {
       loadFields(pnh, &params_);
-      output_dir_ = params_.output_dir;
-      if (output_dir_.empty())
+      if (params_.output_dir.empty())
         throw ParamError("parameter '" + pnh.resolveName("output_dir") +
                          "' must name a folder to write into");
       std::error_code ec;
-      std::filesystem::create_directories(output_dir_ + "/kitti", ec);
+      std::filesystem::create_directories(params_.output_dir + "/kitti", ec);
       if (ec) {
-        throw ParamError("parameter '" + pnh.resolveName("output_dir") + "' = " + output_dir_ +
-                         ": cannot create it (" + ec.message() + ")");
+        throw ParamError("parameter '" + pnh.resolveName("output_dir") +
+                         "' = " + params_.output_dir + ": cannot create it (" + ec.message() + ")");
       }
     } catch (const ParamError& e) {
       refusal_ = ros_conv::RefusalDiagnostics::report(
@@ -54,7 +53,7 @@ class ObjectRecorderNodelet : public nodelet::Nodelet {
       return;
     }
     next_ = static_cast<std::uint64_t>(params_.first_index);
-    csv_.open(output_dir_ + "/objects.csv");
+    csv_.open(params_.output_dir + "/objects.csv");
     csv_ << csvHeader() << '\n';
     diagnostics_ =
         std::make_unique<ros_conv::StageDiagnostics>(getNodeHandle(), pnh, getName(), "recorder");
@@ -62,7 +61,7 @@ class ObjectRecorderNodelet : public nodelet::Nodelet {
     cloud_sub_ = nh.subscribe("velodyne_points", 10, &ObjectRecorderNodelet::cloudCb, this);
     objects_sub_ =
         nh.subscribe("objects", params_.queue_size, &ObjectRecorderNodelet::objectsCb, this);
-    NODELET_INFO("ObjectRecorder: writing revolutions into %s", output_dir_.c_str());
+    NODELET_INFO("ObjectRecorder: writing revolutions into %s", params_.output_dir.c_str());
   }
 
   void cloudCb(const ros::MessageEvent<const CloudXYZIRT>& event) {  // zero copy
@@ -99,19 +98,19 @@ class ObjectRecorderNodelet : public nodelet::Nodelet {
     }
     char name[32];
     std::snprintf(name, sizeof name, "%06llu", static_cast<unsigned long long>(next_));
-    std::ofstream bin(output_dir_ + "/" + name + ".label", std::ios::binary);
+    std::ofstream bin(params_.output_dir + "/" + name + ".label", std::ios::binary);
     bin.write(reinterpret_cast<const char*>(labels.data()),
               static_cast<std::streamsize>(labels.size() * sizeof(std::uint32_t)));
-    std::ofstream kitti(output_dir_ + "/kitti/" + name + ".txt");
+    std::ofstream kitti(params_.output_dir + "/kitti/" + name + ".txt");
     for (const DetectedObject& o : msg->objects) {
       kitti << kittiLabelLine(o) << '\n';
       csv_ << csvLine(next_, msg->header, o) << '\n';
     }
     csv_.flush();
     if (!bin || !kitti || !csv_) {
-      if (diagnostics_->error("write_errors", "cannot write into " + output_dir_, 1)) {
+      if (diagnostics_->error("write_errors", "cannot write into " + params_.output_dir, 1)) {
         NODELET_ERROR("ObjectRecorder: cannot write revolution %s into %s", name,
-                      output_dir_.c_str());
+                      params_.output_dir.c_str());
       }
     }
     ++next_;
@@ -120,7 +119,6 @@ class ObjectRecorderNodelet : public nodelet::Nodelet {
   }
 
   ObjectRecorderParams params_;
-  std::string output_dir_;  // params_.output_dir
   std::uint64_t next_ = 0;  // number of the next revolution written
   std::ofstream csv_;
   std::mutex mutex_;                                         // sizes_

@@ -43,7 +43,6 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
       loadFields(tnh, &params);
       loadFields(ros::NodeHandle(pnh, "markers"), &marker_params_);
       loadFields(pnh, &params_);
-      fixed_frame_ = params_.fixed_frame;
     } catch (const ParamError& e) {
       refusal_ = ros_conv::RefusalDiagnostics::report(
           getNodeHandle(), pnh, getName(),
@@ -60,7 +59,7 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
       return error;
     };
     reconfigure_ = std::make_unique<Reconfigure>(tnh, initial, apply);
-    if (!fixed_frame_.empty()) {
+    if (!params_.fixed_frame.empty()) {
       tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
       tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_);
     }
@@ -84,15 +83,15 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
   std::string fixedFrame(const std_msgs::Header& header, double wait_s, Eigen::Isometry3d* pose,
                          std::string* error) {
     *pose = Eigen::Isometry3d::Identity();
-    if (!tf_buffer_ || fixed_frame_ == header.frame_id) return header.frame_id;
+    if (!tf_buffer_ || params_.fixed_frame == header.frame_id) return header.frame_id;
     try {
       // Waits for a transform that is late, not for a frame nobody publishes; the very first
       // revolution also waits, as tf may not have heard of any frame yet.
-      const bool known = frame_.empty() || (tf_buffer_->_frameExists(fixed_frame_) &&
+      const bool known = frame_.empty() || (tf_buffer_->_frameExists(params_.fixed_frame) &&
                                             tf_buffer_->_frameExists(header.frame_id));
       *pose = tf2::transformToEigen(tf_buffer_->lookupTransform(
-          fixed_frame_, header.frame_id, header.stamp, ros::Duration(known ? wait_s : 0.0)));
-      return fixed_frame_;
+          params_.fixed_frame, header.frame_id, header.stamp, ros::Duration(known ? wait_s : 0.0)));
+      return params_.fixed_frame;
     } catch (const tf2::TransformException& e) {
       diagnostics_->count("tf_failures");
       *error = e.what();
@@ -129,8 +128,8 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
     const std::string frame = fixedFrame(
         msg->header, starting || frame_.empty() ? kRestartTfWaitS : 0.05, &pose, &tf_error);
     if (!tf_error.empty()) {
-      if (starting &&
-          (frame_ == fixed_frame_ || (frame_.empty() && tf_buffer_->_frameExists(fixed_frame_)))) {
+      if (starting && (frame_ == params_.fixed_frame ||
+                       (frame_.empty() && tf_buffer_->_frameExists(params_.fixed_frame)))) {
         // A stream that starts or restarts while tf lacks its first transforms (the listener
         // joined after the first revolution, or tf went back with the clock): skip this
         // revolution rather than track in the sensor frame and flip back.
@@ -141,11 +140,11 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
         NODELET_WARN(
             "no transform %s <- %s (%s): tracking in the sensor frame %s; velocities "
             "are relative to the moving sensor (velocities_relative)",
-            fixed_frame_.c_str(), msg->header.frame_id.c_str(), tf_error.c_str(),
+            params_.fixed_frame.c_str(), msg->header.frame_id.c_str(), tf_error.c_str(),
             msg->header.frame_id.c_str());
         sensor_frame_warned_ = true;
       }
-    } else if (frame == fixed_frame_) {
+    } else if (frame == params_.fixed_frame) {
       sensor_frame_warned_ = false;  // warn again should odometry stop
     }
     auto tracked = boost::make_shared<TrackedObjectArray>();
@@ -185,7 +184,7 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
                              false);
       tracked->header = msg->header;
       tracked->header.frame_id = frame;
-      tracked->velocities_relative = fixed_frame_.empty() || frame != fixed_frame_;
+      tracked->velocities_relative = params_.fixed_frame.empty() || frame != params_.fixed_frame;
       tracked->detector = msg->detector;
       tracked->objects.resize(tracker_->tracks().size());
       for (std::size_t k = 0; k < tracked->objects.size(); ++k) {
@@ -216,7 +215,6 @@ class ObjectTrackerNodelet : public nodelet::Nodelet {
   std::unique_ptr<core::Tracker> tracker_;
   std::vector<core::DetectedObject> objects_;  // converted input, reused
   ros_conv::TrackMarkerParams marker_params_;
-  std::string fixed_frame_ = "odom";
   std::string frame_;                             // the frame the current tracks live in
   bool sensor_frame_warned_ = false;              // said that tracks are in the sensor frame
   ros::Time last_stamp_;                          // of the previous objects message

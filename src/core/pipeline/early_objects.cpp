@@ -312,9 +312,7 @@ bool SectorCompletion::groupDoomed(const GridSegmenter& segmenter, std::int32_t 
     const float max_len = static_cast<float>(sp.vehicle_max_length_m / sp.cell_size_m);
     const float max_wid = static_cast<float>(sp.vehicle_max_width_m / sp.cell_size_m);
     if (touches_higher || !(len <= max_len && wid <= max_wid)) state = 1;
-  }
-  // Every cell of this closed part has the same answer (the same part grows from each).
-  if (grown) {
+    // Every cell of this closed part has the same answer (the same part grows from each).
     for (const std::int32_t c : component_) {
       if (doomed_state_[c] == 0) doomed_touched_.push_back(c);
       doomed_state_[c] = state;

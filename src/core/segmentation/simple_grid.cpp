@@ -172,13 +172,8 @@ void SimpleGrid::unsettle() {
 
 void SimpleGrid::finish() {
   unsettle();
-  if (run_.cell != kNoCell) {
-    GridCell& cell = occupied_cells_[static_cast<std::size_t>(run_.slot)];
-    cell.count += run_.count;
-    cell.z_min = std::min(cell.z_min, run_.min);
-    cell.z_max = std::max(cell.z_max, run_.max);
-    cell.z_sum += run_.sum;
-  }
+  settle();  // the open run into its cell, now for good
+  settled_ = false;
   run_ = Run();
 }
 
